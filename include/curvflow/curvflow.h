@@ -1,0 +1,123 @@
+/*
+ * curvflow — curvature-driven deformation of triangle meshes.
+ *
+ * This header holds what every module shares: the status codes, the
+ * context object (allocator, log callback, last error message, solver
+ * state) and the version. Every fallible public function takes a context as
+ * its first parameter and returns a cf_status; on failure the context's
+ * message names the problem and its place in one line, e.g.
+ * "face 1832: edge (12, 977) is shared by 3 faces".
+ *
+ * The library never prints, never exits and never aborts on bad input.
+ */
+#ifndef CURVFLOW_CURVFLOW_H
+#define CURVFLOW_CURVFLOW_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#if defined(CF_BUILDING_LIBRARY)
+#define CF_API __attribute__((visibility("default")))
+#else
+#define CF_API
+#endif
+
+#define CF_VERSION_MAJOR 0
+#define CF_VERSION_MINOR 1
+#define CF_VERSION_PATCH 0
+
+/* Status codes. CF_OK is zero, every error is negative. Mesh validation
+ * failures each have their own code so a caller can react to the kind of
+ * defect without parsing the message. */
+typedef enum cf_status {
+    CF_OK = 0,
+    CF_ERR_INVALID_ARG = -1,     /* a parameter is out of range or NULL */
+    CF_ERR_NOMEM = -2,           /* an allocation failed */
+    CF_ERR_BAD_MESH = -3,        /* mesh unusable for the request (e.g. wrong genus for an option) */
+    CF_ERR_IO = -4,              /* a file could not be opened, read, written or renamed */
+    CF_ERR_NOT_POSDEF = -5,      /* a matrix expected to be positive definite is not */
+    CF_ERR_NUMERICAL = -6,       /* NaN/Inf, singular system, a step that blew up */
+    CF_ERR_NOT_CONVERGED = -7,   /* an iteration hit its limit */
+    CF_ERR_CANCELLED = -8,       /* the progress callback asked to stop */
+    CF_ERR_PARSE = -9,           /* malformed file content (bad token, bad header) */
+    CF_ERR_TRUNCATED = -10,      /* file ended early (unexpected end of file) */
+    CF_ERR_INDEX_RANGE = -11,    /* a face refers to a vertex that does not exist */
+    CF_ERR_REPEATED_INDEX = -12, /* a face uses the same vertex twice */
+    CF_ERR_NONFINITE = -13,      /* NaN or Inf coordinate or value */
+    CF_ERR_DEGENERATE_FACE = -14,/* zero-area face */
+    CF_ERR_NONMANIFOLD_EDGE = -15,   /* edge shared by more than two faces */
+    CF_ERR_NONMANIFOLD_VERTEX = -16, /* vertex whose faces form several fans */
+    CF_ERR_ORIENTATION = -17,    /* neighbouring faces traverse their edge in the same direction */
+    CF_ERR_UNSUPPORTED = -18     /* valid request this build or method does not support */
+} cf_status;
+
+/* Static name of a status ("CF_ERR_NOMEM"); never NULL. */
+CF_API const char *cf_status_name(cf_status status);
+
+typedef enum cf_log_level {
+    CF_LOG_DEBUG = 0,
+    CF_LOG_INFO = 1,
+    CF_LOG_WARNING = 2,
+    CF_LOG_ERROR = 3
+} cf_log_level;
+
+/* Log callback: receives one line without a trailing newline. */
+typedef void (*cf_log_fn)(void *user, cf_log_level level, const char *line);
+
+/* Optional allocator. All three must be given together; `user` is passed
+ * through. realloc may be NULL (the library then uses malloc + copy). */
+typedef struct cf_allocator {
+    void *(*malloc_fn)(void *user, size_t bytes);
+    void *(*realloc_fn)(void *user, void *ptr, size_t old_bytes, size_t new_bytes);
+    void (*free_fn)(void *user, void *ptr, size_t bytes);
+    void *user;
+} cf_allocator;
+
+typedef struct cf_context cf_context;
+
+/* Creates a context with the default allocator and no log callback.
+ * Statuses: CF_OK, CF_ERR_INVALID_ARG (out NULL), CF_ERR_NOMEM. */
+CF_API cf_status cf_context_create(cf_context **out);
+
+/* As cf_context_create with a custom allocator (copied; may be NULL). */
+CF_API cf_status cf_context_create_with_allocator(const cf_allocator *allocator, cf_context **out);
+
+/* Frees the context and sets *ctx to NULL. Accepts NULL and *ctx == NULL.
+ * Every object created with the context must be destroyed before it. */
+CF_API void cf_context_destroy(cf_context **ctx);
+
+/* Installs (or with fn == NULL removes) the log callback. Messages below
+ * min_level are dropped. */
+CF_API void cf_context_set_log(cf_context *ctx, cf_log_fn fn, void *user, cf_log_level min_level);
+
+/* One-line message of the last error (or warning-as-error) recorded in the
+ * context; "" if none. Valid until the next call on the context. */
+CF_API const char *cf_context_message(const cf_context *ctx);
+
+/* Status of the last error recorded in the context (CF_OK if none). */
+CF_API cf_status cf_context_status(const cf_context *ctx);
+
+/* Clears the recorded error. */
+CF_API void cf_context_clear_error(cf_context *ctx);
+
+/* Bytes currently allocated through the context (for leak tests). */
+CF_API size_t cf_context_bytes_in_use(const cf_context *ctx);
+
+/* Failure injection for tests: the n-th allocation from now (1-based)
+ * fails, and every one after it too if `sticky`. n = 0 disables. */
+CF_API void cf_context_fail_allocation(cf_context *ctx, int64_t n, int sticky);
+
+/* Number of allocations made through the context so far. */
+CF_API int64_t cf_context_allocation_count(const cf_context *ctx);
+
+/* "0.1.0" */
+CF_API const char *cf_version_string(void);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* CURVFLOW_CURVFLOW_H */

@@ -1,0 +1,163 @@
+/*
+ * One interface for every method: create a flow from a mesh and options,
+ * step it, read its state, destroy it. The CLI, benchmarks and reports
+ * treat all methods alike through it.
+ *
+ *   cf_flow_options opts;                      // common part + method part
+ *   cf_flow_options_default(CF_FLOW_IMPLICIT_MCF, &opts);
+ *   cf_flow_options_set(ctx, &opts, "time_step", "0.01");   // by name, or
+ *   ((cf_baseline_options *)cf_flow_options_method(&opts))->time_step = 0.01; // by field
+ *   cf_flow *flow;
+ *   cf_flow_create(ctx, mesh, NULL, &opts, &flow);
+ *   cf_flow_info info;
+ *   for (int i = 0; i < 10; ++i) if (cf_flow_step(flow, &info)) break;
+ *   const double *x = cf_flow_positions(flow);
+ *   cf_flow_destroy(&flow);
+ *
+ * Robustness: every step is checked (finite positions and energy, method
+ * status). When a step fails, the flow keeps the last good state, the
+ * status is returned and the context message names the iteration, e.g.
+ * "iteration 17: energy is NaN".
+ */
+#ifndef CURVFLOW_FLOW_H
+#define CURVFLOW_FLOW_H
+
+#include "curvflow/curvflow.h"
+#include "curvflow/mesh.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum cf_flow_kind {
+    CF_FLOW_EXPLICIT_MCF = 0,          /* explicit mean curvature flow */
+    CF_FLOW_IMPLICIT_MCF = 1,          /* Desbrun et al. 1999, backward Euler */
+    CF_FLOW_CONFORMAL_MCF = 2,         /* Kazhdan, Solomon, Ben-Chen 2012 */
+    CF_FLOW_EXPLICIT_BILAPLACIAN = 3,  /* Taubin-style explicit bi-Laplacian */
+    CF_FLOW_IMPLICIT_BILAPLACIAN = 4,  /* backward Euler bi-Laplacian */
+    CF_FLOW_SPIN_WILLMORE = 5,         /* Crane, Pinkall, Schroeder 2013 */
+    CF_FLOW_STRETCH_BEND_EDIT = 6,     /* Zhao & Gortler, and ARAP variants */
+    CF_FLOW_KIND_COUNT = 7
+} cf_flow_kind;
+
+/* "implicit-mcf" etc.; NULL for an unknown kind. */
+CF_API const char *cf_flow_kind_name(cf_flow_kind kind);
+CF_API const char *cf_flow_kind_description(cf_flow_kind kind);
+/* Looks a kind up by name. CF_ERR_INVALID_ARG for an unknown name. */
+CF_API cf_status cf_flow_kind_from_name(const char *name, cf_flow_kind *kind);
+
+/* Method parameters are described by a table so that front ends can set
+ * them by name ("--param sigma=0.5") and list them with their help. */
+typedef enum cf_param_type {
+    CF_PARAM_DOUBLE = 0,
+    CF_PARAM_INT = 1,     /* int32_t */
+    CF_PARAM_BOOL = 2,    /* int32_t, 0 or 1; accepts true/false/yes/no/1/0 */
+    CF_PARAM_CHOICE = 3   /* int32_t index into `choices` (NULL-terminated names) */
+} cf_param_type;
+
+typedef struct cf_param_desc {
+    const char *name;
+    cf_param_type type;
+    size_t offset;              /* offset of the field in the method's options struct */
+    double min_value, max_value;  /* inclusive range for numbers */
+    const char *const *choices; /* for CF_PARAM_CHOICE */
+    const char *help;
+} cf_param_desc;
+
+/* Options of one flow: the kind and the method's own options struct
+ * (cf_<method>_options, see the method's header), stored inline so the
+ * struct can be copied by value. cf_flow_options_method gives a pointer to
+ * it. */
+#define CF_FLOW_OPTIONS_STORAGE 1024
+typedef struct cf_flow_options {
+    cf_flow_kind kind;
+    union {
+        double align_;
+        unsigned char bytes[CF_FLOW_OPTIONS_STORAGE];
+    } storage;
+} cf_flow_options;
+
+/* Fills the defaults of the method. CF_ERR_INVALID_ARG for a bad kind. */
+CF_API cf_status cf_flow_options_default(cf_flow_kind kind, cf_flow_options *options);
+/* The method's options struct inside `options` (cast to cf_<method>_options). */
+CF_API void *cf_flow_options_method(cf_flow_options *options);
+CF_API const void *cf_flow_options_method_const(const cf_flow_options *options);
+
+/* Sets a parameter from its text form; CF_ERR_INVALID_ARG with a message
+ * naming the parameter for an unknown name, bad text or value out of range. */
+CF_API cf_status cf_flow_options_set(cf_context *ctx, cf_flow_options *options, const char *name, const char *value);
+
+/* The parameter table of a kind. */
+CF_API cf_status cf_flow_params(cf_flow_kind kind, const cf_param_desc **params, int32_t *count);
+
+/* What one step reports. Energy terms and residuals are named by the method
+ * (term_names, residual_names); unused slots have NULL names. */
+#define CF_FLOW_MAX_TERMS 4
+#define CF_FLOW_MAX_RESIDUALS 8
+typedef struct cf_flow_info {
+    int64_t iteration;       /* steps taken so far, this one included */
+    double time;             /* accumulated flow time (sum of time steps) */
+    double time_step;        /* step used for this step */
+    double energy;           /* the method's energy after the step */
+    double energy_terms[CF_FLOW_MAX_TERMS];
+    const char *term_names[CF_FLOW_MAX_TERMS];
+    double residuals[CF_FLOW_MAX_RESIDUALS];
+    const char *residual_names[CF_FLOW_MAX_RESIDUALS];
+    double area;             /* total area after the step */
+    double volume;           /* enclosed volume after the step */
+    double area_drift;       /* area / initial area - 1 */
+    double volume_drift;     /* volume / initial volume - 1 (0 if initial volume is 0) */
+    double assemble_seconds; /* time split of this step */
+    double factorize_seconds;
+    double solve_seconds;
+    double total_seconds;
+} cf_flow_info;
+
+/* Progress callback, called after each step of cf_flow_run (and of
+ * cf_flow_step). Return nonzero to cancel: the run stops with
+ * CF_ERR_CANCELLED and keeps the state reached. */
+typedef int (*cf_progress_fn)(void *user, const cf_flow_info *info);
+
+typedef struct cf_flow cf_flow;
+
+/* Creates a flow. `positions` (3 nv) is the starting state; NULL starts from
+ * the mesh's rest positions. options is required (it names the kind) and
+ * is copied. The mesh must outlive the flow. */
+CF_API cf_status cf_flow_create(cf_context *ctx, const cf_mesh *mesh, const double *positions,
+                                const cf_flow_options *options, cf_flow **out);
+
+/* One step. On failure the state is the one before the step. info may be
+ * NULL. */
+CF_API cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info);
+
+/* Up to `steps` steps, calling the progress callback after each. Stops
+ * early with CF_OK when the method reports convergence. */
+CF_API cf_status cf_flow_run(cf_flow *flow, int64_t steps, cf_flow_info *info);
+
+CF_API void cf_flow_set_progress(cf_flow *flow, cf_progress_fn fn, void *user);
+
+/* Current positions (3 nv), valid until the next step or destroy. */
+CF_API const double *cf_flow_positions(const cf_flow *flow);
+/* Replaces the state (3 nv); methods that keep extra state reset it. */
+CF_API cf_status cf_flow_set_positions(cf_flow *flow, const double *positions);
+CF_API const cf_mesh *cf_flow_mesh(const cf_flow *flow);
+CF_API cf_flow_kind cf_flow_get_kind(const cf_flow *flow);
+/* Energy of the current state (as in the last info; computed at create). */
+CF_API double cf_flow_energy(const cf_flow *flow);
+/* Info of the last step (or of the initial state, iteration 0). */
+CF_API const cf_flow_info *cf_flow_last_info(const cf_flow *flow);
+/* 1 when the method considers itself converged (e.g. relative energy
+ * decrease below its tolerance). */
+CF_API int32_t cf_flow_converged(const cf_flow *flow);
+
+CF_API void cf_flow_destroy(cf_flow **flow);
+
+/* One-off convenience: creates, runs `steps` steps, copies the final
+ * positions into out_positions (3 nv, caller-allocated), destroys. */
+CF_API cf_status cf_flow_apply(cf_context *ctx, const cf_mesh *mesh, const cf_flow_options *options, int64_t steps,
+                               double *out_positions, cf_flow_info *info);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* CURVFLOW_FLOW_H */

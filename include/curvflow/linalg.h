@@ -1,0 +1,203 @@
+/*
+ * Sparse linear algebra: compressed-column matrices, one-pass assembly with
+ * value refill into a fixed pattern, Cholesky with symbolic analysis reused
+ * across numeric refactorisations, saddle-point systems, LU, inverse power
+ * iteration and weighted Gram-Schmidt.
+ *
+ * Only src/linalg/ includes SuiteSparse. Dense vectors are double arrays;
+ * several right-hand sides are stored column after column (column-major,
+ * leading dimension n).
+ */
+#ifndef CURVFLOW_LINALG_H
+#define CURVFLOW_LINALG_H
+
+#include "curvflow/curvflow.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Compressed-column sparse matrix, owned by the library (create/destroy
+ * through the functions below). Row indices in each column are sorted and
+ * unique. `symmetric` != 0 marks a symmetric matrix; every entry is still
+ * stored (both triangles) unless `upper_only` is set. */
+typedef struct cf_sparse {
+    int32_t nrows;
+    int32_t ncols;
+    int32_t *colptr;   /* ncols + 1 */
+    int32_t *rowind;   /* colptr[ncols] */
+    double *values;    /* colptr[ncols] */
+    int32_t symmetric;
+    int32_t upper_only;
+    cf_context *ctx;   /* allocator owner */
+} cf_sparse;
+
+/* Builds A from n triplets (rows[k], cols[k], vals[k]) in one pass;
+ * duplicates are summed. If slot_map is not NULL it receives the index into
+ * A->values of every triplet (n entries, caller-allocated), so later value
+ * sets can be poured into the same pattern by cf_sparse_refill. vals may be
+ * NULL (pattern only, values zero). Statuses: CF_OK, CF_ERR_INVALID_ARG
+ * (index out of range), CF_ERR_NOMEM. */
+CF_API cf_status cf_sparse_from_triplets(cf_context *ctx, int32_t nrows, int32_t ncols, int64_t n,
+                                         const int32_t *rows, const int32_t *cols, const double *vals,
+                                         int32_t symmetric, cf_sparse **out, int64_t *slot_map);
+
+/* Zeroes A's values and adds vals[k] into A->values[slot_map[k]]. */
+CF_API void cf_sparse_refill(cf_sparse *a, int64_t n, const int64_t *slot_map, const double *vals);
+
+CF_API void cf_sparse_destroy(cf_sparse **a);
+CF_API int64_t cf_sparse_nnz(const cf_sparse *a);
+
+/* y = A x (y has nrows entries; x ncols). For upper_only matrices the
+ * mirrored lower triangle is included. */
+CF_API void cf_sparse_multiply(const cf_sparse *a, const double *x, double *y);
+
+/* y = alpha A x + beta y. */
+CF_API void cf_sparse_multiply_add(const cf_sparse *a, double alpha, const double *x, double beta, double *y);
+
+/* Copy of A with every scalar entry replaced by a b x b identity block
+ * scaled by the entry (A kron I_b); used to lift vertex operators to 3-vectors
+ * or quaternions. Entry (i, j) goes to rows b i .. b i + b - 1. */
+CF_API cf_status cf_sparse_kron_identity(cf_context *ctx, const cf_sparse *a, int32_t b, cf_sparse **out);
+
+/* C = alpha A + beta B (same shape). */
+CF_API cf_status cf_sparse_add(cf_context *ctx, double alpha, const cf_sparse *a, double beta,
+                               const cf_sparse *b, cf_sparse **out);
+
+CF_API cf_status cf_sparse_transpose(cf_context *ctx, const cf_sparse *a, cf_sparse **out);
+
+/* C = A B. */
+CF_API cf_status cf_sparse_product(cf_context *ctx, const cf_sparse *a, const cf_sparse *b, cf_sparse **out);
+
+/* Sets every value in column j of row i ... convenience: returns the index of
+ * entry (i, j) in values, or -1 if it is not in the pattern. */
+CF_API int64_t cf_sparse_find(const cf_sparse *a, int32_t i, int32_t j);
+
+/* ---- Cholesky (CHOLMOD, supernodal when it pays) ---------------------- */
+
+typedef enum cf_ordering {
+    CF_ORDERING_AUTO = 0,   /* METIS for large graphs, AMD otherwise */
+    CF_ORDERING_AMD = 1,
+    CF_ORDERING_METIS = 2,
+    CF_ORDERING_NATURAL = 3
+} cf_ordering;
+
+typedef struct cf_cholesky_options {
+    /* The matrix is made of block_size x block_size blocks (1, 3 or 4, or any
+     * b >= 1): the fill-reducing ordering is computed on the graph of blocks
+     * (the vertex graph) and expanded, which gives the same fill far more
+     * cheaply. */
+    int32_t block_size;
+    cf_ordering ordering;
+} cf_cholesky_options;
+
+CF_API void cf_cholesky_options_default(cf_cholesky_options *options);
+
+typedef struct cf_cholesky cf_cholesky;
+
+/* Symbolic analysis of the pattern of A (symmetric, square; the upper
+ * triangle is read). options may be NULL. */
+CF_API cf_status cf_cholesky_create(cf_context *ctx, const cf_sparse *a, const cf_cholesky_options *options,
+                                    cf_cholesky **out);
+
+/* Numeric factorisation of A (same pattern as at create). A matrix that is
+ * not positive definite gives CF_ERR_NOT_POSDEF with the failing column in
+ * the message. */
+CF_API cf_status cf_cholesky_factorize(cf_cholesky *chol, const cf_sparse *a);
+
+/* Factorises A + shift I (same pattern; the diagonal must be in it). */
+CF_API cf_status cf_cholesky_factorize_shifted(cf_cholesky *chol, const cf_sparse *a, double shift);
+
+/* Solves A X = B for nrhs columns (column-major, leading dimension n). x
+ * may equal b. Uses preallocated workspace after the first call. */
+CF_API cf_status cf_cholesky_solve(cf_cholesky *chol, int32_t nrhs, const double *b, double *x);
+
+CF_API int32_t cf_cholesky_size(const cf_cholesky *chol);
+
+/* Timings of the last analyse / factorise / solve, in seconds. */
+typedef struct cf_solver_timings {
+    double analyze_seconds;
+    double factorize_seconds;
+    double solve_seconds;
+} cf_solver_timings;
+CF_API void cf_cholesky_timings(const cf_cholesky *chol, cf_solver_timings *timings);
+
+CF_API void cf_cholesky_destroy(cf_cholesky **chol);
+
+/* ---- Saddle-point systems --------------------------------------------- */
+
+/* [ A  B^T ] [x]   [f]
+ * [ B  -C  ] [y] = [g]
+ * A: n x n symmetric positive semi-definite; B: m x n; C: m diagonal
+ * entries >= 0 (c_diag NULL means C = 0).
+ * With C > 0 the system is reduced to the Schur complement
+ * S = A + B^T C^-1 B (symmetric positive definite, supernodal Cholesky, pattern
+ * analysed once and refilled), y = C^-1 (B x - g), and the result is
+ * refined iteratively against the full system. With C = 0 (hard equality
+ * constraints) or when S is not positive definite it falls back to LU
+ * (UMFPACK) on the full matrix. */
+typedef struct cf_saddle cf_saddle;
+
+typedef struct cf_saddle_options {
+    int32_t block_size;        /* as in cf_cholesky_options */
+    int32_t refinement_steps;  /* iterative refinement steps (default 2) */
+    int32_t force_lu;          /* nonzero: always UMFPACK on the full matrix */
+} cf_saddle_options;
+
+CF_API void cf_saddle_options_default(cf_saddle_options *options);
+CF_API cf_status cf_saddle_create(cf_context *ctx, const cf_sparse *a, const cf_sparse *b,
+                                  const cf_saddle_options *options, cf_saddle **out);
+/* Numeric factorisation for new values of A, B (same patterns) and C. */
+CF_API cf_status cf_saddle_factorize(cf_saddle *s, const cf_sparse *a, const cf_sparse *b, const double *c_diag);
+/* x: n entries, y: m entries. */
+CF_API cf_status cf_saddle_solve(cf_saddle *s, const double *f, const double *g, double *x, double *y);
+/* 1 if the last factorisation used the Schur complement, 0 if LU. */
+CF_API int32_t cf_saddle_used_schur(const cf_saddle *s);
+CF_API void cf_saddle_destroy(cf_saddle **s);
+
+/* ---- LU (UMFPACK) for general square matrices ------------------------- */
+
+typedef struct cf_lu cf_lu;
+CF_API cf_status cf_lu_create(cf_context *ctx, const cf_sparse *a, cf_lu **out);   /* symbolic + numeric */
+CF_API cf_status cf_lu_factorize(cf_lu *lu, const cf_sparse *a);                   /* numeric, same pattern */
+CF_API cf_status cf_lu_solve(cf_lu *lu, const double *b, double *x);
+CF_API void cf_lu_destroy(cf_lu **lu);
+
+/* ---- Eigenvectors and projections ------------------------------------- */
+
+/* Smallest eigenpairs of A v = lambda M v for symmetric positive semi-definite
+ * A and diagonal positive M (m_diag; NULL means identity), by inverse power
+ * iteration with M-orthogonalisation (subspace iteration for k > 1) on a
+ * factorisation of A + shift M. `chol` may be a factorisation of that
+ * matrix the caller keeps (then a and shift are only used for the Rayleigh
+ * quotient); if NULL one is made and freed. vectors: n x k, column-major;
+ * on entry a starting guess (or zeros for a deterministic default), on exit
+ * M-orthonormal. Stops when the eigen-residual |A v - lambda M v|_M-1 is
+ * below tol * |A v| or after max_iterations. */
+typedef struct cf_eigen_options {
+    int32_t max_iterations;  /* default 50 */
+    double tolerance;        /* default 1e-10 */
+    double shift;            /* default 0; a small positive value for singular A */
+} cf_eigen_options;
+CF_API void cf_eigen_options_default(cf_eigen_options *options);
+CF_API cf_status cf_smallest_eigenvectors(cf_context *ctx, const cf_sparse *a, const double *m_diag,
+                                          cf_cholesky *chol, int32_t k, const cf_eigen_options *options,
+                                          double *vectors, double *eigenvalues, int32_t *iterations);
+
+/* Orthonormalises the k columns of basis (n x k, column-major) in place
+ * under <u, v> = sum_i w_i u_i v_i (w NULL: identity), by modified
+ * Gram-Schmidt with one reorthogonalisation. Columns whose remaining norm is
+ * below tol times their original norm are dropped; *rank receives how many
+ * columns remain (packed first). */
+CF_API void cf_orthonormalize(int32_t n, int32_t k, double *basis, const double *w, double tol, int32_t *rank);
+
+/* v <- v - sum_j <v, b_j>_w b_j for an orthonormal basis (n x k). */
+CF_API void cf_project_out(int32_t n, int32_t k, const double *basis, const double *w, double *v);
+
+/* Weighted dot product sum_i w_i a_i b_i (w NULL: plain). */
+CF_API double cf_dot(int32_t n, const double *a, const double *b, const double *w);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* CURVFLOW_LINALG_H */

@@ -1,0 +1,139 @@
+/*
+ * Geometry and discrete operators on a cf_mesh with given positions.
+ * Each operator lives in its own source file under src/ops/ and states its
+ * sign convention here. Outputs are caller-allocated unless they are sparse
+ * matrices (created by the library, freed with cf_sparse_destroy).
+ * `positions` is 3 nv doubles; pass cf_mesh_positions(mesh) for the rest
+ * shape.
+ *
+ * Project-wide signs (docs/conventions.md):
+ *  - L is the positive semi-definite weak cotan Laplacian:
+ *    (L f)_i = sum_j w_ij (f_i - f_j), w_ij = (cot a_ij + cot b_ij) / 2
+ *    (one cotangent for a boundary edge). libigl's cotmatrix is -L.
+ *  - L x = 2 H N dA (integrated mean-curvature normal), H > 0 on a sphere
+ *    with outward normals.
+ *  - K_i = 2 pi - sum of corner angles (interior), pi - sum (boundary).
+ */
+#ifndef CURVFLOW_OPS_H
+#define CURVFLOW_OPS_H
+
+#include "curvflow/curvflow.h"
+#include "curvflow/linalg.h"
+#include "curvflow/mesh.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Corner angles: angles[3 f + k] is the angle of face f at corner k. */
+CF_API cf_status cf_corner_angles(cf_context *ctx, const cf_mesh *mesh, const double *positions, double *angles);
+
+/* Cotangents of corner angles, same layout (cot[3f+k] is the cotangent at
+ * corner k, i.e. of the angle opposite halfedge 3f + (k+1)%3). */
+CF_API cf_status cf_corner_cotangents(cf_context *ctx, const cf_mesh *mesh, const double *positions, double *cot);
+
+/* Face areas (nf, positive). */
+CF_API cf_status cf_face_areas(cf_context *ctx, const cf_mesh *mesh, const double *positions, double *areas);
+
+/* Unit face normals (3 nf), right-hand rule on the corner order. */
+CF_API cf_status cf_face_normals(cf_context *ctx, const cf_mesh *mesh, const double *positions, double *normals);
+
+/* Area-weighted unit vertex normals (3 nv). */
+CF_API cf_status cf_vertex_normals(cf_context *ctx, const cf_mesh *mesh, const double *positions, double *normals);
+
+typedef enum cf_dual_area_kind {
+    CF_DUAL_AREA_BARYCENTRIC = 0, /* a third of each incident face */
+    CF_DUAL_AREA_MIXED_VORONOI = 1 /* Meyer et al. 2003 mixed Voronoi cells */
+} cf_dual_area_kind;
+
+/* Dual (vertex) areas, nv entries; they sum to the total area. */
+CF_API cf_status cf_vertex_areas(cf_context *ctx, const cf_mesh *mesh, const double *positions,
+                                 cf_dual_area_kind kind, double *areas);
+
+/* Positive semi-definite cotan Laplacian L (nv x nv, symmetric, both
+ * triangles stored, sorted, one-pass assembly). */
+CF_API cf_status cf_cotan_laplacian(cf_context *ctx, const cf_mesh *mesh, const double *positions, cf_sparse **out);
+
+/* Cotan weights per edge, w_e = (cot a + cot b) / 2 (ne entries). This is
+ * also the DEC Hodge star *1. */
+CF_API cf_status cf_cotan_weights(cf_context *ctx, const cf_mesh *mesh, const double *positions, double *weights);
+
+typedef enum cf_mass_kind {
+    CF_MASS_LUMPED_BARYCENTRIC = 0,
+    CF_MASS_LUMPED_VORONOI = 1,
+    CF_MASS_GALERKIN = 2          /* consistent P1 mass matrix (not diagonal) */
+} cf_mass_kind;
+
+/* Mass matrix M (nv x nv). Lumped kinds are diagonal. */
+CF_API cf_status cf_mass_matrix(cf_context *ctx, const cf_mesh *mesh, const double *positions, cf_mass_kind kind,
+                                cf_sparse **out);
+
+/* DEC (Desbrun et al. 2008). Orientation: edge e points from
+ * edge_vertices[2e] to edge_vertices[2e+1]; a face's boundary runs along its
+ * corner order. d0: ne x nv, (d0 f)_e = f_j - f_i. d1: nf x ne, +-1 by
+ * whether the face traverses the edge along its orientation. d1 d0 = 0. */
+CF_API cf_status cf_dec_d0(cf_context *ctx, const cf_mesh *mesh, cf_sparse **out);
+CF_API cf_status cf_dec_d1(cf_context *ctx, const cf_mesh *mesh, cf_sparse **out);
+/* Diagonal Hodge stars as vectors: *0 = barycentric dual areas (nv),
+ * *1 = cotan weights (ne), *2 = 1 / face area (nf). */
+CF_API cf_status cf_dec_star0(cf_context *ctx, const cf_mesh *mesh, const double *positions, double *star0);
+CF_API cf_status cf_dec_star1(cf_context *ctx, const cf_mesh *mesh, const double *positions, double *star1);
+CF_API cf_status cf_dec_star2(cf_context *ctx, const cf_mesh *mesh, const double *positions, double *star2);
+
+/* Integrated mean-curvature normal hn = L x (3 nv): 2 H N A_i, pointing
+ * outward on a convex closed surface. */
+CF_API cf_status cf_mean_curvature_normal(cf_context *ctx, const cf_mesh *mesh, const double *positions, double *hn);
+
+/* Pointwise signed mean curvature H_i = <L x, N_i> / (2 A_i) with
+ * barycentric A_i and area-weighted normal N_i (nv). 1/R on a sphere. */
+CF_API cf_status cf_mean_curvature(cf_context *ctx, const cf_mesh *mesh, const double *positions, double *h);
+
+/* Angle defect K_i = 2 pi - sum of angles (interior), pi - sum (boundary:
+ * geodesic curvature) so that sum K = 2 pi chi (nv). */
+CF_API cf_status cf_angle_defect(cf_context *ctx, const cf_mesh *mesh, const double *positions, double *k);
+
+/* Discrete Willmore energy W = sum_i H_i^2 A_i with H_i = |L x|_i / (2 A_i),
+ * barycentric A_i (W = 4 pi on a round sphere in the limit). */
+CF_API cf_status cf_willmore_energy(cf_context *ctx, const cf_mesh *mesh, const double *positions, double *energy);
+
+/* Signed enclosed volume (1/6) sum_f x_a . (x_b x x_c); positive for a
+ * closed outward-oriented mesh. For meshes with boundary it is the volume
+ * of the cone from the origin and depends on the origin. */
+CF_API cf_status cf_enclosed_volume(cf_context *ctx, const cf_mesh *mesh, const double *positions, double *volume);
+
+/* Total surface area. */
+CF_API cf_status cf_total_area(cf_context *ctx, const cf_mesh *mesh, const double *positions, double *area);
+
+/* Piecewise-linear gradient of a vertex function (nv) as one vector per
+ * face (3 nf). */
+CF_API cf_status cf_gradient(cf_context *ctx, const cf_mesh *mesh, const double *positions, const double *f,
+                             double *grad);
+
+/* Integrated divergence of a per-face vector field (3 nf) at vertices (nv),
+ * the negative adjoint of the gradient: div = -G^T A_f X, so that
+ * div(grad f) = -L f. */
+CF_API cf_status cf_divergence(cf_context *ctx, const cf_mesh *mesh, const double *positions, const double *field,
+                               double *div);
+
+/* Basis of harmonic 1-forms (Crane 2013, App. C.1): 2g columns of ne values
+ * each, column-major, orthonormal under the *1 inner product.
+ * *dimension receives 2g; `basis` must hold ne * 2g doubles (pass NULL to
+ * query the dimension only). Deterministic (seeded). */
+CF_API cf_status cf_harmonic_basis(cf_context *ctx, const cf_mesh *mesh, const double *positions, int32_t *dimension,
+                                   double *basis);
+
+/* Per-face vector field (3 nf) of a 1-form (ne values, on oriented edges):
+ * the Whitney interpolation evaluated at the face barycentre. */
+CF_API cf_status cf_one_form_to_vector_field(cf_context *ctx, const cf_mesh *mesh, const double *positions,
+                                             const double *one_form, double *field);
+
+/* One or more levels of Loop subdivision (Loop 1987; boundary rules of
+ * Hoppe et al. 1994). Creates a new mesh whose rest positions are the
+ * subdivided ones. Texture coordinates are subdivided linearly. */
+CF_API cf_status cf_loop_subdivide(cf_context *ctx, const cf_mesh *mesh, const double *positions, int32_t levels,
+                                   cf_mesh **out);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* CURVFLOW_OPS_H */

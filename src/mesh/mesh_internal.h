@@ -1,0 +1,45 @@
+/*
+ * Internal layout of cf_mesh. Operators and methods read these arrays
+ * directly; only src/mesh/ writes them. Meanings as in curvflow/mesh.h.
+ */
+#ifndef CF_MESH_MESH_INTERNAL_H
+#define CF_MESH_MESH_INTERNAL_H
+
+#include "core/core.h"
+#include "curvflow/mesh.h"
+
+struct cf_mesh {
+    cf_context *ctx;
+    int32_t nv, nf, ne;
+    double *positions;            /* 3 nv */
+    int32_t *triangles;           /* 3 nf */
+    int32_t *edge_vertices;       /* 2 ne, i < j */
+    int32_t *halfedge_edge;       /* 3 nf */
+    int32_t *halfedge_twin;       /* 3 nf, -1 on boundary */
+    int32_t *edge_faces;          /* 2 ne */
+    int32_t *edge_halfedge;       /* ne: a halfedge of the edge (the interior-side one on the boundary) */
+    uint8_t *vertex_on_boundary;  /* nv */
+    int32_t *vertex_component;    /* nv */
+    int32_t *face_component;      /* nf */
+    int32_t *ring_offsets;        /* nv + 1 */
+    int32_t *ring_neighbors;      /* 2 ne */
+    int32_t *ring_edges;          /* 2 ne */
+    int32_t *vface_offsets;       /* nv + 1 */
+    int32_t *vface_faces;         /* 3 nf */
+    int32_t boundary_loop_count;
+    int32_t *boundary_loop_offsets;   /* loops + 1 */
+    int32_t *boundary_loop_vertices;  /* boundary vertex count */
+    int32_t component_count;
+    int32_t euler_characteristic;
+    int32_t genus;
+    int32_t uv_count;
+    double *uv;                   /* 2 uv_count or NULL */
+    int32_t *uv_triangles;        /* 3 nf or NULL */
+};
+
+/* Halfedge helpers: h = 3 f + k runs triangles[h] -> triangles[next(h)]. */
+static inline int32_t cfi_he_face(int32_t h) { return h / 3; }
+static inline int32_t cfi_he_next(int32_t h) { return h - h % 3 + (h % 3 + 1) % 3; }
+static inline int32_t cfi_he_prev(int32_t h) { return h - h % 3 + (h % 3 + 2) % 3; }
+
+#endif /* CF_MESH_MESH_INTERNAL_H */

@@ -1,0 +1,57 @@
+/*
+ * How a method plugs into the common flow interface (include/curvflow/flow.h).
+ * Each method folder defines one `const cfi_flow_method cfi_<method>_method`
+ * and src/methods/flow.c lists it in its registry.
+ *
+ * The common layer (flow.c) owns the position buffer and does everything
+ * that is the same for all methods: copying options, checking every step
+ * for non-finite values and restoring the last good state on failure,
+ * area/volume drift, timing, progress callback, iteration count.
+ */
+#ifndef CF_METHODS_FLOW_INTERNAL_H
+#define CF_METHODS_FLOW_INTERNAL_H
+
+#include "core/core.h"
+#include "curvflow/flow.h"
+#include "mesh/mesh_internal.h"
+
+typedef struct cfi_flow_method {
+    cf_flow_kind kind;
+    const char *name;          /* "implicit-mcf" */
+    const char *description;   /* one line */
+    size_t options_size;       /* must be <= CF_FLOW_OPTIONS_STORAGE */
+    void (*options_default)(void *options);
+    const cf_param_desc *params;
+    int32_t param_count;
+    /* Allocates the method state (preallocating everything the steps need)
+     * into flow->impl, from flow->mesh, flow->positions and options. Fills
+     * flow->info with the initial energy (iteration 0). */
+    cf_status (*create)(cf_flow *flow, const void *options);
+    /* One step: updates flow->positions in place and fills the method's
+     * parts of *info (time_step, energy, terms, residuals, assemble/
+     * factorize/solve seconds). The common layer has saved the previous
+     * positions and restores them if this returns an error. */
+    cf_status (*step)(cf_flow *flow, cf_flow_info *info);
+    /* Called after cf_flow_set_positions or a failed step restored the
+     * positions, so the method can resynchronise cached state (may be NULL). */
+    cf_status (*reset)(cf_flow *flow);
+    void (*destroy)(cf_flow *flow);
+} cfi_flow_method;
+
+struct cf_flow {
+    cf_context *ctx;
+    const cf_mesh *mesh;
+    const cfi_flow_method *method;
+    cf_flow_options options;    /* copy */
+    void *impl;                 /* method state */
+    double *positions;          /* 3 nv, current state */
+    double *saved_positions;    /* 3 nv, state before the current step */
+    cf_flow_info info;          /* last step's info */
+    double initial_area;
+    double initial_volume;
+    int32_t converged;          /* set by the method */
+    cf_progress_fn progress;
+    void *progress_user;
+};
+
+#endif /* CF_METHODS_FLOW_INTERNAL_H */

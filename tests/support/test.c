@@ -1,0 +1,98 @@
+#include "test.h"
+
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+int cft_failures = 0;
+int cft_checks = 0;
+const char *cft_current_test = "";
+
+void cft_fail(const char *file, int line, const char *fmt, ...)
+{
+    va_list ap;
+    ++cft_failures;
+    fprintf(stderr, "%s:%d: [%s] ", file, line, cft_current_test);
+    va_start(ap, fmt);
+    vfprintf(stderr, fmt, ap);
+    va_end(ap);
+    fputc('\n', stderr);
+}
+
+int cft_finish(void)
+{
+    fprintf(stderr, "%d checks, %d failed\n", cft_checks, cft_failures);
+    if (cft_checks == 0) {
+        fprintf(stderr, "no check ran: a test that checks nothing cannot fail\n");
+        return 1;
+    }
+    return cft_failures == 0 ? 0 : 1;
+}
+
+void cft_skip(const char *why)
+{
+    fprintf(stdout, "SKIP: %s\n", why);
+    fprintf(stderr, "SKIP: %s\n", why);
+    exit(77);
+}
+
+static const char *shared_dir(void)
+{
+    const char *env = getenv("CURVFLOW_SHARED_DIR");
+    return env && *env ? env : CF_TEST_SHARED_DIR;
+}
+
+const char *cft_shared_mesh_path(const char *name)
+{
+    static char path[4096];
+    struct stat st;
+    snprintf(path, sizeof path, "%s/meshes/%s", shared_dir(), name);
+    if (stat(path, &st) != 0) return NULL;
+    return path;
+}
+
+const char *cft_require_shared_mesh(const char *name)
+{
+    const char *p = cft_shared_mesh_path(name);
+    if (!p) {
+        static char why[4200];
+        snprintf(why, sizeof why, "%s/meshes/%s not found (the shared test data is absent)", shared_dir(), name);
+        cft_skip(why);
+    }
+    return p;
+}
+
+const char *cft_temp_path(const char *suffix)
+{
+    static char path[4096];
+    static int counter = 0;
+    snprintf(path, sizeof path, "%s/tmp_%ld_%d%s", CF_TEST_BINARY_DIR, (long)getpid(), counter++, suffix);
+    return path;
+}
+
+static void log_to_stderr(void *user, cf_log_level level, const char *line)
+{
+    (void)user;
+    static const char *names[] = {"debug", "info", "warning", "error"};
+    fprintf(stderr, "  [curvflow %s] %s\n", names[level], line);
+}
+
+cf_context *cft_context(void)
+{
+    cf_context *ctx = NULL;
+    if (cf_context_create(&ctx) != CF_OK) {
+        fprintf(stderr, "cannot create context\n");
+        exit(1);
+    }
+    cf_context_set_log(ctx, log_to_stderr, NULL, CF_LOG_WARNING);
+    return ctx;
+}
+
+int cft_near(double a, double b, double rtol, double atol)
+{
+    if (isnan(a) || isnan(b)) return 0;
+    double scale = fabs(a) > fabs(b) ? fabs(a) : fabs(b);
+    return fabs(a - b) <= atol + rtol * scale;
+}

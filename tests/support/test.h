@@ -1,0 +1,83 @@
+/*
+ * Tiny test harness. A test file defines static void functions and a main
+ * that runs them with CFT_RUN; checks print file:line and both values and
+ * count failures; main returns cft_finish().
+ *
+ *   static void test_sum(void) { CHECK_NEAR(1.0 + 1e-12, 1.0, 1e-9, 0.0); }
+ *   int main(void) { CFT_RUN(test_sum); return cft_finish(); }
+ *
+ * Tests needing ../shared/meshes call cft_shared_mesh_path(), which returns
+ * NULL when the folder is absent, and then cft_skip("why") which prints a
+ * visible SKIP line and exits with 77 (CTest's skip code here).
+ */
+#ifndef CF_TESTS_SUPPORT_TEST_H
+#define CF_TESTS_SUPPORT_TEST_H
+
+#include "curvflow/curvflow.h"
+#include "curvflow/mesh.h"
+
+#include <math.h>
+#include <stdio.h>
+
+extern int cft_failures;
+extern int cft_checks;
+extern const char *cft_current_test;
+
+void cft_fail(const char *file, int line, const char *fmt, ...);
+int cft_finish(void);
+/* Prints "SKIP: <why>" and exits with 77. */
+_Noreturn void cft_skip(const char *why);
+/* Full path of ../shared/meshes/<name> (static buffer), or NULL if the
+ * shared folder is absent. */
+const char *cft_shared_mesh_path(const char *name);
+/* Like cft_shared_mesh_path but skips the whole test program when absent. */
+const char *cft_require_shared_mesh(const char *name);
+/* Temporary file path in the build tree (static buffer, unique per call). */
+const char *cft_temp_path(const char *suffix);
+/* A context that prints library log lines to stderr. */
+cf_context *cft_context(void);
+/* true if |a - b| <= atol + rtol * max(|a|, |b|) */
+int cft_near(double a, double b, double rtol, double atol);
+
+#define CFT_RUN(fn) \
+    do { cft_current_test = #fn; fprintf(stderr, "-- %s\n", #fn); fn(); } while (0)
+
+#define CHECK(cond) \
+    do { ++cft_checks; if (!(cond)) cft_fail(__FILE__, __LINE__, "CHECK(%s) failed", #cond); } while (0)
+
+#define CHECK_NEAR(a, b, rtol, atol) \
+    do { \
+        ++cft_checks; \
+        double cft_a_ = (double)(a), cft_b_ = (double)(b); \
+        if (!cft_near(cft_a_, cft_b_, (rtol), (atol))) \
+            cft_fail(__FILE__, __LINE__, "CHECK_NEAR(%s, %s): %.17g vs %.17g (diff %.3g, rtol %g, atol %g)", \
+                     #a, #b, cft_a_, cft_b_, fabs(cft_a_ - cft_b_), (double)(rtol), (double)(atol)); \
+    } while (0)
+
+#define CHECK_LE(a, b) \
+    do { \
+        ++cft_checks; \
+        double cft_a_ = (double)(a), cft_b_ = (double)(b); \
+        if (!(cft_a_ <= cft_b_)) cft_fail(__FILE__, __LINE__, "CHECK_LE(%s, %s): %.17g > %.17g", #a, #b, cft_a_, cft_b_); \
+    } while (0)
+
+#define CHECK_STATUS(expr, expected) \
+    do { \
+        ++cft_checks; \
+        cf_status cft_s_ = (expr); \
+        if (cft_s_ != (expected)) \
+            cft_fail(__FILE__, __LINE__, "%s returned %s, expected %s", #expr, cf_status_name(cft_s_), \
+                     cf_status_name(expected)); \
+    } while (0)
+
+/* For calls that must succeed; prints the context message on failure. */
+#define CHECK_OK(ctx, expr) \
+    do { \
+        ++cft_checks; \
+        cf_status cft_s_ = (expr); \
+        if (cft_s_ != CF_OK) \
+            cft_fail(__FILE__, __LINE__, "%s returned %s: %s", #expr, cf_status_name(cft_s_), \
+                     cf_context_message(ctx)); \
+    } while (0)
+
+#endif /* CF_TESTS_SUPPORT_TEST_H */

@@ -54,4 +54,14 @@ struct cf_flow {
     void *progress_user;
 };
 
+
+
+/* The registry (src/methods/flow.c) lists one method per kind. */
+extern const cfi_flow_method cfi_explicit_mcf_method;
+extern const cfi_flow_method cfi_implicit_mcf_method;
+extern const cfi_flow_method cfi_conformal_mcf_method;
+extern const cfi_flow_method cfi_explicit_bilaplacian_method;
+extern const cfi_flow_method cfi_implicit_bilaplacian_method;
+extern const cfi_flow_method cfi_spin_willmore_method;
+extern const cfi_flow_method cfi_stretch_bend_edit_method;
 #endif /* CF_METHODS_FLOW_INTERNAL_H */

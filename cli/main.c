@@ -1,11 +1,63 @@
-/* curvflow command-line tool (placeholder until the CLI lands). */
+/*
+ * curvflow command-line tool: dispatches to the subcommands (cli.h).
+ * Exit codes: 0 ok, 1 usage, 2 invalid mesh or file, 3 numerical failure.
+ */
+#include "cli.h"
 #include "curvflow/curvflow.h"
 
 #include <stdio.h>
+#include <string.h>
+
+typedef struct command {
+    const char *name;
+    int (*run)(int argc, char **argv);
+    const char *summary;
+} command;
+
+static const command commands[] = {
+    {"info", cli_info, "counts, topology, validation report, angle/area statistics of a mesh"},
+    {"generate", cli_generate, "write a built-in mesh (icosphere, torus, bumpy-sphere, grid, ...)"},
+    {"flow", cli_flow, "run any flow method on a mesh (--list-methods)"},
+    {"compare", cli_compare, "quasi-conformal error and area distortion between two meshes"},
+    {"demo", cli_demo, "the main job on a built-in bumpy sphere"},
+    {"spin", cli_spin, "spin transformation from a curvature change (Crane 2013)"},
+    {"curve", cli_curve, "isometric flow of planar curves (Crane 2013)"},
+    {"edit", cli_edit, "stretching + bending mesh editing (Zhao & Gortler)"},
+};
+#define COMMAND_COUNT (sizeof commands / sizeof commands[0])
+
+static void print_help(FILE *out)
+{
+    fprintf(out,
+            "Usage: curvflow COMMAND [ARGS]...\n"
+            "Deforms triangle meshes by controlling curvature.\n\n"
+            "Commands:\n");
+    for (size_t i = 0; i < COMMAND_COUNT; ++i) fprintf(out, "  %-10s %s\n", commands[i].name, commands[i].summary);
+    fprintf(out,
+            "\nOptions:\n"
+            "  -h, --help     show this help (curvflow COMMAND --help for a command)\n"
+            "  -V, --version  show the version\n\n"
+            "Meshes are read and written as OBJ, OFF or PLY (format from the extension).\n"
+            "Exit status: 0 ok, 1 usage error, 2 invalid mesh or file, 3 numerical failure.\n");
+}
 
 int main(int argc, char **argv)
 {
-    (void)argc; (void)argv;
-    printf("curvflow %s\n", cf_version_string());
-    return 0;
+    if (argc < 2) {
+        print_help(stderr);
+        return CLI_EXIT_USAGE;
+    }
+    const char *name = argv[1];
+    if (strcmp(name, "-h") == 0 || strcmp(name, "--help") == 0 || strcmp(name, "help") == 0) {
+        print_help(stdout);
+        return CLI_EXIT_OK;
+    }
+    if (strcmp(name, "-V") == 0 || strcmp(name, "--version") == 0) {
+        printf("curvflow %s\n", cf_version_string());
+        return CLI_EXIT_OK;
+    }
+    for (size_t i = 0; i < COMMAND_COUNT; ++i)
+        if (strcmp(name, commands[i].name) == 0) return commands[i].run(argc - 1, argv + 1);
+    fprintf(stderr, "curvflow: unknown command '%s'\nTry 'curvflow --help' for more information.\n", name);
+    return CLI_EXIT_USAGE;
 }

@@ -87,6 +87,12 @@ CF_API const void *cf_flow_options_method_const(const cf_flow_options *options);
  * naming the parameter for an unknown name, bad text or value out of range. */
 CF_API cf_status cf_flow_options_set(cf_context *ctx, cf_flow_options *options, const char *name, const char *value);
 
+/* Text form of the current value of one parameter (as accepted by
+ * cf_flow_options_set; choices by name, bools as true/false). CF_ERR_INVALID_ARG
+ * if buf is too small. */
+CF_API cf_status cf_flow_options_format(const cf_flow_options *options, const cf_param_desc *param, char *buf,
+                                        size_t size);
+
 /* The parameter table of a kind. */
 CF_API cf_status cf_flow_params(cf_flow_kind kind, const cf_param_desc **params, int32_t *count);
 

@@ -124,6 +124,13 @@ CF_API void cf_cholesky_timings(const cf_cholesky *chol, cf_solver_timings *timi
 
 CF_API void cf_cholesky_destroy(cf_cholesky **chol);
 
+/* Process-wide switch, default on: stop CHOLMOD's OpenMP parallel regions
+ * (CHOLMOD 3.0.14 asks for 4 threads in each; on 2 cores they fight
+ * OpenBLAS's threads and factorisations run about 2x slower, see
+ * docs/linalg.md). Takes effect when a context first uses CHOLMOD; call it
+ * before creating any factorisation. OpenBLAS keeps its own threads. */
+CF_API void cf_linalg_set_thread_fix(int enabled);
+
 /* ---- Saddle-point systems --------------------------------------------- */
 
 /* [ A  B^T ] [x]   [f]
@@ -153,6 +160,9 @@ CF_API cf_status cf_saddle_factorize(cf_saddle *s, const cf_sparse *a, const cf_
 CF_API cf_status cf_saddle_solve(cf_saddle *s, const double *f, const double *g, double *x, double *y);
 /* 1 if the last factorisation used the Schur complement, 0 if LU. */
 CF_API int32_t cf_saddle_used_schur(const cf_saddle *s);
+/* Relative residual |K z - rhs|_2 / |rhs|_2 of the full system after the
+ * last solve (after refinement). A warning is logged when it exceeds 1e-10. */
+CF_API double cf_saddle_residual(const cf_saddle *s);
 CF_API void cf_saddle_destroy(cf_saddle **s);
 
 /* ---- LU (UMFPACK) for general square matrices ------------------------- */

@@ -35,11 +35,20 @@ struct cf_mesh {
     int32_t uv_count;
     double *uv;                   /* 2 uv_count or NULL */
     int32_t *uv_triangles;        /* 3 nf or NULL */
+    /* Added after the fixed layout above. */
+    int32_t boundary_vertex_count;    /* length of boundary_loop_vertices */
 };
 
 /* Halfedge helpers: h = 3 f + k runs triangles[h] -> triangles[next(h)]. */
 static inline int32_t cfi_he_face(int32_t h) { return h / 3; }
 static inline int32_t cfi_he_next(int32_t h) { return h - h % 3 + (h % 3 + 1) % 3; }
 static inline int32_t cfi_he_prev(int32_t h) { return h - h % 3 + (h % 3 + 2) % 3; }
+
+/* Topology of one 1-to-4 split (used by the icosphere generator and Loop
+ * subdivision): vertex v keeps index v, the midpoint of edge e gets index
+ * nv + e, and face f becomes faces 4f .. 4f+3 of out (12 nf int32):
+ * (a, m_ab, m_ca), (m_ab, b, m_bc), (m_ca, m_bc, c), (m_ab, m_bc, m_ca),
+ * all oriented like f. */
+void cfi_mesh_split4_triangles(const cf_mesh *mesh, int32_t *out);
 
 #endif /* CF_MESH_MESH_INTERNAL_H */

@@ -25,15 +25,20 @@ typedef struct cfi_flow_method {
     int32_t param_count;
     /* Allocates the method state (preallocating everything the steps need)
      * into flow->impl, from flow->mesh, flow->positions and options. Fills
-     * flow->info with the initial energy (iteration 0). */
+     * flow->info with the initial energy (iteration 0). On failure it
+     * records the message; the common layer then calls destroy, which must
+     * accept a partially built (or NULL) flow->impl. */
     cf_status (*create)(cf_flow *flow, const void *options);
     /* One step: updates flow->positions in place and fills the method's
      * parts of *info (time_step, energy, terms, residuals, assemble/
      * factorize/solve seconds). The common layer has saved the previous
-     * positions and restores them if this returns an error. */
+     * positions and restores them if this returns an error. Must not
+     * allocate. The common layer fills iteration, time, area, volume,
+     * drifts and total_seconds. */
     cf_status (*step)(cf_flow *flow, cf_flow_info *info);
     /* Called after cf_flow_set_positions or a failed step restored the
-     * positions, so the method can resynchronise cached state (may be NULL). */
+     * positions, so the method can resynchronise cached state and
+     * recompute flow->info.energy for the current positions (may be NULL). */
     cf_status (*reset)(cf_flow *flow);
     void (*destroy)(cf_flow *flow);
 } cfi_flow_method;
@@ -55,6 +60,9 @@ struct cf_flow {
 };
 
 
+
+/* The registry entry of a kind, NULL if out of range. */
+const cfi_flow_method *cfi_flow_method_of(cf_flow_kind kind);
 
 /* The registry (src/methods/flow.c) lists one method per kind. */
 extern const cfi_flow_method cfi_explicit_mcf_method;

@@ -1,22 +1,691 @@
-/* Placeholder registration of the spin-Willmore flow until it lands. */
+/*
+ * Conformal Willmore flow in curvature space: Crane, Pinkall, Schroeder
+ * 2013, "Robust Fairing via Conformal Curvature Flow", Table 1 and
+ * Sections 4, 6.1-6.3, App. B-E.
+ *
+ * One step on the current surface f:
+ *   I.   H from the cotan Laplacian (Sec. 6.1);
+ *   II.  rhodot = -2 H, optionally filtered v <- v - (id + sigma Delta^k)^-1 v (Sec. 4);
+ *   III. constraints (Sec. 6.2): inversion N^x,y,z, then Moebius balancing
+ *        (App. E.1), then total curvature 1 and exactness Z_i^x,y,z (App. C.1);
+ *   IV.  rho = tau rhodot (so mu~ = (1 - 2 tau) mu, NOTES.md);
+ *   V.   lambda = smallest eigenvector of X(rho) by one inverse power
+ *        iteration from lambda = 1 (Sec. 6.4.2), or the Dirichlet solve of
+ *        Sec. 6.3.2 for a fixed boundary;
+ *   VI.  transformed edges and the cotan Poisson problem (Eq. (6)).
+ * The symbolic factorisations of X (block size 4) and L are computed once at
+ * creation; each step only refills values and refactorises.
+ */
 #include "methods/flow_internal.h"
+#include "methods/spin_willmore/spin_internal.h"
+#include "curvflow/ops.h"
 
-static void spin_willmore_options_default(void *options) { (void)options; }
-static cf_status spin_willmore_create(cf_flow *flow, const void *options)
+#include <math.h>
+#include <stddef.h>
+#include <string.h>
+
+#define CFI_PI 3.14159265358979323846
+
+/* TEMPORARY (until ops/linalg land these): weak references so that the
+ * library links while they are still missing. Removed once implemented. */
+#pragma weak cf_orthonormalize
+#pragma weak cf_project_out
+#pragma weak cf_dot
+
+/* Sign of an inversion's curvature change relative to App. D's
+ * rhodot = -2 <a, N> in our orientation of X (checked by the Moebius test). */
+#define CFI_MOBIUS_SIGN 1.0
+
+typedef struct spin_state {
+    cf_spin_willmore_options opt;
+    int32_t nv, ne, nf;
+    cfi_dirac *dirac;
+    cf_cholesky *chol;       /* X(rho) + eps M */
+    cf_cholesky *chol0;      /* X(0) + eps M, exactness only */
+    cfi_poisson *poisson;
+    cf_sparse *filter;       /* M + sigma' L (M^-1 L)^(k-1), built from the input */
+    cf_cholesky *filter_chol;
+    double filter_scale;     /* k = 0: sigma / (1 + sigma) */
+    int32_t harmonic_dim;    /* 2g if the exactness constraint is active */
+    int32_t fixed_boundary;
+    int32_t has_boundary;
+    double eps;
+    double *harmonic;        /* ne x 2g */
+    double *area;            /* nv barycentric areas of the current surface */
+    double *normal;          /* 3 nv */
+    double *lx;              /* 3 nv: L f */
+    double *h;               /* nv */
+    double *rest_area;       /* nv: areas of the input, for Moebius balancing */
+    double *rhodot, *rho;    /* nv */
+    double *lambda, *qrhs, *qwork;   /* 4 nv */
+    double *zrhs, *zsol;     /* 4 nv x 2g */
+    double *basis;           /* nv x max_cols */
+    int32_t max_cols;
+    double *edges;           /* 3 ne */
+    double *newpos;          /* 3 nv */
+    double *vtmp, *vtmp2;    /* nv */
+    double energy;
+    cfi_spin_diagnostics diag;
+} spin_state;
+
+void cf_spin_willmore_options_default(cf_spin_willmore_options *o)
 {
-    (void)options;
-    return cfi_error(flow->ctx, CF_ERR_UNSUPPORTED, "spin-willmore: not implemented yet");
+    if (!o) return;
+    memset(o, 0, sizeof *o);
+    o->time_step = 0.45;
+    o->total_curvature = 1;
+    o->inversion = 1;
+    o->exactness = 1;
+    o->mobius = 0;
+    o->mobius_weight = 1.0;
+    o->sigma = 0.0;
+    o->filter_k = 2;
+    o->boundary_mode = CF_SPIN_BOUNDARY_FREE;
+    o->power_iterations = 1;
+    o->normalize = 1;
+    o->tolerance = 1e-6;
 }
-static cf_status spin_willmore_step(cf_flow *flow, cf_flow_info *info)
+
+static void options_default(void *options) { cf_spin_willmore_options_default(options); }
+
+static const char *const boundary_choices[] = {"free", "fixed", NULL};
+
+#define OPT(f) offsetof(cf_spin_willmore_options, f)
+static const cf_param_desc spin_params[] = {
+    {"time_step", CF_PARAM_DOUBLE, OPT(time_step), 1e-9, 10.0, NULL,
+     "tau: rho = -2 tau H per step (stable for tau < 1; 0.5 removes curvature to first order)"},
+    {"total_curvature", CF_PARAM_BOOL, OPT(total_curvature), 0, 1, NULL, "constraint <rhodot, 1> = 0 (App. B)"},
+    {"inversion", CF_PARAM_BOOL, OPT(inversion), 0, 1, NULL, "constraints <rhodot, N> = 0 (App. D)"},
+    {"exactness", CF_PARAM_BOOL, OPT(exactness), 0, 1, NULL, "constraints <rhodot, Z_i> = 0, genus > 0 (App. C)"},
+    {"mobius", CF_PARAM_BOOL, OPT(mobius), 0, 1, NULL, "Moebius balancing toward the input area distribution (App. E)"},
+    {"mobius_weight", CF_PARAM_DOUBLE, OPT(mobius_weight), 0.0, 100.0, NULL, "scale of the balancing term"},
+    {"sigma", CF_PARAM_DOUBLE, OPT(sigma), 0.0, 1e12, NULL,
+     "spectral filter strength in units of R^2k, R = sqrt(area/4pi); 0 = off (Sec. 4)"},
+    {"filter_k", CF_PARAM_INT, OPT(filter_k), 0, 3, NULL, "spectral filter power k (Fig. 8)"},
+    {"boundary", CF_PARAM_CHOICE, OPT(boundary_mode), 0, 1, boundary_choices,
+     "free (natural) or fixed boundary positions (Sec. 6.3.2)"},
+    {"power_iterations", CF_PARAM_INT, OPT(power_iterations), 1, 100, NULL, "inverse power iterations per step"},
+    {"normalize", CF_PARAM_BOOL, OPT(normalize), 0, 1, NULL, "keep total area and centroid"},
+    {"tolerance", CF_PARAM_DOUBLE, OPT(tolerance), 0.0, 1.0, NULL, "converged below this relative energy decrease"},
+};
+#undef OPT
+
+/* ---- geometry of the current surface ---------------------------------- */
+
+/* Refills L, areas, normals, L f, H and the energy W = sum |L f|_i^2 / (4 A_i)
+ * (as cf_willmore_energy; interior vertices only when there is a boundary). */
+static cf_status update_geometry(cf_flow *flow, spin_state *s, const double *x)
 {
-    (void)info;
-    return cfi_error(flow->ctx, CF_ERR_UNSUPPORTED, "spin-willmore: not implemented yet");
+    cf_context *ctx = flow->ctx;
+    const cf_mesh *mesh = flow->mesh;
+    cf_status st = cfi_poisson_refill(s->poisson, mesh, x);
+    if (st == CF_OK) st = cf_vertex_areas(ctx, mesh, x, CF_DUAL_AREA_BARYCENTRIC, s->area);
+    if (st == CF_OK) st = cf_vertex_normals(ctx, mesh, x, s->normal);
+    if (st != CF_OK) return st;
+    const cf_sparse *l = s->poisson->l;
+    memset(s->lx, 0, 3 * (size_t)s->nv * sizeof(double));
+    for (int32_t j = 0; j < s->nv; ++j)
+        for (int32_t p = l->colptr[j]; p < l->colptr[j + 1]; ++p) {
+            int32_t i = l->rowind[p];
+            for (int c = 0; c < 3; ++c) s->lx[3 * i + c] += l->values[p] * x[3 * j + c];
+        }
+    double w = 0.0;
+    for (int32_t i = 0; i < s->nv; ++i) {
+        const double *v = s->lx + 3 * i, *n = s->normal + 3 * i;
+        if (!(s->area[i] > 0.0)) return cfi_error(ctx, CF_ERR_DEGENERATE_FACE, "vertex %d: zero dual area", i);
+        if (mesh->vertex_on_boundary[i]) {
+            s->h[i] = 0.0;
+            continue;
+        }
+        s->h[i] = (v[0] * n[0] + v[1] * n[1] + v[2] * n[2]) / (2.0 * s->area[i]);
+        w += (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) / (4.0 * s->area[i]);
+    }
+    s->energy = w;
+    return CF_OK;
 }
-static void spin_willmore_destroy(cf_flow *flow) { (void)flow; }
+
+/* ---- creation ---------------------------------------------------------- */
+
+static void spin_destroy(cf_flow *flow)
+{
+    spin_state *s = flow->impl;
+    if (!s) return;
+    cf_context *ctx = flow->ctx;
+    cfi_dirac_destroy(ctx, &s->dirac);
+    cf_cholesky_destroy(&s->chol);
+    cf_cholesky_destroy(&s->chol0);
+    cfi_poisson_destroy(ctx, &s->poisson);
+    cf_sparse_destroy(&s->filter);
+    cf_cholesky_destroy(&s->filter_chol);
+    int64_t nv = s->nv, g2 = s->harmonic_dim;
+    CFI_FREE(ctx, s->harmonic, (int64_t)s->ne * g2);
+    CFI_FREE(ctx, s->area, nv);
+    CFI_FREE(ctx, s->normal, 3 * nv);
+    CFI_FREE(ctx, s->lx, 3 * nv);
+    CFI_FREE(ctx, s->h, nv);
+    CFI_FREE(ctx, s->rest_area, nv);
+    CFI_FREE(ctx, s->rhodot, nv);
+    CFI_FREE(ctx, s->rho, nv);
+    CFI_FREE(ctx, s->lambda, 4 * nv);
+    CFI_FREE(ctx, s->qrhs, 4 * nv);
+    CFI_FREE(ctx, s->qwork, 4 * nv);
+    CFI_FREE(ctx, s->zrhs, 4 * nv * g2);
+    CFI_FREE(ctx, s->zsol, 4 * nv * g2);
+    CFI_FREE(ctx, s->basis, nv * s->max_cols);
+    CFI_FREE(ctx, s->edges, 3 * (int64_t)s->ne);
+    CFI_FREE(ctx, s->newpos, 3 * nv);
+    CFI_FREE(ctx, s->vtmp, nv);
+    CFI_FREE(ctx, s->vtmp2, nv);
+    CFI_FREE(ctx, s, 1);
+    flow->impl = NULL;
+}
+
+/* Copy of a with column j scaled by colscale[j]. */
+static cf_status scaled_copy(cf_context *ctx, const cf_sparse *a, const double *colscale, cf_sparse **out)
+{
+    int64_t nnz = cf_sparse_nnz(a);
+    int32_t *r = CFI_ALLOC(ctx, int32_t, nnz), *c = CFI_ALLOC(ctx, int32_t, nnz);
+    double *v = CFI_ALLOC(ctx, double, nnz);
+    cf_status st = CF_ERR_NOMEM;
+    if (r && c && v) {
+        for (int32_t j = 0; j < a->ncols; ++j)
+            for (int32_t p = a->colptr[j]; p < a->colptr[j + 1]; ++p) {
+                r[p] = a->rowind[p];
+                c[p] = j;
+                v[p] = a->values[p] * colscale[j];
+            }
+        st = cf_sparse_from_triplets(ctx, a->nrows, a->ncols, nnz, r, c, v, 0, out, NULL);
+    }
+    CFI_FREE(ctx, r, nnz);
+    CFI_FREE(ctx, c, nnz);
+    CFI_FREE(ctx, v, nnz);
+    return st;
+}
+
+/* Filter matrix F = M + sigma' L (M^-1 L)^(k-1) of the input surface. The
+ * weak cotan Laplacian is invariant under conformal maps, and the flow is
+ * conformal, so F is built and factorised once. */
+static cf_status build_filter(cf_flow *flow, spin_state *s)
+{
+    cf_context *ctx = flow->ctx;
+    const cf_mesh *mesh = flow->mesh;
+    int32_t k = s->opt.filter_k;
+    double sigma = s->opt.sigma;
+    if (k == 0) {
+        s->filter_scale = sigma / (1.0 + sigma);
+        return CF_OK;
+    }
+    double radius2 = flow->initial_area / (4.0 * CFI_PI);
+    double sig = sigma * pow(radius2, (double)k);
+    cf_sparse *l = NULL, *m = NULL, *lminv = NULL, *p = NULL, *p2 = NULL;
+    cf_status st = cf_cotan_laplacian(ctx, mesh, flow->positions, &l);
+    if (st == CF_OK) st = cf_mass_matrix(ctx, mesh, flow->positions, CF_MASS_LUMPED_BARYCENTRIC, &m);
+    if (st != CF_OK) goto done;
+    if (k == 1) {
+        st = cf_sparse_add(ctx, 1.0, m, sig, l, &s->filter);
+    } else {
+        for (int32_t i = 0; i < s->nv; ++i) s->vtmp[i] = 1.0 / s->area[i];
+        st = scaled_copy(ctx, l, s->vtmp, &lminv);
+        if (st == CF_OK) st = cf_sparse_product(ctx, lminv, l, &p);
+        if (st == CF_OK && k == 3) {
+            st = cf_sparse_product(ctx, lminv, p, &p2);
+            cf_sparse_destroy(&p);
+            p = p2;
+            p2 = NULL;
+        }
+        if (st == CF_OK) st = cf_sparse_add(ctx, 1.0, m, sig, p, &s->filter);
+    }
+    if (st != CF_OK) goto done;
+    s->filter->symmetric = 1;
+    cf_cholesky_options co;
+    cf_cholesky_options_default(&co);
+    co.block_size = 1;
+    st = cf_cholesky_create(ctx, s->filter, &co, &s->filter_chol);
+    if (st == CF_OK) st = cf_cholesky_factorize(s->filter_chol, s->filter);
+done:
+    cf_sparse_destroy(&l);
+    cf_sparse_destroy(&m);
+    cf_sparse_destroy(&lminv);
+    cf_sparse_destroy(&p);
+    cf_sparse_destroy(&p2);
+    return st;
+}
+
+static cf_status spin_create(cf_flow *flow, const void *options)
+{
+    cf_context *ctx = flow->ctx;
+    const cf_mesh *mesh = flow->mesh;
+    const cf_spin_willmore_options *o = options;
+    if (!(o->time_step > 0.0) || !isfinite(o->time_step))
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: time_step must be > 0, got %g", o->time_step);
+    if (o->filter_k < 0 || o->filter_k > 3)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: filter_k must be 0..3, got %d", o->filter_k);
+    if (!(o->sigma >= 0.0) || !isfinite(o->sigma))
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: sigma must be >= 0, got %g", o->sigma);
+    if (o->power_iterations < 1)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: power_iterations must be >= 1, got %d",
+                         o->power_iterations);
+    if (o->boundary_mode != CF_SPIN_BOUNDARY_FREE && o->boundary_mode != CF_SPIN_BOUNDARY_FIXED)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: unknown boundary mode %d", o->boundary_mode);
+    if (!(o->mobius_weight >= 0.0) || !isfinite(o->mobius_weight))
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: mobius_weight must be >= 0");
+    int32_t has_boundary = mesh->boundary_loop_count > 0;
+    if (o->boundary_mode == CF_SPIN_BOUNDARY_FIXED && !has_boundary)
+        return cfi_error(ctx, CF_ERR_BAD_MESH, "spin-willmore: boundary=fixed needs a mesh with boundary");
+
+    spin_state *s = CFI_ALLOC(ctx, spin_state, 1);
+    if (!s) return CF_ERR_NOMEM;
+    flow->impl = s;
+    s->opt = *o;
+    s->nv = mesh->nv;
+    s->ne = mesh->ne;
+    s->nf = mesh->nf;
+    s->has_boundary = has_boundary;
+    s->fixed_boundary = o->boundary_mode == CF_SPIN_BOUNDARY_FIXED;
+    int64_t nv = s->nv;
+    cf_status st = CF_OK;
+
+    /* exactness: harmonic 1-forms of the input (closed surfaces of genus > 0).
+     * Harmonic forms depend only on the conformal structure, which the flow
+     * preserves, so the basis is computed once (App. C.1, steps I-III). */
+    int32_t dim = 0;
+    if (o->exactness && !has_boundary && mesh->genus > 0) {
+        st = cf_harmonic_basis(ctx, mesh, flow->positions, &dim, NULL);
+        if (st != CF_OK) goto fail;
+    }
+    s->harmonic_dim = dim;
+    s->max_cols = 4 + 3 * dim + 1;
+    s->harmonic = dim ? CFI_ALLOC(ctx, double, (int64_t)s->ne * dim) : NULL;
+    s->area = CFI_ALLOC(ctx, double, nv);
+    s->normal = CFI_ALLOC(ctx, double, 3 * nv);
+    s->lx = CFI_ALLOC(ctx, double, 3 * nv);
+    s->h = CFI_ALLOC(ctx, double, nv);
+    s->rest_area = CFI_ALLOC(ctx, double, nv);
+    s->rhodot = CFI_ALLOC(ctx, double, nv);
+    s->rho = CFI_ALLOC(ctx, double, nv);
+    s->lambda = CFI_ALLOC(ctx, double, 4 * nv);
+    s->qrhs = CFI_ALLOC(ctx, double, 4 * nv);
+    s->qwork = CFI_ALLOC(ctx, double, 4 * nv);
+    s->zrhs = dim ? CFI_ALLOC(ctx, double, 4 * nv * dim) : NULL;
+    s->zsol = dim ? CFI_ALLOC(ctx, double, 4 * nv * dim) : NULL;
+    s->basis = CFI_ALLOC(ctx, double, nv * s->max_cols);
+    s->edges = CFI_ALLOC(ctx, double, 3 * (int64_t)s->ne);
+    s->newpos = CFI_ALLOC(ctx, double, 3 * nv);
+    s->vtmp = CFI_ALLOC(ctx, double, nv);
+    s->vtmp2 = CFI_ALLOC(ctx, double, nv);
+    if ((dim && (!s->harmonic || !s->zrhs || !s->zsol)) || !s->area || !s->normal || !s->lx || !s->h ||
+        !s->rest_area || !s->rhodot || !s->rho || !s->lambda || !s->qrhs || !s->qwork || !s->basis || !s->edges ||
+        !s->newpos || !s->vtmp || !s->vtmp2) {
+        st = CF_ERR_NOMEM;
+        goto fail;
+    }
+    if (dim) {
+        int32_t dim2 = 0;
+        st = cf_harmonic_basis(ctx, mesh, flow->positions, &dim2, s->harmonic);
+        if (st != CF_OK) goto fail;
+        if (CF_NEVER(dim2 != dim)) {
+            st = cfi_error(ctx, CF_ERR_NUMERICAL, "spin-willmore: harmonic basis dimension changed");
+            goto fail;
+        }
+    }
+    st = cfi_poisson_create(ctx, mesh, flow->positions, &s->poisson);
+    if (st == CF_OK) st = update_geometry(flow, s, flow->positions);
+    if (st != CF_OK) goto fail;
+    memcpy(s->rest_area, s->area, (size_t)nv * sizeof(double));
+    s->eps = CFI_SPIN_SHIFT * 4.0 * CFI_PI / flow->initial_area;
+
+    st = cfi_dirac_create(ctx, mesh, &s->dirac);
+    if (st == CF_OK) st = cfi_dirac_fill(s->dirac, mesh, flow->positions, NULL, s->eps);
+    if (st != CF_OK) goto fail;
+    cf_cholesky_options co;
+    cf_cholesky_options_default(&co);
+    co.block_size = 4;
+    st = cf_cholesky_create(ctx, s->dirac->x, &co, &s->chol);
+    if (st == CF_OK && dim) st = cf_cholesky_create(ctx, s->dirac->x, &co, &s->chol0);
+    if (st == CF_OK && o->sigma > 0.0) st = build_filter(flow, s);
+    if (st != CF_OK) goto fail;
+
+    flow->info.energy = s->energy;
+    flow->info.energy_terms[0] = s->energy / (4.0 * CFI_PI);
+    flow->info.term_names[0] = "W/4pi";
+    return CF_OK;
+fail:
+    spin_destroy(flow);
+    return st;
+}
+
+/* ---- constraints ------------------------------------------------------- */
+
+/* Z_i of App. C.1 on the current surface x: face vectors v from the 2 x 2
+ * systems, right-hand side D^* A v (vertex i gets sum_k e_i v_k / 2), and
+ * solves with X(0). Fills columns of s->basis from `col` with the imaginary
+ * parts of each Z_i; returns the new column count. */
+static cf_status exactness_columns(cf_flow *flow, spin_state *s, const double *x, int32_t *col,
+                                   double *factor_seconds, double *solve_seconds)
+{
+    const cf_mesh *mesh = flow->mesh;
+    int32_t nv = s->nv, dim = s->harmonic_dim;
+    double t0 = cfi_now_seconds();
+    cf_status st = cfi_dirac_fill(s->dirac, mesh, x, NULL, s->eps);
+    if (st != CF_OK) return st;
+    st = cf_cholesky_factorize(s->chol0, s->dirac->x);
+    double t1 = cfi_now_seconds();
+    *factor_seconds += t1 - t0;
+    if (st != CF_OK) return st;
+    memset(s->zrhs, 0, 4 * (size_t)nv * dim * sizeof(double));
+    for (int32_t f = 0; f < s->nf; ++f) {
+        const int32_t *t = mesh->triangles + 3 * f;
+        const int32_t *he = mesh->halfedge_edge + 3 * f;
+        double e[3][3];
+        for (int m = 0; m < 3; ++m)
+            for (int c = 0; c < 3; ++c) e[m][c] = x[3 * t[(m + 2) % 3] + c] - x[3 * t[(m + 1) % 3] + c];
+        /* halfedge 3f+k runs t[k] -> t[k+1] = edge opposite corner k+2, i.e. e[(k+2)%3] */
+        double a11 = 0, a12 = 0, a22 = 0;
+        const double *e1 = e[2], *e2 = e[0];   /* halfedges 0 (t0->t1) and 1 (t1->t2) */
+        for (int c = 0; c < 3; ++c) {
+            a11 += e1[c] * e1[c];
+            a12 += e1[c] * e2[c];
+            a22 += e2[c] * e2[c];
+        }
+        double det = a11 * a22 - a12 * a12;
+        if (!(det > 0.0)) return cfi_error(flow->ctx, CF_ERR_DEGENERATE_FACE, "face %d: degenerate in exactness", f);
+        for (int32_t g = 0; g < dim; ++g) {
+            const double *w = s->harmonic + (int64_t)g * s->ne;
+            /* 1-form values along the halfedges: the edge runs i < j */
+            double om[2];
+            for (int h = 0; h < 2; ++h) {
+                int32_t ed = he[h];
+                double sgn = mesh->edge_vertices[2 * ed] == t[h] ? 1.0 : -1.0;
+                om[h] = sgn * w[ed];
+            }
+            double a1 = (a22 * om[0] - a12 * om[1]) / det, a2 = (a11 * om[1] - a12 * om[0]) / det;
+            double v[3];
+            for (int c = 0; c < 3; ++c) v[c] = a1 * e1[c] + a2 * e2[c];
+            double *r = s->zrhs + (int64_t)g * 4 * nv;
+            for (int m = 0; m < 3; ++m) {
+                /* e_m v = -<e_m, v> + e_m x v */
+                const double *em = e[m];
+                double *ri = r + 4 * t[m];
+                ri[0] += -0.5 * (em[0] * v[0] + em[1] * v[1] + em[2] * v[2]);
+                ri[1] += 0.5 * (em[1] * v[2] - em[2] * v[1]);
+                ri[2] += 0.5 * (em[2] * v[0] - em[0] * v[2]);
+                ri[3] += 0.5 * (em[0] * v[1] - em[1] * v[0]);
+            }
+        }
+    }
+    st = cf_cholesky_solve(s->chol0, dim, s->zrhs, s->zsol);
+    *solve_seconds += cfi_now_seconds() - t1;
+    if (st != CF_OK) return st;
+    for (int32_t g = 0; g < dim; ++g) {
+        const double *z = s->zsol + (int64_t)g * 4 * nv;
+        for (int c = 1; c < 4; ++c) {
+            double *b = s->basis + (int64_t)(*col) * nv;
+            for (int32_t i = 0; i < nv; ++i) b[i] = z[4 * i + c];
+            ++*col;
+        }
+    }
+    return CF_OK;
+}
+
+/* Moebius balancing (App. E.1): an inversion direction a that moves the
+ * vertex areas toward the input's distribution; adds the corresponding
+ * curvature change to rhodot and returns its M-norm. The rate alpha makes
+ * the induced change of log scale, -2 alpha <a, f>, the best L2 fit of
+ * -u0, so the term vanishes once areas are balanced. */
+static double mobius_term(const cf_flow *flow, spin_state *s, const double *x)
+{
+    int32_t nv = s->nv;
+    double atot = 0.0, rtot = 0.0;
+    for (int32_t i = 0; i < nv; ++i) {
+        atot += s->area[i];
+        rtot += s->rest_area[i];
+    }
+    double *u = s->vtmp;
+    double ubar = 0.0, cen[3] = {0, 0, 0};
+    for (int32_t i = 0; i < nv; ++i) {
+        u[i] = 0.5 * log(s->area[i] / (s->rest_area[i] * atot / rtot));
+        ubar += s->area[i] * u[i];
+        for (int c = 0; c < 3; ++c) cen[c] += s->area[i] * x[3 * i + c];
+    }
+    ubar /= atot;
+    for (int c = 0; c < 3; ++c) cen[c] /= atot;
+    double v[3] = {0, 0, 0}, b[9] = {0};
+    for (int32_t i = 0; i < nv; ++i) {
+        u[i] -= ubar;
+        const double *n = s->normal + 3 * i;
+        for (int c = 0; c < 3; ++c) {
+            v[c] += s->area[i] * (x[3 * i + c] - cen[c]) * u[i];
+            for (int d = 0; d < 3; ++d) b[3 * c + d] += 4.0 * s->area[i] * n[c] * n[d];
+        }
+    }
+    /* a = B^-1 v by Cramer's rule */
+    double det = b[0] * (b[4] * b[8] - b[5] * b[7]) - b[1] * (b[3] * b[8] - b[5] * b[6]) +
+                 b[2] * (b[3] * b[7] - b[4] * b[6]);
+    double scale = fabs(b[0]) + fabs(b[4]) + fabs(b[8]);
+    if (!(fabs(det) > 1e-12 * scale * scale * scale)) return 0.0;
+    double a[3];
+    a[0] = (v[0] * (b[4] * b[8] - b[5] * b[7]) - b[1] * (v[1] * b[8] - b[5] * v[2]) + b[2] * (v[1] * b[7] - b[4] * v[2])) / det;
+    a[1] = (b[0] * (v[1] * b[8] - b[5] * v[2]) - v[0] * (b[3] * b[8] - b[5] * b[6]) + b[2] * (b[3] * v[2] - v[1] * b[6])) / det;
+    a[2] = (b[0] * (b[4] * v[2] - v[1] * b[7]) - b[1] * (b[3] * v[2] - v[1] * b[6]) + v[0] * (b[3] * b[7] - b[4] * b[6])) / det;
+    double gu = 0.0, gg = 0.0;
+    for (int32_t i = 0; i < nv; ++i) {
+        double g = 0.0;
+        for (int c = 0; c < 3; ++c) g += a[c] * (x[3 * i + c] - cen[c]);
+        gu += s->area[i] * g * u[i];
+        gg += s->area[i] * g * g;
+    }
+    if (!(gg > 0.0)) return 0.0;
+    double alpha = gu / (2.0 * gg);
+    double norm2 = 0.0;
+    for (int32_t i = 0; i < nv; ++i) {
+        const double *n = s->normal + 3 * i;
+        double t = CFI_MOBIUS_SIGN * s->opt.mobius_weight * (-2.0 * alpha) * (a[0] * n[0] + a[1] * n[1] + a[2] * n[2]);
+        s->rhodot[i] += t;
+        norm2 += s->area[i] * t * t;
+    }
+    return sqrt(norm2);
+}
+
+/* Orthonormalises columns [0, ncols) of the basis under M and projects them
+ * out of rhodot; returns the rank. */
+static int32_t project(spin_state *s, int32_t ncols)
+{
+    if (ncols == 0) return 0;
+    int32_t rank = 0;
+    cf_orthonormalize(s->nv, ncols, s->basis, s->area, 1e-10, &rank);
+    cf_project_out(s->nv, rank, s->basis, s->area, s->rhodot);
+    double rn = sqrt(cf_dot(s->nv, s->rhodot, s->rhodot, s->area));
+    for (int32_t j = 0; j < rank; ++j) {
+        double r = rn > 0.0 ? fabs(cf_dot(s->nv, s->rhodot, s->basis + (int64_t)j * s->nv, s->area)) / rn : 0.0;
+        if (r > s->diag.constraint_residual) s->diag.constraint_residual = r;
+    }
+    return rank;
+}
+
+/* ---- step -------------------------------------------------------------- */
+
+static cf_status spin_step(cf_flow *flow, cf_flow_info *info)
+{
+    spin_state *s = flow->impl;
+    const cf_mesh *mesh = flow->mesh;
+    cf_context *ctx = flow->ctx;
+    int32_t nv = s->nv;
+    double *x = flow->positions;
+    double t_asm = 0.0, t_fac = 0.0, t_sol = 0.0;
+    double t0 = cfi_now_seconds();
+    double energy_before = s->energy;
+    cf_status st = CF_OK;
+    memset(&s->diag, 0, sizeof s->diag);
+
+    /* I-II. rhodot = -2 H (Sec. 6.1), then the spectral filter (Sec. 4) */
+    for (int32_t i = 0; i < nv; ++i) s->rhodot[i] = -2.0 * s->h[i];
+    if (s->opt.sigma > 0.0) {
+        if (s->opt.filter_k == 0) {
+            for (int32_t i = 0; i < nv; ++i) s->rhodot[i] *= s->filter_scale;
+        } else {
+            for (int32_t i = 0; i < nv; ++i) s->vtmp[i] = s->rest_area[i] * s->rhodot[i];
+            double ts = cfi_now_seconds();
+            st = cf_cholesky_solve(s->filter_chol, 1, s->vtmp, s->vtmp2);
+            t_sol += cfi_now_seconds() - ts;
+            if (st != CF_OK) return st;
+            for (int32_t i = 0; i < nv; ++i) s->rhodot[i] -= s->vtmp2[i];
+        }
+    }
+
+    /* III. constraints (Sec. 6.2) */
+    int32_t ncols = 0, count = 0, rank = 0;
+    if (s->opt.inversion) {
+        for (int c = 0; c < 3; ++c) {
+            double *b = s->basis + (int64_t)ncols * nv;
+            for (int32_t i = 0; i < nv; ++i) b[i] = s->normal[3 * i + c];
+            ++ncols;
+        }
+        count += ncols;
+        rank += project(s, ncols);
+    }
+    if (s->opt.mobius) s->diag.mobius_norm = mobius_term(flow, s, x);
+    ncols = 0;
+    if (s->opt.total_curvature) {
+        for (int32_t i = 0; i < nv; ++i) s->basis[i] = 1.0;
+        ncols = 1;
+    }
+    if (s->harmonic_dim > 0) {
+        double ta = cfi_now_seconds();
+        st = exactness_columns(flow, s, x, &ncols, &t_fac, &t_sol);
+        (void)ta;
+        if (st != CF_OK) return st;
+    }
+    count += ncols;
+    rank += project(s, ncols);
+    s->diag.constraint_count = count;
+    s->diag.constraint_rank = rank;
+    s->diag.harmonic_dimension = s->harmonic_dim;
+    {
+        double one = 0.0, rn = 0.0, atot = 0.0;
+        for (int32_t i = 0; i < nv; ++i) {
+            one += s->area[i] * s->rhodot[i];
+            rn += s->area[i] * s->rhodot[i] * s->rhodot[i];
+            atot += s->area[i];
+        }
+        s->diag.total_curvature_change = rn > 0.0 ? fabs(one) / sqrt(rn * atot) : 0.0;
+    }
+
+    /* IV. rho = tau rhodot */
+    for (int32_t i = 0; i < nv; ++i) s->rho[i] = s->opt.time_step * s->rhodot[i];
+
+    /* V. lambda from X(rho) */
+    double ta = cfi_now_seconds();
+    st = cfi_dirac_fill(s->dirac, mesh, x, s->rho, s->eps);
+    if (st != CF_OK) return st;
+    if (s->fixed_boundary) cfi_dirac_fix_boundary(s->dirac, mesh, s->qrhs);
+    double tb = cfi_now_seconds();
+    t_asm += tb - ta;
+    st = cf_cholesky_factorize(s->chol, s->dirac->x);
+    double tc = cfi_now_seconds();
+    t_fac += tc - tb;
+    if (st != CF_OK) return st;
+    if (s->fixed_boundary) {
+        st = cf_cholesky_solve(s->chol, 1, s->qrhs, s->lambda);
+    } else {
+        for (int32_t i = 0; i < nv; ++i) {
+            s->lambda[4 * i] = 1.0;
+            s->lambda[4 * i + 1] = s->lambda[4 * i + 2] = s->lambda[4 * i + 3] = 0.0;
+        }
+        st = cfi_spin_power_iteration(s->chol, s->area, nv, s->opt.power_iterations, s->lambda, s->qwork);
+    }
+    t_sol += cfi_now_seconds() - tc;
+    if (st != CF_OK) return cfi_error(ctx, st, "spin-willmore: eigenvector solve failed");
+    s->diag.eigenvalue = cfi_spin_rayleigh(s->dirac->x, s->area, nv, s->eps, s->lambda, s->qwork);
+
+    /* VI. edges and positions */
+    ta = cfi_now_seconds();
+    cfi_spin_transform_edges(mesh, x, s->lambda, s->edges);
+    t_asm += cfi_now_seconds() - ta;
+    st = cfi_poisson_solve(s->poisson, mesh, s->edges, s->fixed_boundary, x, s->newpos, &t_fac, &t_sol);
+    if (st != CF_OK) return st;
+    s->diag.integrability_error = cfi_spin_integrability_error(mesh, s->newpos, s->edges);
+    if (!s->fixed_boundary) {
+        /* fix translation (and the scale, if asked): Willmore energy is invariant under both */
+        double c_old[3] = {0, 0, 0}, c_new[3] = {0, 0, 0}, atot = 0.0;
+        for (int32_t i = 0; i < nv; ++i) {
+            atot += s->area[i];
+            for (int c = 0; c < 3; ++c) {
+                c_old[c] += s->area[i] * x[3 * i + c];
+                c_new[c] += s->area[i] * s->newpos[3 * i + c];
+            }
+        }
+        double scale = 1.0;
+        if (s->opt.normalize) {
+            double a_new = 0.0;
+            st = cf_total_area(ctx, mesh, s->newpos, &a_new);
+            if (st != CF_OK) return st;
+            if (!(a_new > 0.0)) return cfi_error(ctx, CF_ERR_NUMERICAL, "spin-willmore: recovered surface has no area");
+            scale = sqrt(flow->initial_area / a_new);
+        }
+        for (int32_t i = 0; i < nv; ++i)
+            for (int c = 0; c < 3; ++c)
+                x[3 * i + c] = c_old[c] / atot + scale * (s->newpos[3 * i + c] - c_new[c] / atot);
+    } else {
+        memcpy(x, s->newpos, 3 * (size_t)nv * sizeof(double));
+    }
+    for (int32_t i = 0; i < 3 * nv; ++i)
+        if (!isfinite(x[i])) return cfi_error(ctx, CF_ERR_NUMERICAL, "vertex %d: position is not finite", i / 3);
+
+    ta = cfi_now_seconds();
+    st = update_geometry(flow, s, x);
+    t_asm += cfi_now_seconds() - ta;
+    if (st != CF_OK) return st;
+
+    info->time_step = s->opt.time_step;
+    info->energy = s->energy;
+    info->energy_terms[0] = s->energy / (4.0 * CFI_PI);
+    info->term_names[0] = "W/4pi";
+    info->residuals[0] = s->diag.constraint_residual;
+    info->residual_names[0] = "constraint";
+    info->residuals[1] = s->diag.integrability_error;
+    info->residual_names[1] = "integrability";
+    info->residuals[2] = s->diag.eigenvalue;
+    info->residual_names[2] = "eigenvalue";
+    info->assemble_seconds = t_asm;
+    info->factorize_seconds = t_fac;
+    info->solve_seconds = t_sol;
+    info->total_seconds = cfi_now_seconds() - t0;
+    double decrease = energy_before - s->energy;
+    flow->converged = decrease >= 0.0 && decrease <= s->opt.tolerance * energy_before;
+    return CF_OK;
+}
+
+static cf_status spin_reset(cf_flow *flow)
+{
+    spin_state *s = flow->impl;
+    if (!s) return CF_OK;
+    flow->converged = 0;
+    return update_geometry(flow, s, flow->positions);
+}
+
+cf_status cfi_spin_willmore_diagnostics(const cf_flow *flow, cfi_spin_diagnostics *out)
+{
+    if (!flow || !out || flow->method != &cfi_spin_willmore_method || !flow->impl) return CF_ERR_INVALID_ARG;
+    *out = ((const spin_state *)flow->impl)->diag;
+    return CF_OK;
+}
+
+const double *cfi_spin_willmore_last_rhodot(const cf_flow *flow)
+{
+    if (!flow || flow->method != &cfi_spin_willmore_method || !flow->impl) return NULL;
+    return ((const spin_state *)flow->impl)->rhodot;
+}
 
 const cfi_flow_method cfi_spin_willmore_method = {
-    CF_FLOW_SPIN_WILLMORE, "spin-willmore",
+    CF_FLOW_SPIN_WILLMORE,
+    "spin-willmore",
     "conformal Willmore flow in curvature space (Crane, Pinkall, Schroeder 2013)",
-    8, spin_willmore_options_default, NULL, 0,
-    spin_willmore_create, spin_willmore_step, NULL, spin_willmore_destroy,
+    sizeof(cf_spin_willmore_options),
+    options_default,
+    spin_params,
+    (int32_t)(sizeof spin_params / sizeof spin_params[0]),
+    spin_create,
+    spin_step,
+    spin_reset,
+    spin_destroy,
 };

@@ -1,22 +1,585 @@
-/* Placeholder registration of the stretch-bend editing method until it lands. */
+/*
+ * Mesh editing by local/global iteration — Zhao & Gortler, "A Report on
+ * Shape Deformation with a Stretching and Bending Energy" (hybrid energy,
+ * Eq. 17, and its stretch-only / bend-only limits), plus ARAP spokes
+ * (Sorkine & Alexa 2007, Eq. 6) and spokes-and-rims (Eq. 7) for comparison.
+ *
+ * Global phase (Sec. 4.1): with R and u' fixed the energy is quadratic;
+ * the normal equations (Eq. 23, with K = M L_pointwise = 2 L)
+ *     [alpha K_t + beta K M^-1 K] x' = alpha b + beta K (|H| u')
+ * are solved for the free vertices, the handle columns moved to the
+ * right-hand side. The matrix depends only on the rest shape and the handle
+ * set, so it is factorised once per handle set; each iteration solves
+ * three right-hand sides. Local phase: model.c.
+ */
 #include "methods/flow_internal.h"
+#include "methods/stretch_bend_edit/sbe_internal.h"
 
-static void stretch_bend_edit_options_default(void *options) { (void)options; }
-static cf_status stretch_bend_edit_create(cf_flow *flow, const void *options)
+#include "curvflow/stretch_bend_edit.h"
+
+#include <math.h>
+#include <string.h>
+
+typedef struct sbe_state {
+    cfi_sbe_model model;
+    cf_stretch_bend_options options;
+    double *rest;             /* 3 nv, copy of the rest pose */
+    int32_t nfree;
+    int32_t *free_index;      /* nv: index among free vertices, -1 for a handle */
+    int32_t handle_count;
+    int32_t *handle_vertices; /* copy of the handle set */
+    double *handle_targets;
+    cf_sparse *a_full;        /* nv x nv system matrix (before reduction) */
+    cf_sparse *a_free;        /* nfree x nfree */
+    cf_cholesky *chol;
+    double *rhs_const;        /* 3 nfree: A_fc x_c */
+    double *rhs;              /* 3 nv column-major */
+    double *hu;               /* 3 nv column-major |H| u' */
+    double *rhs_free;         /* 3 nfree */
+    double *sol_free;         /* 3 nfree */
+    int32_t rhs_cap_free;     /* allocated size of the nfree arrays */
+    double energy;            /* E at the current positions */
+    double factorize_seconds; /* of the last (re)factorisation, reported once */
+} sbe_state;
+
+static const char *const energy_names[] = {"hybrid", "stretch", "bend", "arap", "arap-rims", NULL};
+static const char *const mass_names[] = {"voronoi", "barycentric", NULL};
+
+const char *cf_edit_energy_name(cf_edit_energy energy)
 {
-    (void)options;
-    return cfi_error(flow->ctx, CF_ERR_UNSUPPORTED, "stretch-bend-edit: not implemented yet");
+    if ((int)energy < 0 || (int)energy >= CF_EDIT_ENERGY_COUNT) return NULL;
+    return energy_names[energy];
 }
-static cf_status stretch_bend_edit_step(cf_flow *flow, cf_flow_info *info)
+
+cf_status cf_edit_energy_from_name(cf_context *ctx, const char *name, cf_edit_energy *energy)
 {
-    (void)info;
-    return cfi_error(flow->ctx, CF_ERR_UNSUPPORTED, "stretch-bend-edit: not implemented yet");
+    if (!ctx) return CF_ERR_INVALID_ARG;
+    if (!name || !energy) return cfi_error(ctx, CF_ERR_INVALID_ARG, "energy name or output is NULL");
+    for (int k = 0; k < CF_EDIT_ENERGY_COUNT; ++k) {
+        if (strcmp(name, energy_names[k]) == 0) {
+            *energy = (cf_edit_energy)k;
+            return CF_OK;
+        }
+    }
+    return cfi_error(ctx, CF_ERR_INVALID_ARG,
+                     "unknown energy '%s' (expected hybrid, stretch, bend, arap or arap-rims)", name);
 }
-static void stretch_bend_edit_destroy(cf_flow *flow) { (void)flow; }
+
+void cf_stretch_bend_options_default(cf_stretch_bend_options *o)
+{
+    if (!o) return;
+    memset(o, 0, sizeof *o);
+    o->energy = CF_EDIT_HYBRID;
+    o->lambda = 0.5;
+    o->max_iterations = 100;
+    o->relative_tolerance = 1e-6;
+    o->mass = CF_EDIT_MASS_VORONOI;
+    o->scale_free = 1;
+}
+
+static void options_default(void *options) { cf_stretch_bend_options_default(options); }
+
+static const cf_param_desc params[] = {
+    {"energy", CF_PARAM_CHOICE, offsetof(cf_stretch_bend_options, energy), 0, 4, energy_names,
+     "energy: hybrid (Eq. 17), stretch (Eq. 5), bend (Eq. 15), arap (Eq. 6), arap-rims (Eq. 7)"},
+    {"lambda", CF_PARAM_DOUBLE, offsetof(cf_stretch_bend_options, lambda), 0.0, 1.0, NULL,
+     "hybrid weight: lambda E_s + (1 - lambda) E_db"},
+    {"max_iterations", CF_PARAM_INT, offsetof(cf_stretch_bend_options, max_iterations), 1, 1e7, NULL,
+     "local/global iterations for the one-off edit"},
+    {"relative_tolerance", CF_PARAM_DOUBLE, offsetof(cf_stretch_bend_options, relative_tolerance), 0.0, 1.0, NULL,
+     "converged when the relative energy decrease of a step is below this"},
+    {"mass", CF_PARAM_CHOICE, offsetof(cf_stretch_bend_options, mass), 0, 1, mass_names,
+     "dual area M_v of the bending energy"},
+    {"scale_free", CF_PARAM_BOOL, offsetof(cf_stretch_bend_options, scale_free), 0, 1, NULL,
+     "divide the stretching energy by the rest area so lambda does not depend on the model's size"},
+};
+
+static void free_system(sbe_state *s, cf_context *ctx)
+{
+    cf_cholesky_destroy(&s->chol);
+    cf_sparse_destroy(&s->a_free);
+    CFI_FREE(ctx, s->free_index, (size_t)s->model.nv);
+    CFI_FREE(ctx, s->handle_vertices, (size_t)s->handle_count);
+    CFI_FREE(ctx, s->handle_targets, 3 * (size_t)s->handle_count);
+    CFI_FREE(ctx, s->rhs_const, 3 * (size_t)s->rhs_cap_free);
+    CFI_FREE(ctx, s->rhs_free, 3 * (size_t)s->rhs_cap_free);
+    CFI_FREE(ctx, s->sol_free, 3 * (size_t)s->rhs_cap_free);
+    s->rhs_cap_free = 0;
+    s->handle_count = 0;
+    s->nfree = 0;
+}
+
+static void state_free(sbe_state *s, cf_context *ctx)
+{
+    if (!s) return;
+    int32_t nv = s->model.nv;
+    free_system(s, ctx);
+    cf_sparse_destroy(&s->a_full);
+    CFI_FREE(ctx, s->rest, 3 * (size_t)nv);
+    CFI_FREE(ctx, s->rhs, 3 * (size_t)nv);
+    CFI_FREE(ctx, s->hu, 3 * (size_t)nv);
+    cfi_sbe_model_free(&s->model);
+    cfi_free(ctx, s, sizeof *s);
+}
+
+/* A = alpha K_t + beta K M^-1 K on all vertices (Eq. 23 times 1/2 of the
+ * gradient), K_t = sum over terms w (d_i - d_j)(d_i - d_j)^T. */
+static cf_status build_full_matrix(sbe_state *s, cf_context *ctx)
+{
+    cfi_sbe_model *m = &s->model;
+    int32_t nv = m->nv;
+    cf_sparse *kt = NULL, *dk = NULL, *kmk = NULL;
+    cf_status st = CF_OK;
+    if (m->alpha > 0.0 && m->term_count > 0) {
+        int64_t n = 4 * (int64_t)m->term_count;
+        int32_t *rows = CFI_ALLOC(ctx, int32_t, n);
+        int32_t *cols = CFI_ALLOC(ctx, int32_t, n);
+        double *vals = CFI_ALLOC(ctx, double, n);
+        if (rows && cols && vals) {
+            for (int32_t t = 0; t < m->term_count; ++t) {
+                int32_t i = m->term_ij[2 * t], j = m->term_ij[2 * t + 1];
+                double w = m->alpha * m->term_w[t];
+                int64_t b = 4 * (int64_t)t;
+                rows[b] = i; cols[b] = i; vals[b] = w;
+                rows[b + 1] = j; cols[b + 1] = j; vals[b + 1] = w;
+                rows[b + 2] = i; cols[b + 2] = j; vals[b + 2] = -w;
+                rows[b + 3] = j; cols[b + 3] = i; vals[b + 3] = -w;
+            }
+            st = cf_sparse_from_triplets(ctx, nv, nv, n, rows, cols, vals, 1, &kt, NULL);
+        } else {
+            st = CF_ERR_NOMEM;
+        }
+        CFI_FREE(ctx, rows, n);
+        CFI_FREE(ctx, cols, n);
+        CFI_FREE(ctx, vals, n);
+        if (st != CF_OK) return st;
+    }
+    if (m->beta > 0.0) {
+        /* D K with D = beta M^-1 (rows scaled), then K (D K). */
+        st = cf_sparse_add(ctx, 1.0, m->k, 0.0, m->k, &dk);
+        if (st == CF_OK) {
+            for (int32_t j = 0; j < dk->ncols; ++j)
+                for (int32_t p = dk->colptr[j]; p < dk->colptr[j + 1]; ++p)
+                    dk->values[p] *= m->beta / m->mass[dk->rowind[p]];
+            st = cf_sparse_product(ctx, m->k, dk, &kmk);
+        }
+        cf_sparse_destroy(&dk);
+        if (st == CF_OK && kmk) kmk->symmetric = 1;
+    }
+    if (st == CF_OK) {
+        if (kt && kmk) {
+            st = cf_sparse_add(ctx, 1.0, kt, 1.0, kmk, &s->a_full);
+            if (st == CF_OK) s->a_full->symmetric = 1;
+        } else if (kt) {
+            s->a_full = kt;
+            kt = NULL;
+        } else if (kmk) {
+            s->a_full = kmk;
+            kmk = NULL;
+        } else {
+            st = cfi_error(ctx, CF_ERR_INVALID_ARG, "stretch-bend-edit: the energy has no terms");
+        }
+    }
+    cf_sparse_destroy(&kt);
+    cf_sparse_destroy(&kmk);
+    return st;
+}
+
+/* Validates the handles against the mesh, reduces A to the free vertices,
+ * factorises it and precomputes A_fc x_c (Sec. 4.1). */
+static cf_status setup_system(sbe_state *s, cf_context *ctx, const cf_mesh *mesh, const cf_handle_set *h)
+{
+    int32_t nv = mesh->nv;
+    if (!h) return cfi_error(ctx, CF_ERR_INVALID_ARG, "stretch-bend-edit: no handle set (options.handles is NULL)");
+    if (h->count < 0 || (h->count > 0 && (!h->vertices || !h->targets)))
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "stretch-bend-edit: malformed handle set");
+    if (h->count == 0)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "stretch-bend-edit: the handle set is empty; at least one "
+                                                  "vertex per connected component must be constrained");
+    for (int32_t k = 0; k < h->count; ++k) {
+        int32_t v = h->vertices[k];
+        if (v < 0 || v >= nv)
+            return cfi_error(ctx, CF_ERR_INVALID_ARG, "handle %d: vertex %d out of range (mesh has %d vertices)",
+                             k, v, nv);
+        if (k > 0 && v <= h->vertices[k - 1])
+            return cfi_error(ctx, CF_ERR_INVALID_ARG, "handle %d: vertex %d repeated or not sorted", k, v);
+        for (int d = 0; d < 3; ++d)
+            if (!isfinite(h->targets[3 * k + d]))
+                return cfi_error(ctx, CF_ERR_NONFINITE, "handle %d (vertex %d): target is not finite", k, v);
+    }
+    if (h->count >= nv)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "stretch-bend-edit: all %d vertices are handles; nothing to solve",
+                         nv);
+
+    free_system(s, ctx);
+    s->free_index = CFI_ALLOC(ctx, int32_t, (size_t)nv);
+    s->handle_vertices = CFI_ALLOC(ctx, int32_t, (size_t)h->count);
+    s->handle_targets = CFI_ALLOC(ctx, double, 3 * (size_t)h->count);
+    if (!s->free_index || !s->handle_vertices || !s->handle_targets) return CF_ERR_NOMEM;
+    s->handle_count = h->count;
+    memcpy(s->handle_vertices, h->vertices, (size_t)h->count * sizeof(int32_t));
+    memcpy(s->handle_targets, h->targets, 3 * (size_t)h->count * sizeof(double));
+
+    /* Every connected component needs a handle, else the system is
+     * singular (translations of that component cost nothing). */
+    int32_t nc = mesh->component_count;
+    uint8_t *has = CFI_ALLOC(ctx, uint8_t, (size_t)(nc > 0 ? nc : 1));
+    if (!has) return CF_ERR_NOMEM;
+    for (int32_t v = 0; v < nv; ++v) s->free_index[v] = 0;
+    for (int32_t k = 0; k < h->count; ++k) {
+        s->free_index[h->vertices[k]] = -1;
+        has[mesh->vertex_component[h->vertices[k]]] = 1;
+    }
+    int32_t missing = -1;
+    for (int32_t v = 0; v < nv && missing < 0; ++v)
+        if (!has[mesh->vertex_component[v]]) missing = v;
+    CFI_FREE(ctx, has, (size_t)(nc > 0 ? nc : 1));
+    if (missing >= 0)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG,
+                         "stretch-bend-edit: the connected component of vertex %d has no handle vertex "
+                         "(the system would be singular)", missing);
+    int32_t nfree = 0;
+    for (int32_t v = 0; v < nv; ++v)
+        if (s->free_index[v] == 0) s->free_index[v] = nfree++; else s->free_index[v] = -1;
+    s->nfree = nfree;
+    s->rhs_cap_free = nfree;
+    s->rhs_const = CFI_ALLOC(ctx, double, 3 * (size_t)nfree);
+    s->rhs_free = CFI_ALLOC(ctx, double, 3 * (size_t)nfree);
+    s->sol_free = CFI_ALLOC(ctx, double, 3 * (size_t)nfree);
+    if (!s->rhs_const || !s->rhs_free || !s->sol_free) return CF_ERR_NOMEM;
+
+    /* Target of each vertex (only handles are read). */
+    const cf_sparse *a = s->a_full;
+    int64_t nnz = cf_sparse_nnz(a);
+    int32_t *rows = CFI_ALLOC(ctx, int32_t, nnz);
+    int32_t *cols = CFI_ALLOC(ctx, int32_t, nnz);
+    double *vals = CFI_ALLOC(ctx, double, nnz);
+    int32_t *handle_slot = CFI_ALLOC(ctx, int32_t, (size_t)nv);
+    cf_status st = (rows && cols && vals && handle_slot) ? CF_OK : CF_ERR_NOMEM;
+    if (st == CF_OK) {
+        for (int32_t k = 0; k < h->count; ++k) handle_slot[h->vertices[k]] = k;
+        int64_t n = 0;
+        for (int32_t j = 0; j < nv; ++j) {
+            int32_t fj = s->free_index[j];
+            for (int32_t p = a->colptr[j]; p < a->colptr[j + 1]; ++p) {
+                int32_t fi = s->free_index[a->rowind[p]];
+                if (fi < 0) continue;
+                if (fj >= 0) {
+                    rows[n] = fi;
+                    cols[n] = fj;
+                    vals[n] = a->values[p];
+                    ++n;
+                } else {
+                    const double *tgt = h->targets + 3 * handle_slot[j];
+                    for (int d = 0; d < 3; ++d) s->rhs_const[(size_t)d * nfree + fi] += a->values[p] * tgt[d];
+                }
+            }
+        }
+        st = cf_sparse_from_triplets(ctx, nfree, nfree, n, rows, cols, vals, 1, &s->a_free, NULL);
+    }
+    CFI_FREE(ctx, rows, nnz);
+    CFI_FREE(ctx, cols, nnz);
+    CFI_FREE(ctx, vals, nnz);
+    CFI_FREE(ctx, handle_slot, (size_t)nv);
+    if (st != CF_OK) return st;
+
+    double t0 = cfi_now_seconds();
+    cf_cholesky_options copt;
+    cf_cholesky_options_default(&copt);
+    copt.block_size = 1;
+    st = cf_cholesky_create(ctx, s->a_free, &copt, &s->chol);
+    if (st == CF_OK) st = cf_cholesky_factorize(s->chol, s->a_free);
+    s->factorize_seconds = cfi_now_seconds() - t0;
+    if (st == CF_ERR_NOT_POSDEF)
+        return cfi_error(ctx, CF_ERR_NOT_POSDEF,
+                         "stretch-bend-edit: the %s system is not positive definite on this mesh (negative cotan "
+                         "weights; the ARAP spokes energy can be indefinite, try arap-rims or hybrid)",
+                         cf_edit_energy_name(s->model.energy));
+    return st;
+}
+
+static void snap_handles(const sbe_state *s, double *x)
+{
+    for (int32_t k = 0; k < s->handle_count; ++k)
+        memcpy(x + 3 * (size_t)s->handle_vertices[k], s->handle_targets + 3 * (size_t)k, 3 * sizeof(double));
+}
+
+static void fill_terms(const sbe_state *s, cf_flow_info *info)
+{
+    int arap = s->model.energy == CF_EDIT_ARAP || s->model.energy == CF_EDIT_ARAP_RIMS;
+    info->energy = s->energy;
+    if (arap) {
+        info->term_names[0] = cf_edit_energy_name(s->model.energy);
+        info->energy_terms[0] = s->model.term_energy;
+    } else {
+        info->term_names[0] = "stretch";
+        info->energy_terms[0] = s->model.term_energy;
+        info->term_names[1] = "bend";
+        info->energy_terms[1] = s->model.bend_energy;
+    }
+}
+
+static cf_status sbe_create(cf_flow *flow, const void *options)
+{
+    cf_context *ctx = flow->ctx;
+    const cf_mesh *mesh = flow->mesh;
+    int32_t nv = mesh->nv;
+    const cf_stretch_bend_options *o = options;
+    sbe_state *s = cfi_malloc(ctx, sizeof *s);
+    if (!s) return CF_ERR_NOMEM;
+    memset(s, 0, sizeof *s);
+    s->model.nv = nv;
+    flow->impl = s;
+    s->options = *o;
+    s->rest = CFI_ALLOC(ctx, double, 3 * (size_t)nv);
+    s->rhs = CFI_ALLOC(ctx, double, 3 * (size_t)nv);
+    s->hu = CFI_ALLOC(ctx, double, 3 * (size_t)nv);
+    if (!s->rest || !s->rhs || !s->hu) return CF_ERR_NOMEM;
+    const double *rest = o->rest_positions ? o->rest_positions : mesh->positions;
+    for (int32_t i = 0; i < 3 * nv; ++i) {
+        if (!isfinite(rest[i]))
+            return cfi_error(ctx, CF_ERR_NONFINITE, "vertex %d: rest position is not finite", i / 3);
+        s->rest[i] = rest[i];
+    }
+    cf_status st = cfi_sbe_model_init(&s->model, ctx, mesh, s->rest, o);
+    if (st == CF_OK) st = build_full_matrix(s, ctx);
+    if (st == CF_OK) st = setup_system(s, ctx, mesh, o->handles);
+    if (st != CF_OK) return st;
+    /* The starting state has its handles at their targets; iteration 0
+     * reports its energy with optimal rotations. */
+    snap_handles(s, flow->positions);
+    st = cfi_sbe_local_step(&s->model, flow->positions, &s->energy);
+    if (st != CF_OK) return st;
+    fill_terms(s, &flow->info);
+    flow->info.factorize_seconds = s->factorize_seconds;
+    flow->converged = 0;
+    return CF_OK;
+}
+
+/* Right-hand side of Eq. 23 on all vertices, column-major into s->rhs:
+ * alpha b (Eq. 22, from the terms) + beta K (|H| u'). */
+static void assemble_rhs(sbe_state *s)
+{
+    cfi_sbe_model *m = &s->model;
+    int32_t nv = m->nv;
+    double *rhs = s->rhs;
+    memset(rhs, 0, 3 * (size_t)nv * sizeof(double));
+    for (int32_t r = 0; r < m->rot_count; ++r) {
+        const double *rot = m->rotations + 9 * r;
+        for (int32_t t = m->rot_offsets[r]; t < m->rot_offsets[r + 1]; ++t) {
+            int32_t i = m->term_ij[2 * t], j = m->term_ij[2 * t + 1];
+            const double *e = m->term_e + 3 * t;
+            double w = m->alpha * m->term_w[t];
+            for (int d = 0; d < 3; ++d) {
+                double re = w * (rot[3 * d] * e[0] + rot[3 * d + 1] * e[1] + rot[3 * d + 2] * e[2]);
+                rhs[(size_t)d * nv + i] += re;
+                rhs[(size_t)d * nv + j] -= re;
+            }
+        }
+    }
+    if (m->beta > 0.0) {
+        for (int d = 0; d < 3; ++d)
+            for (int32_t v = 0; v < nv; ++v)
+                s->hu[(size_t)d * nv + v] = m->hm[v] / m->mass[v] * m->u[(size_t)d * nv + v];
+        for (int d = 0; d < 3; ++d)
+            cf_sparse_multiply_add(m->k, m->beta, s->hu + (size_t)d * nv, 1.0, rhs + (size_t)d * nv);
+    }
+}
+
+/* Global phase: x (3 nv interleaved) receives the minimiser over the free
+ * vertices for the current rotations and u', handles at their targets. */
+static cf_status global_solve(sbe_state *s, double *x, double *assemble_seconds, double *solve_seconds)
+{
+    int32_t nv = s->model.nv, nfree = s->nfree;
+    double t0 = cfi_now_seconds();
+    assemble_rhs(s);
+    const double *rhs = s->rhs;
+    for (int32_t v = 0; v < nv; ++v) {
+        int32_t f = s->free_index[v];
+        if (f < 0) continue;
+        for (int d = 0; d < 3; ++d)
+            s->rhs_free[(size_t)d * nfree + f] = rhs[(size_t)d * nv + v] - s->rhs_const[(size_t)d * nfree + f];
+    }
+    double t1 = cfi_now_seconds();
+    cf_status st = cf_cholesky_solve(s->chol, 3, s->rhs_free, s->sol_free);
+    if (st != CF_OK) return st;
+    double t2 = cfi_now_seconds();
+    for (int32_t v = 0; v < nv; ++v) {
+        int32_t f = s->free_index[v];
+        if (f < 0) continue;
+        for (int d = 0; d < 3; ++d) x[3 * v + d] = s->sol_free[(size_t)d * nfree + f];
+    }
+    snap_handles(s, x);
+    if (assemble_seconds) *assemble_seconds = t1 - t0;
+    if (solve_seconds) *solve_seconds = t2 - t1;
+    return CF_OK;
+}
+
+cf_status cfi_sbe_flow_global_solve(cf_flow *flow, double *x)
+{
+    if (!flow || flow->method != &cfi_stretch_bend_edit_method || !flow->impl || !x) return CF_ERR_INVALID_ARG;
+    return global_solve(flow->impl, x, NULL, NULL);
+}
+
+cf_status cfi_sbe_flow_gradient(cf_flow *flow, const double *x, double *grad)
+{
+    if (!flow || flow->method != &cfi_stretch_bend_edit_method || !flow->impl || !x || !grad)
+        return CF_ERR_INVALID_ARG;
+    sbe_state *s = flow->impl;
+    int32_t nv = s->model.nv;
+    assemble_rhs(s);
+    double *xcol = s->model.xcol, *ax = s->model.kx;
+    for (int32_t v = 0; v < nv; ++v)
+        for (int d = 0; d < 3; ++d) xcol[(size_t)d * nv + v] = x[3 * v + d];
+    for (int d = 0; d < 3; ++d) cf_sparse_multiply(s->a_full, xcol + (size_t)d * nv, ax + (size_t)d * nv);
+    /* The energy is x^T A x - 2 rhs^T x + const, so its gradient is
+     * 2 (A x - rhs). */
+    for (int32_t v = 0; v < nv; ++v)
+        for (int d = 0; d < 3; ++d) grad[3 * v + d] = 2.0 * (ax[(size_t)d * nv + v] - s->rhs[(size_t)d * nv + v]);
+    return CF_OK;
+}
+
+cfi_sbe_model *cfi_sbe_flow_model(cf_flow *flow)
+{
+    if (!flow || flow->method != &cfi_stretch_bend_edit_method || !flow->impl) return NULL;
+    return &((sbe_state *)flow->impl)->model;
+}
+
+/* One local/global iteration: global solve with the rotations and u' of the
+ * current state, then the local step at the new state (which also gives the
+ * energy E(x') reported for it). */
+static cf_status sbe_step(cf_flow *flow, cf_flow_info *info)
+{
+    sbe_state *s = flow->impl;
+    cfi_sbe_model *m = &s->model;
+    double *x = flow->positions;
+    double assemble = 0.0, solve = 0.0;
+    cf_status st = global_solve(s, x, &assemble, &solve);
+    if (st != CF_OK) return st;
+    double t2 = cfi_now_seconds();
+
+    double previous = s->energy;
+    st = cfi_sbe_local_step(m, x, &s->energy);
+    if (st != CF_OK) return st;
+    double t3 = cfi_now_seconds();
+    /* Stopping rule: relative energy decrease below the tolerance. */
+    double scale = fabs(previous) > 0.0 ? fabs(previous) : 1.0;
+    double decrease = (previous - s->energy) / scale;
+    if (decrease < s->options.relative_tolerance || s->energy == 0.0) flow->converged = 1;
+
+    info->time_step = 1.0;
+    fill_terms(s, info);
+    info->residual_names[0] = "relative_decrease";
+    info->residuals[0] = decrease;
+    info->assemble_seconds = assemble + (t3 - t2);
+    info->factorize_seconds = s->factorize_seconds;
+    s->factorize_seconds = 0.0;
+    info->solve_seconds = solve;
+    return CF_OK;
+}
+
+/* After cf_flow_set_positions or a failed step: handles back on their
+ * targets and the local step redone at the new state. */
+static cf_status sbe_reset(cf_flow *flow)
+{
+    sbe_state *s = flow->impl;
+    if (!s) return CF_OK;
+    snap_handles(s, flow->positions);
+    cf_status st = cfi_sbe_local_step(&s->model, flow->positions, &s->energy);
+    if (st == CF_OK) fill_terms(s, &flow->info);
+    return st;
+}
+
+static void sbe_destroy(cf_flow *flow)
+{
+    state_free(flow->impl, flow->ctx);
+    flow->impl = NULL;
+}
 
 const cfi_flow_method cfi_stretch_bend_edit_method = {
-    CF_FLOW_STRETCH_BEND_EDIT, "stretch-bend-edit",
+    CF_FLOW_STRETCH_BEND_EDIT,
+    "stretch-bend-edit",
     "stretching + bending mesh editing by local/global iteration (Zhao & Gortler), and ARAP",
-    8, stretch_bend_edit_options_default, NULL, 0,
-    stretch_bend_edit_create, stretch_bend_edit_step, NULL, stretch_bend_edit_destroy,
+    sizeof(cf_stretch_bend_options),
+    options_default,
+    params,
+    (int32_t)(sizeof params / sizeof params[0]),
+    sbe_create,
+    sbe_step,
+    sbe_reset,
+    sbe_destroy,
 };
+
+cf_status cf_stretch_bend_set_handles(cf_flow *flow, const cf_handle_set *handles)
+{
+    if (!flow) return CF_ERR_INVALID_ARG;
+    if (flow->method != &cfi_stretch_bend_edit_method || !flow->impl)
+        return cfi_error(flow->ctx, CF_ERR_INVALID_ARG, "cf_stretch_bend_set_handles: not a stretch-bend-edit flow");
+    sbe_state *s = flow->impl;
+    cf_status st = setup_system(s, flow->ctx, flow->mesh, handles);
+    if (st != CF_OK) {
+        /* Keep the flow usable only with a valid system: restore the old
+         * handles is not possible after free_system, so report it. */
+        return st;
+    }
+    s->options.handles = handles;
+    flow->converged = 0;
+    return sbe_reset(flow);
+}
+
+cf_status cf_stretch_bend_edit(cf_context *ctx, const cf_mesh *mesh, const double *start,
+                               const cf_stretch_bend_options *options, double *out_positions, cf_flow_info *info)
+{
+    if (!ctx) return CF_ERR_INVALID_ARG;
+    if (!mesh || !options || !out_positions)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "cf_stretch_bend_edit: mesh, options or output is NULL");
+    if (options->max_iterations < 0)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "max_iterations must be >= 0, got %d", (int)options->max_iterations);
+    cf_flow_options fo;
+    cf_flow_options_default(CF_FLOW_STRETCH_BEND_EDIT, &fo);
+    memcpy(cf_flow_options_method(&fo), options, sizeof *options);
+    cf_flow *flow = NULL;
+    cf_status st = cf_flow_create(ctx, mesh, start, &fo, &flow);
+    if (st != CF_OK) return st;
+    st = cf_flow_run(flow, options->max_iterations, info);
+    if (st == CF_OK) {
+        memcpy(out_positions, flow->positions, 3 * (size_t)mesh->nv * sizeof(double));
+        if (info) *info = flow->info;
+    }
+    cf_flow_destroy(&flow);
+    return st;
+}
+
+cf_status cf_stretch_bend_energy(cf_context *ctx, const cf_mesh *mesh, const double *rest, const double *deformed,
+                                 const cf_stretch_bend_options *options, double *stretch, double *bend, double *arap,
+                                 double *total)
+{
+    if (!ctx) return CF_ERR_INVALID_ARG;
+    if (!mesh || !deformed || !options)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "cf_stretch_bend_energy: mesh, deformed or options is NULL");
+    const double *x0 = rest ? rest : mesh->positions;
+    int is_arap = options->energy == CF_EDIT_ARAP || options->energy == CF_EDIT_ARAP_RIMS;
+    cfi_sbe_model m;
+    cf_status st = cfi_sbe_model_init(&m, ctx, mesh, x0, options);
+    if (st != CF_OK) return st;
+    double alpha = m.alpha, beta = m.beta;
+    if (!is_arap && (alpha == 0.0 || beta == 0.0)) {
+        /* A one-term model lacks the other term's data: evaluate both with
+         * a two-term model and weight them with the requested alpha, beta. */
+        cfi_sbe_model_free(&m);
+        cf_stretch_bend_options h = *options;
+        h.energy = CF_EDIT_HYBRID;
+        h.lambda = 0.5;
+        st = cfi_sbe_model_init(&m, ctx, mesh, x0, &h);
+        if (st != CF_OK) return st;
+    }
+    st = cfi_sbe_local_step(&m, deformed, NULL);
+    double term = m.term_energy, bd = m.bend_energy;
+    cfi_sbe_model_free(&m);
+    if (st != CF_OK) return st;
+    if (stretch) *stretch = is_arap ? 0.0 : term;
+    if (bend) *bend = is_arap ? 0.0 : bd;
+    if (arap) *arap = is_arap ? term : 0.0;
+    if (total) *total = alpha * term + beta * bd;
+    return CF_OK;
+}

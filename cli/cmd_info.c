@@ -1,0 +1,207 @@
+/*
+ * curvflow info IN [--json]: counts, components, boundary loops, genus,
+ * Euler characteristic, the validation report (every defect counted),
+ * corner-angle and face-area statistics, and W/4pi for closed meshes.
+ */
+#define _GNU_SOURCE
+#include "common.h"
+#include "curvflow/io.h"
+#include "curvflow/ops.h"
+
+#include <getopt.h>
+#include <jansson.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static void usage(FILE *out)
+{
+    fprintf(out,
+            "Usage: curvflow info IN [--json]\n"
+            "Prints counts, connected components, boundary loops, genus, Euler characteristic,\n"
+            "the validation report, corner angle statistics (min / median / fraction below 10 deg),\n"
+            "face area statistics and, for closed meshes, the Willmore energy W/4pi.\n\n"
+            "  --json       print one JSON object instead of text\n"
+            "  -h, --help   show this help\n\n"
+            "Exit status: 0 valid mesh, 2 unreadable file or invalid mesh (the report is still printed).\n");
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* Median of a sorted array. */
+static double median(const double *v, size_t n) { return n == 0 ? NAN : (n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2])); }
+
+static json_t *num(double v) { return isfinite(v) ? json_real(v) : json_null(); }
+
+int cli_info(int argc, char **argv)
+{
+    static const struct option longopts[] = {
+        {"json", no_argument, NULL, 'j'}, {"help", no_argument, NULL, 'h'}, {NULL, 0, NULL, 0}};
+    int as_json = 0, c;
+    while ((c = getopt_long(argc, argv, "h", longopts, NULL)) != -1) {
+        switch (c) {
+        case 'j': as_json = 1; break;
+        case 'h': usage(stdout); return CLI_EXIT_OK;
+        default: return cli_usage_error("info", "invalid option");
+        }
+    }
+    if (optind + 1 != argc) return cli_usage_error("info", "expected one input mesh, got %d", argc - optind);
+    const char *path = argv[optind];
+
+    cf_context *ctx = cli_context(false);
+    if (!ctx) return CLI_EXIT_NUMERICAL;
+    int code = CLI_EXIT_OK;
+    cf_mesh_data *data = NULL;
+    cf_mesh *mesh = NULL;
+    double *angles = NULL, *areas = NULL;
+    json_t *root = json_object();
+
+    cf_status st = cf_read_mesh_file(ctx, path, &data);
+    if (st != CF_OK) {
+        code = cli_fail(ctx, path, st);
+        if (code == CLI_EXIT_USAGE) code = CLI_EXIT_INPUT;
+        goto done;
+    }
+    cf_mesh_desc desc;
+    cf_mesh_data_desc(data, &desc);
+    cf_mesh_report report;
+    st = cf_mesh_validate(ctx, &desc, &report);
+    if (st != CF_OK) {
+        code = cli_fail(ctx, path, st);
+        goto done;
+    }
+    json_object_set_new(root, "file", json_string(path));
+    json_object_set_new(root, "vertices", json_integer(data->vertex_count));
+    json_object_set_new(root, "faces", json_integer(data->face_count));
+    json_object_set_new(root, "polygons_triangulated", json_integer(data->polygon_count));
+    json_object_set_new(root, "texture_coordinates",
+                        json_string(data->uv_count == 0 ? "none" : data->uv_triangles ? "per-corner" : "per-vertex"));
+    json_t *val = json_object();
+    json_object_set_new(val, "valid", json_boolean(report.first_status == CF_OK));
+    json_object_set_new(val, "index_out_of_range", json_integer(report.index_out_of_range));
+    json_object_set_new(val, "repeated_index", json_integer(report.repeated_index));
+    json_object_set_new(val, "nonfinite_coordinates", json_integer(report.nonfinite_coordinates));
+    json_object_set_new(val, "degenerate_faces", json_integer(report.degenerate_faces));
+    json_object_set_new(val, "nonmanifold_edges", json_integer(report.nonmanifold_edges));
+    json_object_set_new(val, "nonmanifold_vertices", json_integer(report.nonmanifold_vertices));
+    json_object_set_new(val, "inconsistent_orientation_edges", json_integer(report.inconsistent_orientation_edges));
+    json_object_set_new(val, "unreferenced_vertices", json_integer(report.unreferenced_vertices));
+    json_object_set_new(val, "first_error", report.first_status == CF_OK ? json_null() : json_string(report.first_message));
+    json_object_set_new(root, "validation", val);
+
+    if (report.first_status == CF_OK) {
+        st = cf_mesh_create(ctx, &desc, &mesh);
+        if (st != CF_OK) {
+            code = cli_fail(ctx, path, st);
+            goto done;
+        }
+        int32_t nf = cf_mesh_face_count(mesh);
+        json_object_set_new(root, "edges", json_integer(cf_mesh_edge_count(mesh)));
+        json_object_set_new(root, "components", json_integer(cf_mesh_component_count(mesh)));
+        json_object_set_new(root, "boundary_loops", json_integer(cf_mesh_boundary_loop_count(mesh)));
+        json_object_set_new(root, "euler_characteristic", json_integer(cf_mesh_euler_characteristic(mesh)));
+        json_object_set_new(root, "genus", json_integer(cf_mesh_genus(mesh)));
+
+        angles = malloc(3 * (size_t)nf * sizeof *angles);
+        areas = malloc((size_t)nf * sizeof *areas);
+        if (!angles || !areas) {
+            fprintf(stderr, "curvflow: out of memory\n");
+            code = CLI_EXIT_NUMERICAL;
+            goto done;
+        }
+        const double *x = cf_mesh_positions(mesh);
+        if ((st = cf_corner_angles(ctx, mesh, x, angles)) != CF_OK || (st = cf_face_areas(ctx, mesh, x, areas)) != CF_OK) {
+            code = cli_fail(ctx, path, st);
+            goto done;
+        }
+        size_t na = 3 * (size_t)nf, below = 0;
+        const double deg = 180.0 / acos(-1.0);
+        for (size_t i = 0; i < na; ++i) below += angles[i] * deg < 10.0;
+        qsort(angles, na, sizeof *angles, cmp_double);
+        json_t *ang = json_object();
+        json_object_set_new(ang, "min_degrees", num(angles[0] * deg));
+        json_object_set_new(ang, "median_degrees", num(median(angles, na) * deg));
+        json_object_set_new(ang, "max_degrees", num(angles[na - 1] * deg));
+        json_object_set_new(ang, "fraction_below_10_degrees", num((double)below / (double)na));
+        json_object_set_new(root, "angles", ang);
+        double total = 0.0;
+        for (int32_t f = 0; f < nf; ++f) total += areas[f];
+        qsort(areas, (size_t)nf, sizeof *areas, cmp_double);
+        json_t *ar = json_object();
+        json_object_set_new(ar, "total", num(total));
+        json_object_set_new(ar, "min", num(areas[0]));
+        json_object_set_new(ar, "median", num(median(areas, (size_t)nf)));
+        json_object_set_new(ar, "max", num(areas[nf - 1]));
+        json_object_set_new(ar, "max_over_min", num(areas[nf - 1] / areas[0]));
+        json_object_set_new(root, "face_areas", ar);
+        double volume = 0.0;
+        if (cf_mesh_boundary_loop_count(mesh) == 0) {
+            double w = 0.0;
+            if ((st = cf_willmore_energy(ctx, mesh, x, &w)) != CF_OK ||
+                (st = cf_enclosed_volume(ctx, mesh, x, &volume)) != CF_OK) {
+                code = cli_fail(ctx, path, st);
+                goto done;
+            }
+            json_object_set_new(root, "willmore_over_4pi", num(w / (4.0 * acos(-1.0))));
+            json_object_set_new(root, "volume", num(volume));
+        } else {
+            json_object_set_new(root, "willmore_over_4pi", json_null());
+            json_object_set_new(root, "volume", json_null());
+        }
+    } else {
+        code = CLI_EXIT_INPUT;
+    }
+
+    if (as_json) {
+        char *text = json_dumps(root, JSON_INDENT(2) | JSON_REAL_PRECISION(10) | JSON_PRESERVE_ORDER);
+        if (text) puts(text);
+        free(text);
+    } else {
+        printf("file:          %s\n", path);
+        printf("vertices:      %d\nfaces:         %d\n", (int)data->vertex_count, (int)data->face_count);
+        if (data->polygon_count) printf("polygons:      %d (fan-triangulated)\n", (int)data->polygon_count);
+        printf("uv:            %s\n", json_string_value(json_object_get(root, "texture_coordinates")));
+        if (mesh) {
+            printf("edges:         %d\n", (int)cf_mesh_edge_count(mesh));
+            printf("components:    %d\nboundary loops: %d\n", (int)cf_mesh_component_count(mesh),
+                   (int)cf_mesh_boundary_loop_count(mesh));
+            printf("euler char.:   %d\ngenus:         %d\n", (int)cf_mesh_euler_characteristic(mesh),
+                   (int)cf_mesh_genus(mesh));
+            json_t *ang = json_object_get(root, "angles"), *ar = json_object_get(root, "face_areas");
+            printf("angles (deg):  min %.4g  median %.4g  max %.4g  below 10 deg: %.2f %%\n",
+                   json_real_value(json_object_get(ang, "min_degrees")),
+                   json_real_value(json_object_get(ang, "median_degrees")),
+                   json_real_value(json_object_get(ang, "max_degrees")),
+                   100.0 * json_real_value(json_object_get(ang, "fraction_below_10_degrees")));
+            printf("face areas:    total %.6g  min %.4g  median %.4g  max %.4g  (max/min %.3g)\n",
+                   json_real_value(json_object_get(ar, "total")), json_real_value(json_object_get(ar, "min")),
+                   json_real_value(json_object_get(ar, "median")), json_real_value(json_object_get(ar, "max")),
+                   json_real_value(json_object_get(ar, "max_over_min")));
+            json_t *w = json_object_get(root, "willmore_over_4pi");
+            if (json_is_real(w)) printf("W/4pi:         %.6g\nvolume:        %.6g\n", json_real_value(w),
+                                        json_real_value(json_object_get(root, "volume")));
+            printf("validation:    ok\n");
+        } else {
+            printf("validation:    INVALID: %s\n", report.first_message);
+            printf("  index out of range %d, repeated index %d, non-finite %d, degenerate faces %d,\n"
+                   "  non-manifold edges %d, non-manifold vertices %d, inconsistent orientation %d, unreferenced %d\n",
+                   (int)report.index_out_of_range, (int)report.repeated_index, (int)report.nonfinite_coordinates,
+                   (int)report.degenerate_faces, (int)report.nonmanifold_edges, (int)report.nonmanifold_vertices,
+                   (int)report.inconsistent_orientation_edges, (int)report.unreferenced_vertices);
+        }
+    }
+    if (!mesh) fprintf(stderr, "curvflow: %s: %s\n", path, report.first_message);
+
+done:
+    free(angles);
+    free(areas);
+    json_decref(root);
+    cf_mesh_destroy(&mesh);
+    cf_mesh_data_destroy(&data);
+    cf_context_destroy(&ctx);
+    return code;
+}

@@ -1,0 +1,80 @@
+/*
+ * Helpers shared by the subcommands: error reporting in the tool's format
+ * ("curvflow: <file>: <message>"), exit codes from statuses, number and
+ * --param key=value parsing, mesh loading, the per-step progress line / bar
+ * and the JSONL step log.
+ */
+#ifndef CF_CLI_COMMON_H
+#define CF_CLI_COMMON_H
+
+#include "cli.h"
+#include "curvflow/curvflow.h"
+#include "curvflow/flow.h"
+#include "curvflow/mesh.h"
+
+#include <stdbool.h>
+#include <stdio.h>
+
+/* Exit code for a library status: 0 ok, 1 invalid argument (usage), 3
+ * numerical failure / cancelled / out of memory, 2 anything about the input
+ * (file, format, mesh validity, unsupported request). */
+int cli_exit_code(cf_status status);
+
+/* Prints "curvflow: <what>: <message>" to stderr; `what` may be NULL, and is
+ * left out when the message already starts with it (I/O messages name the
+ * file themselves). Returns cli_exit_code(status). */
+int cli_fail(cf_context *ctx, const char *what, cf_status status);
+
+/* Prints "curvflow: <fmt...>" and a hint to --help to stderr; returns 1. */
+int cli_usage_error(const char *command, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
+/* Strict number parsing (whole string, finite, in range); print a usage
+ * error naming the option on failure and return false. */
+bool cli_parse_int(const char *command, const char *option, const char *text, long long min_value,
+                   long long max_value, long long *out);
+bool cli_parse_double(const char *command, const char *option, const char *text, double *out);
+
+/* A context with warnings from the library forwarded to stderr. */
+cf_context *cli_context(bool verbose);
+
+/* Loads a validated mesh; on failure prints the message and returns the
+ * exit code (2), else 0. */
+int cli_load_mesh(cf_context *ctx, const char *path, cf_mesh **out);
+
+/* Creates the directory (one level) if it does not exist. Returns 0 or 2
+ * (with a message). */
+int cli_make_dir(const char *path);
+
+/* Progress reporting for a flow run: one line per step on stderr (or a bar
+ * redrawn in place when stderr is a terminal) and one JSON object per step
+ * in the log file. Use as the flow's progress callback. */
+typedef struct cli_progress {
+    const char *method;     /* method name for the status line */
+    int64_t total_steps;
+    bool quiet;             /* no status lines */
+    bool tty;               /* draw a bar instead of lines */
+    FILE *log;              /* JSONL log or NULL */
+    const char *log_path;
+    bool log_failed;
+    double start_seconds;
+    bool bar_drawn;
+} cli_progress;
+
+void cli_progress_init(cli_progress *p, const char *method, int64_t total_steps, bool quiet);
+/* Opens the log file (truncates); returns 0 or 2 with a message. */
+int cli_progress_open_log(cli_progress *p, const char *path);
+/* Writes the JSON object of one step (also for the initial state, iteration 0). */
+void cli_progress_log(cli_progress *p, const cf_flow_info *info);
+/* cf_progress_fn: prints and logs the step; never cancels. */
+int cli_progress_callback(void *user, const cf_flow_info *info);
+/* Ends the bar line; closes the log. Returns 0 or 2 if the log could not be written. */
+int cli_progress_finish(cli_progress *p);
+
+/* Wall-clock seconds (monotonic). */
+double cli_now(void);
+
+#endif /* CF_CLI_COMMON_H */

@@ -1,0 +1,65 @@
+/*
+ * Baseline curvature flows the papers compare against, on the common flow
+ * interface (curvflow/flow.h):
+ *
+ *   explicit-mcf           x <- x - tau M^-1 L x                  energy: area
+ *   implicit-mcf           (M + tau L) x' = M x, L and M of x     energy: area
+ *                          (Desbrun, Meyer, Schroeder, Barr 1999, backward Euler)
+ *   conformal-mcf          (M + tau L0) x' = M x, L0 of the initial mesh, M of x
+ *                          (Kazhdan, Solomon, Ben-Chen 2012)      energy: area
+ *   explicit-bilaplacian   x <- x - tau M^-1 L M^-1 L x           energy: (1/2) x^T L M^-1 L x
+ *   implicit-bilaplacian   (M + tau L M^-1 L) x' = M x            energy: (1/2) x^T L M^-1 L x
+ *
+ * L is the positive semi-definite cotan Laplacian and M the lumped mass
+ * matrix (curvflow/ops.h), both of the current positions unless stated.
+ * The bi-Laplacian energy is the squared L2 norm of the discrete
+ * mean-curvature normal, (1/2) sum_i |(L x)_i|^2 / m_i = 2 sum_i H_i^2 m_i,
+ * i.e. twice the discrete Willmore energy (Willmore-like; it is not
+ * invariant under Moebius transformations and differs from cf_willmore_energy
+ * by the factor 2 only).
+ *
+ * Time steps are scale-free. The actual step tau is
+ *   explicit-mcf           time_step * h^2      (h: mean edge length of the start shape)
+ *   explicit-bilaplacian   time_step * h^4
+ *   implicit-mcf, conformal-mcf   time_step * A0    (A0: total area of the start shape)
+ *   implicit-bilaplacian   time_step * A0^2
+ * so that a uniformly scaled mesh follows the same (scaled) path. The
+ * explicit flows are stable for time_step below about 1/3 (MCF) and 1/20
+ * (bi-Laplacian) on near-equilateral meshes; above the limit the step is
+ * rejected with CF_ERR_NUMERICAL as soon as the energy rises by more than
+ * 50 % in one step (the previous state is kept).
+ */
+#ifndef CURVFLOW_BASELINE_FLOWS_H
+#define CURVFLOW_BASELINE_FLOWS_H
+
+#include "curvflow/flow.h"
+#include "curvflow/ops.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct cf_baseline_options {
+    /* Scale-free time step (see above). Parameter "time_step". */
+    double time_step;
+    /* Lumped mass: CF_MASS_LUMPED_BARYCENTRIC (0) or CF_MASS_LUMPED_VORONOI
+     * (1) (a cf_mass_kind value). Parameter "mass" = barycentric | voronoi. */
+    int32_t mass;
+    /* Nonzero: after each step scale about the centroid and translate so that
+     * total area and (mass-weighted) centroid equal the start shape's, as
+     * Kazhdan et al. 2012 do. Parameter "rescale". */
+    int32_t rescale;
+    /* The flow reports convergence when the relative energy decrease of a
+     * step is below this (0: never). Parameter "tolerance". */
+    double tolerance;
+} cf_baseline_options;
+
+/* Defaults of one baseline kind (explicit/implicit MCF, conformal MCF,
+ * explicit/implicit bi-Laplacian): chosen stable and visibly smoothing in
+ * about 10 steps. CF_ERR_INVALID_ARG for another kind. */
+CF_API cf_status cf_baseline_options_default(cf_flow_kind kind, cf_baseline_options *options);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* CURVFLOW_BASELINE_FLOWS_H */

@@ -1,0 +1,167 @@
+/*
+ * Mesh file I/O: OBJ, OFF and PLY readers and writers, atomic output.
+ *
+ *   cf_mesh *mesh;
+ *   if (cf_load_mesh(ctx, "spot.obj", &mesh) != CF_OK)
+ *       fprintf(stderr, "%s\n", cf_context_message(ctx));   // "spot.obj: line 12: ..."
+ *   cf_field q = {"quality", CF_FIELD_FACE, per_face_values};
+ *   cf_write_mesh_file(ctx, "out.ply", mesh, new_positions, &q, 1);
+ *
+ * Readers fill a cf_mesh_data (what the file holds, unvalidated apart from
+ * syntax, index ranges and finite coordinates); cf_load_mesh also builds a
+ * validated cf_mesh. Messages name the file (the path as given) and the
+ * line (text formats) or element index (binary PLY), e.g.
+ * "truncated_spot.obj: line 7063: face has 2 vertices (file ends inside a
+ * face line: truncated?)".
+ *
+ * Numbers are parsed and printed in the "C" locale (the library never calls
+ * setlocale). ASCII output uses %.17g, so positions round-trip bit-exactly.
+ *
+ * Writers are atomic: the file is written to a temporary file in the same
+ * directory, flushed and fsync'ed, then renamed over the target. On any
+ * failure the temporary file is removed and an existing target is left
+ * untouched.
+ */
+#ifndef CURVFLOW_IO_H
+#define CURVFLOW_IO_H
+
+#include "curvflow/curvflow.h"
+#include "curvflow/mesh.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum cf_mesh_format {
+    CF_FORMAT_AUTO = 0, /* from the file name's extension (.obj .off .ply, case-insensitive) */
+    CF_FORMAT_OBJ = 1,
+    CF_FORMAT_OFF = 2,
+    CF_FORMAT_PLY = 3
+} cf_mesh_format;
+
+/* Format of a path from its extension; CF_ERR_UNSUPPORTED (with a message)
+ * for an unknown extension. */
+CF_API cf_status cf_mesh_format_from_path(cf_context *ctx, const char *path, cf_mesh_format *format);
+
+/* A named per-vertex or per-face array of doubles read from a file (PLY
+ * properties other than x, y, z, u, v and the face index list). */
+typedef struct cf_mesh_property {
+    char *name;      /* NUL-terminated, owned by the cf_mesh_data */
+    double *values;  /* vertex_count or face_count values */
+} cf_mesh_property;
+
+/* What a mesh file holds. Created by the readers, freed with
+ * cf_mesh_data_destroy; every array is owned by it. Faces are triangles:
+ * polygons were fan-triangulated (v0, v_i, v_i+1), and per-face properties
+ * of a polygon are repeated on each of its triangles. */
+typedef struct cf_mesh_data {
+    int32_t vertex_count;
+    double *positions;          /* 3 * vertex_count, xyz */
+    int32_t face_count;         /* triangles */
+    int32_t *triangles;         /* 3 * face_count, 0-based */
+    /* Texture coordinates (uv_count == 0 and NULL when absent). Per vertex
+     * when uv_triangles is NULL (uv_count == vertex_count, PLY u,v), else per
+     * corner: uv_triangles holds 3 * face_count indices into uv (OBJ vt,
+     * PLY face texcoord lists). */
+    int32_t uv_count;
+    double *uv;                 /* 2 * uv_count */
+    int32_t *uv_triangles;      /* 3 * face_count or NULL */
+    int32_t vertex_property_count;
+    cf_mesh_property *vertex_properties;
+    int32_t face_property_count;
+    cf_mesh_property *face_properties;
+    /* Faces of the file with more than 3 vertices (each was fan-triangulated;
+     * a warning was logged). */
+    int32_t polygon_count;
+    cf_context *context;        /* owner, used by cf_mesh_data_destroy */
+} cf_mesh_data;
+
+/* Frees the data; accepts NULL and *data == NULL; sets *data to NULL. */
+CF_API void cf_mesh_data_destroy(cf_mesh_data **data);
+
+/* Fills a mesh description that points into `data` (no copy): positions,
+ * triangles and uv. CF_ERR_INVALID_ARG for NULL arguments. */
+CF_API cf_status cf_mesh_data_desc(const cf_mesh_data *data, cf_mesh_desc *desc);
+
+/* Property of the given name, or NULL. */
+CF_API const cf_mesh_property *cf_mesh_data_vertex_property(const cf_mesh_data *data, const char *name);
+CF_API const cf_mesh_property *cf_mesh_data_face_property(const cf_mesh_data *data, const char *name);
+
+/* Reads a mesh file; the format comes from the extension. Statuses:
+ * CF_ERR_IO (cannot open/read), CF_ERR_PARSE (malformed content),
+ * CF_ERR_TRUNCATED (file ends early), CF_ERR_INDEX_RANGE (a face index
+ * that is 0, negative beyond the start or past the vertices defined),
+ * CF_ERR_NONFINITE (NaN/Inf coordinate), CF_ERR_UNSUPPORTED (extension,
+ * PLY variant), CF_ERR_NOMEM, CF_ERR_INVALID_ARG. *out is NULL on failure. */
+CF_API cf_status cf_read_mesh_file(cf_context *ctx, const char *path, cf_mesh_data **out);
+
+/* Reads a mesh from memory (`bytes` need not be NUL-terminated). `format`
+ * must not be CF_FORMAT_AUTO. `name` is used in messages (NULL: "<memory>").
+ * Same statuses as cf_read_mesh_file. */
+CF_API cf_status cf_read_mesh_memory(cf_context *ctx, const void *bytes, size_t size, cf_mesh_format format,
+                                     const char *name, cf_mesh_data **out);
+
+/* Reads a file and builds a validated mesh (positions, triangles, uv).
+ * Validation failures keep the mesh core's status (CF_ERR_NONMANIFOLD_EDGE,
+ * CF_ERR_ORIENTATION, ...) with the message prefixed by the path,
+ * e.g. "beetle.obj: face 12: edge (3, 9) is shared by 3 faces". */
+CF_API cf_status cf_load_mesh(cf_context *ctx, const char *path, cf_mesh **out);
+
+/* A named scalar field attached to the output. */
+typedef enum cf_field_location {
+    CF_FIELD_VERTEX = 0, /* vertex_count values */
+    CF_FIELD_FACE = 1    /* face_count values */
+} cf_field_location;
+
+typedef struct cf_field {
+    const char *name;            /* [A-Za-z0-9_.-]+, unique per location, not a reserved name (x y z u v
+                                    vertex_indices texcoord index) */
+    cf_field_location location;
+    const double *values;
+} cf_field;
+
+typedef enum cf_ply_encoding {
+    CF_PLY_BINARY_LITTLE_ENDIAN = 0, /* default */
+    CF_PLY_BINARY_BIG_ENDIAN = 1,
+    CF_PLY_ASCII = 2
+} cf_ply_encoding;
+
+typedef struct cf_write_options {
+    cf_mesh_format format;        /* CF_FORMAT_AUTO: from the extension */
+    cf_ply_encoding ply_encoding; /* PLY only */
+    int32_t write_uv;             /* write the mesh's texture coordinates if it has any (default 1) */
+} cf_write_options;
+
+CF_API void cf_write_options_default(cf_write_options *options);
+
+/* Writes `mesh` with `positions` (3 nv; NULL = the mesh's rest positions)
+ * and `field_count` fields, atomically. Vertex order and count are kept.
+ *  - PLY: x y z (double) [u v (double) when the uv is per vertex] + vertex
+ *    fields as double properties; faces as `list uchar int vertex_indices`
+ *    [+ `list uchar double texcoord` (u0 v0 u1 v1 u2 v2) when uv is per
+ *    corner] + face fields as double properties.
+ *  - OBJ: v (%.17g), vt and f v/vt when the mesh has uv; fields go to side
+ *    CSV files next to it: "<stem>.vertex.csv" and "<stem>.face.csv"
+ *    (stem = path without its extension), header "index,<name>,...", one
+ *    row per element with values in %.17g. Each CSV is written atomically
+ *    before the OBJ.
+ *  - OFF: positions and triangles only; fields are rejected (CF_ERR_UNSUPPORTED).
+ * Statuses: CF_ERR_INVALID_ARG (NULL, bad field), CF_ERR_NONFINITE
+ * (non-finite position), CF_ERR_IO (with the path and the system's reason),
+ * CF_ERR_UNSUPPORTED, CF_ERR_NOMEM. */
+CF_API cf_status cf_write_mesh_file(cf_context *ctx, const char *path, const cf_mesh *mesh,
+                                    const double *positions, const cf_field *fields, int32_t field_count);
+
+/* As cf_write_mesh_file with options (NULL = defaults). */
+CF_API cf_status cf_write_mesh_file_ex(cf_context *ctx, const char *path, const cf_mesh *mesh,
+                                       const double *positions, const cf_field *fields, int32_t field_count,
+                                       const cf_write_options *options);
+
+/* Writes `size` bytes of `text` to `path` atomically (temp file + fsync +
+ * rename). CF_ERR_IO names the path and the reason. */
+CF_API cf_status cf_write_text_file_atomic(cf_context *ctx, const char *path, const char *text, size_t size);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* CURVFLOW_IO_H */

@@ -1,0 +1,132 @@
+/*
+ * Shape metrics: comparison of two position sets on one connectivity
+ * (quasi-conformal error, area distortion, angle change), single-shape
+ * summaries (area, volume, Willmore energy, Gauss-Bonnet check, best-fit
+ * sphere), similarity alignment (Umeyama) and vertex-to-surface distance,
+ * plus the robust 3 x 3 SVD and closest-rotation kernels other modules use.
+ *
+ * Matrices are 3 x 3 row-major (m[3 r + c]). Per-face/per-vertex outputs are
+ * caller-allocated and optional (NULL skips them).
+ */
+#ifndef CURVFLOW_METRICS_H
+#define CURVFLOW_METRICS_H
+
+#include "curvflow/curvflow.h"
+#include "curvflow/mesh.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---- 3 x 3 kernels ----------------------------------------------------- */
+
+/* Signed singular value decomposition a = u diag(s) v^T by one-sided
+ * (Hestenes) Jacobi rotations, accurate to the relative precision of the
+ * small singular values (no a^T a is formed).
+ * u and v are rotations (det +1). Sign correction: s[0] >= s[1] >= |s[2]|
+ * and s[2] carries the sign of det(a), i.e. s[2] < 0 exactly when a
+ * contains a reflection; |s| are the usual singular values. Rank-deficient
+ * inputs get an arbitrary orthonormal completion of u.
+ * Statuses: CF_OK, CF_ERR_INVALID_ARG (NULL), CF_ERR_NONFINITE (NaN/Inf
+ * entry; outputs then hold identity/zero). No context: this is a pure kernel. */
+CF_API cf_status cf_svd3(const double a[9], double u[9], double s[3], double v[9]);
+
+/* Closest rotation r to a in the Frobenius norm (maximises trace(r^T a)):
+ * r = u v^T with the signed SVD above, which is the polar factor with the
+ * determinant correction "negate the column of the smallest singular value".
+ * For an ARAP/Procrustes covariance S = sum_k w_k p_k q_k^T (p rest, q
+ * deformed edge) the rotation taking p to q is cf_rotation_from_covariance
+ * of S^T. Statuses as cf_svd3. */
+CF_API cf_status cf_rotation_from_covariance(const double a[9], double r[9]);
+
+/* ---- statistics ---------------------------------------------------------- */
+
+typedef struct cf_stats {
+    int64_t count;
+    double min, max;
+    double mean;           /* plain mean */
+    double weighted_mean;  /* weighted by the given weights (areas) */
+    double weighted_std;   /* weighted standard deviation about weighted_mean */
+    double p50, p95;       /* unweighted percentiles (nearest rank) */
+} cf_stats;
+
+/* Statistics of n values (weights NULL: uniform). Allocates a sorted copy
+ * through the context for the percentiles. Non-finite values give
+ * CF_ERR_NONFINITE naming the index. */
+CF_API cf_status cf_stats_compute(cf_context *ctx, int64_t n, const double *values, const double *weights,
+                                  cf_stats *out);
+
+/* ---- comparisons on one connectivity ------------------------------------ */
+
+/* Quasi-conformal error per face (Sander et al. 2001): the ratio
+ * sigma_max / sigma_min >= 1 of the singular values of the affine map from
+ * the triangle in `a` to the triangle in `b`, each expressed in its own
+ * orthonormal 2D frame. 1 for a similarity. q: nf (optional); stats
+ * weighted by the face areas in `a` (optional). */
+CF_API cf_status cf_quasi_conformal_error(cf_context *ctx, const cf_mesh *mesh, const double *a, const double *b,
+                                          double *q, cf_stats *stats);
+
+/* Log area distortion per face, log(A_b / A_a) after scaling `b` so that
+ * both total areas are equal (so a uniform scaling gives 0 everywhere).
+ * out: nf (optional); stats weighted by face areas in `a` (optional):
+ * weighted_mean and weighted_std are the figures usually quoted. */
+CF_API cf_status cf_log_area_distortion(cf_context *ctx, const cf_mesh *mesh, const double *a, const double *b,
+                                        double *out, cf_stats *stats);
+
+/* Per-vertex angle change: the largest |theta_b - theta_a| (radians) over
+ * the vertex's corners. out: nv (optional); stats unweighted over vertices,
+ * weighted by barycentric areas of `a` (optional). */
+CF_API cf_status cf_angle_change(cf_context *ctx, const cf_mesh *mesh, const double *a, const double *b,
+                                 double *out, cf_stats *stats);
+
+/* ---- single-shape summary -------------------------------------------------- */
+
+typedef struct cf_shape_summary {
+    double area;
+    double volume;                 /* signed enclosed volume */
+    double willmore;               /* cf_willmore_energy */
+    double willmore_over_4pi;
+    double total_angle_defect;     /* sum K_i */
+    double gauss_bonnet_target;    /* 2 pi chi */
+    double sphere_center[3];       /* least-squares (geometric) sphere fit */
+    double sphere_radius;
+    double sphere_max_deviation;   /* max_i | |x_i - c| - R | / R */
+    double sphere_rms_deviation;   /* RMS of the same, / R */
+} cf_shape_summary;
+
+CF_API cf_status cf_shape_summary_compute(cf_context *ctx, const cf_mesh *mesh, const double *positions,
+                                          cf_shape_summary *out);
+
+/* Least-squares sphere through n points (3 n doubles): algebraic fit
+ * refined by Gauss-Newton on sum (|x_i - c| - R)^2. max_dev and rms_dev are
+ * relative to R (either may be NULL). Needs n >= 4 non-coplanar points
+ * (CF_ERR_NUMERICAL otherwise). */
+CF_API cf_status cf_fit_sphere(cf_context *ctx, int32_t n, const double *points, double center[3], double *radius,
+                               double *max_dev, double *rms_dev);
+
+/* ---- alignment and distances ---------------------------------------------- */
+
+/* Similarity y ~ scale * rotation * x + translation minimising
+ * sum w_i |y_i - (s R x_i + t)|^2 over rotations (no reflection), s > 0 and t
+ * (Umeyama 1991). source, target: 3 n; weights: n or NULL. rms (optional)
+ * receives the weighted RMS residual. with_scale = 0 fixes s = 1 (rigid). */
+CF_API cf_status cf_similarity_align(cf_context *ctx, int32_t n, const double *source, const double *target,
+                                     const double *weights, int with_scale, double rotation[9], double *scale,
+                                     double translation[3], double *rms);
+
+/* out_i = s R x_i + t (out may equal x). */
+CF_API void cf_similarity_apply(int32_t n, const double rotation[9], double scale, const double translation[3],
+                                const double *x, double *out);
+
+/* Distance from each of n points to the nearest point on the triangles of
+ * `mesh` at `positions` (bounding-volume hierarchy, exact point-triangle
+ * distance). dist: n (optional); max_dist/rms_dist optional; argmax
+ * (optional) the index of the farthest point. */
+CF_API cf_status cf_point_to_surface_distance(cf_context *ctx, int32_t n, const double *points,
+                                              const cf_mesh *mesh, const double *positions, double *dist,
+                                              double *max_dist, double *rms_dist, int32_t *argmax);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* CURVFLOW_METRICS_H */

@@ -1,0 +1,83 @@
+/*
+ * Conformal Willmore flow in curvature space and the spin transformation it
+ * is built from (Crane, Pinkall, Schroeder 2013, "Robust Fairing via
+ * Conformal Curvature Flow"; vertex-based spin transformations of Crane,
+ * Pinkall, Schroeder 2011).
+ *
+ * Conventions (docs/spin.md):
+ *  - rho is a change of mean curvature per vertex, in units of 1/length:
+ *    the transformed surface has H~ ~= H + rho (Crane 2013, Sec. 6,
+ *    mu~ = mu + (rho - gamma)|df|).
+ *  - Time step: one step of the flow prescribes rho = tau * rhodot with
+ *    rhodot = -2 H projected onto the constraints (Crane 2013, Sec. 4/6.1:
+ *    mu~ = (1 - 2 tau) mu). The flow is stable for 0 < tau < 1 and
+ *    tau = 1/2 removes the (projected) curvature deviation to first order in
+ *    one step. The default is 0.45 (docs/spin.md says why).
+ *
+ * Use through the common flow interface (curvflow/flow.h) with kind
+ * CF_FLOW_SPIN_WILLMORE; the options struct below is the method part of
+ * cf_flow_options, and every field can also be set by name
+ * ("time_step", "sigma", "filter_k", "mobius", ...).
+ */
+#ifndef CURVFLOW_SPIN_WILLMORE_H
+#define CURVFLOW_SPIN_WILLMORE_H
+
+#include "curvflow/curvflow.h"
+#include "curvflow/mesh.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum cf_spin_boundary_mode {
+    /* Natural boundary conditions of the facewise Dirac matrix (Sec. 6.2:
+     * "for topological disks this flow can be integrated without further
+     * modification"). */
+    CF_SPIN_BOUNDARY_FREE = 0,
+    /* Sec. 6.3.2: lambda = 1 on boundary vertices (boundary columns of X moved
+     * to the right-hand side) and a Poisson problem with the boundary
+     * positions fixed: boundary vertices do not move at all. */
+    CF_SPIN_BOUNDARY_FIXED = 1
+} cf_spin_boundary_mode;
+
+typedef struct cf_spin_willmore_options {
+    double time_step;          /* tau, rho = -2 tau H (projected); stable for tau < 1. Default 0.45 */
+    int32_t total_curvature;   /* constraint <rhodot, 1> = 0 (App. B). Default 1 */
+    int32_t inversion;         /* constraints <rhodot, N^x,y,z> = 0 (App. D). Default 1 */
+    int32_t exactness;         /* constraints <rhodot, Z_i^x,y,z> = 0 for genus > 0 (App. C). Default 1 */
+    int32_t mobius;            /* Moebius balancing (App. E.1). Default 0 */
+    double mobius_weight;      /* scale of the balancing term. Default 1 */
+    /* Spectral filter v <- v - (id + sigma' Delta^k)^-1 v (Sec. 4, Fig. 8, 19),
+     * Delta = M^-1 L >= 0, sigma' = sigma R^(2k) with R = sqrt(area / 4 pi)
+     * of the input (so sigma is scale-free). sigma = 0 disables. */
+    double sigma;              /* default 0 */
+    int32_t filter_k;          /* 0..3, default 2 */
+    int32_t boundary_mode;     /* cf_spin_boundary_mode, default FREE */
+    int32_t power_iterations;  /* inverse power iterations per step, default 1 (Sec. 6.4.2) */
+    int32_t normalize;         /* keep total area and area-weighted centroid (Willmore energy is
+                                * scale invariant). Default 1 */
+    double tolerance;          /* converged when the relative energy decrease of a step is
+                                * below this. Default 1e-6 */
+} cf_spin_willmore_options;
+
+CF_API void cf_spin_willmore_options_default(cf_spin_willmore_options *options);
+
+/* SpinXForm (Crane et al. 2011; Crane 2013, Sec. 6 and App. G): finds the
+ * smallest eigenvector lambda of the facewise quaternionic matrix X(rho)
+ * (real 4 nv x 4 nv form) by inverse power iteration on a Cholesky
+ * factorisation, transforms every edge by lambda and recovers the positions
+ * from the cotan Poisson problem L f~ = div e~.
+ *   positions: 3 nv (NULL: the mesh's rest positions);
+ *   rho: nv values, curvature change in 1/length (H~ ~= H + rho);
+ *   out_positions: 3 nv, caller-allocated (may not alias positions).
+ * The result keeps the area-weighted centroid of the input; its scale is set
+ * by normalising lambda to mean |lambda|^2 = 1 (area weighted).
+ * Statuses: CF_OK, CF_ERR_INVALID_ARG, CF_ERR_NONFINITE (rho), CF_ERR_NOMEM,
+ * CF_ERR_DEGENERATE_FACE, CF_ERR_NOT_POSDEF, CF_ERR_NUMERICAL. */
+CF_API cf_status cf_spin_transform(cf_context *ctx, const cf_mesh *mesh, const double *positions, const double *rho,
+                                   double *out_positions);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* CURVFLOW_SPIN_WILLMORE_H */

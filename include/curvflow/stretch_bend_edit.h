@@ -1,0 +1,154 @@
+/*
+ * Interactive mesh editing with a stretching + bending energy (Zhao &
+ * Gortler, "A Report on Shape Deformation with a Stretching and Bending
+ * Energy"), together with the ARAP energies it is compared against.
+ *
+ * Energies (x = rest positions, x' = deformed positions, cot a_vw = cotangent
+ * of the corner opposite halfedge v->w in the REST mesh, W_vw = cot a_vw +
+ * cot a_wv, M_v = rest dual area, (K f)_v = sum_w W_vw (f_v - f_w), which is
+ * twice the project's L):
+ *   stretch   E_s  = sum_halfedges cot a_vw |(x'_v - x'_w) - R_t (x_v - x_w)|^2     (Eq. 5)
+ *   bend      E_db = sum_v M_v |(K x')_v / M_v - |H_v| u'_v|^2, |H_v| = |(K x)_v| / M_v   (Eq. 15)
+ *   hybrid    E_t  = (lambda / A) E_s + (1 - lambda) E_db                          (Eq. 17)
+ *   arap      sum_v sum_{w in N(v)} W_vw |(x'_v - x'_w) - R_v (x_v - x_w)|^2     (Eq. 6)
+ *   arap-rims sum_v sum_{(m,n) in E(v)} W_mn |(x'_m - x'_n) - R_v (x_m - x_n)|^2 (Eq. 7)
+ * with one rotation R_t per triangle (stretch) or R_v per vertex (ARAP), and
+ * one unit vector u'_v per vertex (bend). E(v) is the set of spoke and rim
+ * edges of the triangles around v, each edge once with its full weight W.
+ * A is the total rest area when `scale_free` is set (default), else 1: it
+ * makes lambda independent of the model's size (the paper notes E_s scales
+ * with the square of the size while E_db does not). "stretch" and "bend" are
+ * the hybrid at lambda = 1 and 0.
+ *
+ * The energies are minimised by local/global iteration (Sec. 4): one flow
+ * step (cf_flow_step on a CF_FLOW_STRETCH_BEND_EDIT flow) is one global
+ * solve (Eq. 23, handle vertices moved to the right-hand side, matrix
+ * factorised once per handle set, three right-hand sides) followed by one
+ * local step (Procrustes rotations with determinant correction, Eq. 24, and
+ * u' = normalised K x'). The energy reported after a step is E(x') with the
+ * optimal rotations, so it never increases from step to step.
+ */
+#ifndef CURVFLOW_STRETCH_BEND_EDIT_H
+#define CURVFLOW_STRETCH_BEND_EDIT_H
+
+#include "curvflow/curvflow.h"
+#include "curvflow/flow.h"
+#include "curvflow/mesh.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum cf_edit_energy {
+    CF_EDIT_HYBRID = 0,    /* lambda E_s + (1 - lambda) E_db (Eq. 17) */
+    CF_EDIT_STRETCH = 1,   /* E_s only (Eq. 5), lambda = 1 */
+    CF_EDIT_BEND = 2,      /* E_db only (Eq. 15), lambda = 0 */
+    CF_EDIT_ARAP = 3,      /* ARAP spokes, per-vertex rotations (Eq. 6) */
+    CF_EDIT_ARAP_RIMS = 4, /* ARAP spokes and rims (Eq. 7) */
+    CF_EDIT_ENERGY_COUNT = 5
+} cf_edit_energy;
+
+/* "hybrid", "stretch", "bend", "arap", "arap-rims"; NULL if out of range. */
+CF_API const char *cf_edit_energy_name(cf_edit_energy energy);
+/* CF_ERR_INVALID_ARG with a message listing the names for an unknown name. */
+CF_API cf_status cf_edit_energy_from_name(cf_context *ctx, const char *name, cf_edit_energy *energy);
+
+/* Dual area M_v of the bending energy (the paper suggests Voronoi). */
+typedef enum cf_edit_mass {
+    CF_EDIT_MASS_VORONOI = 0,      /* Meyer et al. mixed Voronoi cells */
+    CF_EDIT_MASS_BARYCENTRIC = 1
+} cf_edit_mass;
+
+/* ---- Handles ------------------------------------------------------------ */
+
+/* Constrained vertices with their target positions. A fixed vertex has its
+ * current position as target. Created by the library, read-only for the
+ * caller. Vertices are unique and sorted ascending. */
+typedef struct cf_handle_set {
+    int32_t count;        /* constrained vertices */
+    int32_t *vertices;    /* count, ascending */
+    double *targets;      /* 3 count */
+    int32_t moved_count;  /* how many targets differ from the positions the set was built on (informational) */
+    cf_context *ctx;
+} cf_handle_set;
+
+/* Copies `count` vertices and their targets (3 count) into a new set,
+ * sorting them. Statuses: CF_ERR_INVALID_ARG (negative index, a vertex
+ * given twice, NULL arrays with count > 0), CF_ERR_NONFINITE (a target),
+ * CF_ERR_NOMEM. */
+CF_API cf_status cf_handle_set_create(cf_context *ctx, int32_t count, const int32_t *vertices, const double *targets,
+                                      cf_handle_set **out);
+CF_API void cf_handle_set_destroy(cf_handle_set **handles);
+
+/* Reads a JSON handle file (format in docs/edit.md):
+ *   { "sets": [
+ *       { "name": "feet", "box": { "min": [x,y,z], "max": [x,y,z] }, "fixed": true },
+ *       { "name": "head", "relative_box": { "min": [0,0.9,0], "max": [1,1,1] },
+ *         "transform": { "translate": [0,0.1,0],
+ *                        "rotate": { "axis": [0,0,1], "angle_degrees": 30, "center": [0,0,0] },
+ *                        "scale": 1.0 } },
+ *       { "name": "tip", "vertices": [12, 40], "targets": [[0,0,1], [0,1,1]] } ] }
+ * Each set selects vertices by "vertices" (index list), "box" (axis-aligned,
+ * absolute coordinates, inclusive) or "relative_box" (fractions of the
+ * bounding box of `positions`), and gives exactly one of "fixed": true,
+ * "targets" (one position per listed vertex) or "transform" (applied as
+ * x -> c + scale R(axis, angle) (x - c) + translate, c = rotation centre,
+ * default the set's centroid). Selection and transforms use `positions`
+ * (3 nv; NULL = the mesh's rest positions), so a handle file can be applied
+ * to a deformed state. A vertex in two sets is an error.
+ * Statuses: CF_ERR_IO (cannot read), CF_ERR_PARSE (malformed JSON with
+ * line:column, unknown key, wrong type, unknown vertex index with its value
+ * and the set's name, empty set, overlapping sets, every vertex constrained),
+ * CF_ERR_NOMEM. The message starts with the path. */
+CF_API cf_status cf_handle_set_read_json(cf_context *ctx, const cf_mesh *mesh, const double *positions,
+                                         const char *path, cf_handle_set **out);
+/* As above from a string; `source_name` prefixes messages (may be NULL). */
+CF_API cf_status cf_handle_set_parse_json(cf_context *ctx, const cf_mesh *mesh, const double *positions,
+                                          const char *text, const char *source_name, cf_handle_set **out);
+
+/* ---- Options and flow ---------------------------------------------------- */
+
+typedef struct cf_stretch_bend_options {
+    int32_t energy;              /* cf_edit_energy, default CF_EDIT_HYBRID */
+    double lambda;               /* hybrid weight in [0, 1], default 0.5 */
+    int32_t max_iterations;      /* for cf_stretch_bend_edit and the CLI, default 100 */
+    double relative_tolerance;   /* converged when (E_prev - E) / E_prev < tol, default 1e-6 */
+    int32_t mass;                /* cf_edit_mass, default CF_EDIT_MASS_VORONOI */
+    int32_t scale_free;          /* 1: stretch term divided by total rest area (default) */
+    const cf_handle_set *handles;   /* required; must outlive the flow */
+    const double *rest_positions;   /* 3 nv rest pose, NULL = the mesh's positions; must outlive the flow */
+} cf_stretch_bend_options;
+
+CF_API void cf_stretch_bend_options_default(cf_stretch_bend_options *options);
+
+/* Replaces the handle set of a running CF_FLOW_STRETCH_BEND_EDIT flow:
+ * refactorises the system and moves the handle vertices of the current
+ * state to their targets; the next step continues from the current state.
+ * (To restart from the rest pose, call cf_flow_set_positions with it.)
+ * Statuses: CF_ERR_INVALID_ARG (not such a flow, bad handles),
+ * CF_ERR_NOT_POSDEF (indefinite ARAP system), CF_ERR_NOMEM. */
+CF_API cf_status cf_stretch_bend_set_handles(cf_flow *flow, const cf_handle_set *handles);
+
+/* Convenience: runs up to options->max_iterations local/global iterations
+ * (stopping at the relative tolerance) from `start` (3 nv, NULL = rest pose)
+ * and writes the result into out_positions (3 nv, caller-allocated).
+ * info (may be NULL) receives the last step's info. */
+CF_API cf_status cf_stretch_bend_edit(cf_context *ctx, const cf_mesh *mesh, const double *start,
+                                      const cf_stretch_bend_options *options, double *out_positions,
+                                      cf_flow_info *info);
+
+/* Energy terms of a deformed state without handles: E(x') minimised over
+ * the rotations (and u'), as in App. B's tables. energy selects which
+ * rotation sets are used; the outputs that do not apply are set to 0:
+ *   stretch  = E_s (Eq. 5), bend = E_db (Eq. 15)  for hybrid/stretch/bend,
+ *   arap     = E_arap (Eq. 6) or E_arap-SR (Eq. 7) for arap/arap-rims,
+ *   total    = the energy the method minimises (hybrid weighting included).
+ * rest (3 nv, NULL = mesh positions), deformed (3 nv). Any output may be NULL. */
+CF_API cf_status cf_stretch_bend_energy(cf_context *ctx, const cf_mesh *mesh, const double *rest,
+                                        const double *deformed, const cf_stretch_bend_options *options,
+                                        double *stretch, double *bend, double *arap, double *total);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* CURVFLOW_STRETCH_BEND_EDIT_H */

@@ -1,0 +1,274 @@
+/*
+ * Wavefront OBJ reader: v, vt and f (v, v/vt, v/vt/vn, v//vn, negative
+ * relative indices); polygons are fan-triangulated with one warning.
+ * vn, vp, comments, o, g, s, usemtl, mtllib are ignored; any other keyword
+ * is ignored with a single warning.
+ *
+ * Decisions where the format is loose:
+ *  - an index must refer to a v/vt defined on an earlier line (the usual
+ *    reading of the spec; relative indices need it anyway);
+ *  - texture coordinates are kept per corner when every face gives vt; if
+ *    only some faces do, they are dropped with a warning;
+ *  - truncation: a malformed line that is the last line of a file not ending
+ *    in a newline is reported as CF_ERR_TRUNCATED instead of CF_ERR_PARSE
+ *    (e.g. "f 93 165" cut from "f 93 1651 1513"). A cut that still leaves a
+ *    well-formed line cannot be detected.
+ */
+#include "io/io_internal.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+typedef struct obj_line {
+    const char *p;     /* cursor */
+    const char *end;   /* end of line (the '\n' or the end of the buffer) */
+    int64_t number;    /* 1-based */
+    bool last_unterminated; /* last line of the file and no newline after it */
+    const char *keyword;
+} obj_line;
+
+typedef struct obj_reader {
+    cf_context *ctx;
+    const char *name;
+    cfi_mesh_builder b;
+    int32_t nv, nvt;
+    int uv_mode;          /* -1 undecided, 0 no uv, 1 per-corner uv */
+    bool uv_dropped;
+    bool warned_unknown;
+} obj_reader;
+
+/* Records an error for the current line; a malformed (CF_ERR_PARSE) last
+ * line without newline becomes CF_ERR_TRUNCATED. */
+static cf_status fail(obj_reader *r, const obj_line *ln, cf_status st, const char *fmt, ...) CF_PRINTF(4, 5);
+static cf_status fail(obj_reader *r, const obj_line *ln, cf_status st, const char *fmt, ...)
+{
+    char msg[256];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    if (st == CF_ERR_PARSE && ln->last_unterminated)
+        return cfi_error(r->ctx, CF_ERR_TRUNCATED, "%s: line %lld: %s (file ends inside a %s line: truncated?)",
+                         r->name, (long long)ln->number, msg, ln->keyword);
+    return cfi_error(r->ctx, st, "%s: line %lld: %s", r->name, (long long)ln->number, msg);
+}
+
+/* Next whitespace-separated token of the line; false at the end. */
+static bool next_token(obj_line *ln, const char **s, const char **e)
+{
+    const char *p = ln->p;
+    while (p < ln->end && cfi_is_space(*p)) ++p;
+    if (p >= ln->end) {
+        ln->p = p;
+        return false;
+    }
+    *s = p;
+    while (p < ln->end && !cfi_is_space(*p)) ++p;
+    *e = p;
+    ln->p = p;
+    return true;
+}
+
+static cf_status parse_vertex(obj_reader *r, obj_line *ln)
+{
+    double x[3];
+    const char *s, *e;
+    for (int k = 0; k < 3; ++k) {
+        if (!next_token(ln, &s, &e))
+            return fail(r, ln, CF_ERR_PARSE, "vertex %d has %d coordinates, expected 3", r->nv, k);
+        if (!cfi_parse_double(s, e, &x[k]))
+            return fail(r, ln, CF_ERR_PARSE, "vertex %d: bad number '%.*s'", r->nv, (int)(e - s > 40 ? 40 : e - s), s);
+    }
+    /* Extra values (w, or r g b colours) are ignored. */
+    if (!isfinite(x[0]) || !isfinite(x[1]) || !isfinite(x[2]))
+        return fail(r, ln, CF_ERR_NONFINITE, "vertex %d has a non-finite coordinate", r->nv);
+    if (r->nv >= CFI_MAX_ELEMENTS) return fail(r, ln, CF_ERR_PARSE, "too many vertices");
+    cf_context *ctx = r->ctx;
+    cfi_buf *pos = &r->b.positions;
+    if (cfi_buf_reserve(ctx, pos, 3) != CF_OK) return CF_ERR_NOMEM;
+    double *dst = (double *)pos->data + pos->count;
+    dst[0] = x[0];
+    dst[1] = x[1];
+    dst[2] = x[2];
+    pos->count += 3;
+    r->nv++;
+    return CF_OK;
+}
+
+static cf_status parse_texcoord(obj_reader *r, obj_line *ln)
+{
+    double t[2] = {0.0, 0.0};
+    const char *s, *e;
+    int k = 0;
+    for (; k < 2 && next_token(ln, &s, &e); ++k)
+        if (!cfi_parse_double(s, e, &t[k]))
+            return fail(r, ln, CF_ERR_PARSE, "texture coordinate %d: bad number '%.*s'", r->nvt,
+                        (int)(e - s > 40 ? 40 : e - s), s);
+    if (k == 0) return fail(r, ln, CF_ERR_PARSE, "texture coordinate %d has no values", r->nvt);
+    if (!isfinite(t[0]) || !isfinite(t[1]))
+        return fail(r, ln, CF_ERR_NONFINITE, "texture coordinate %d is not finite", r->nvt);
+    if (r->nvt >= INT32_MAX / 2) return fail(r, ln, CF_ERR_PARSE, "too many texture coordinates");
+    if (cfi_buf_reserve(r->ctx, &r->b.uv, 2) != CF_OK) return CF_ERR_NOMEM;
+    double *dst = (double *)r->b.uv.data + r->b.uv.count;
+    dst[0] = t[0];
+    dst[1] = t[1];
+    r->b.uv.count += 2;
+    r->nvt++;
+    return CF_OK;
+}
+
+/* Resolves a 1-based (or negative, relative) OBJ index against `count`
+ * elements defined so far; -1 if out of range. */
+static int64_t resolve(int64_t idx, int32_t count)
+{
+    if (idx > 0) return idx <= count ? idx - 1 : -1;
+    if (idx < 0) return -idx <= count ? count + idx : -1;
+    return -1;
+}
+
+/* One corner token: v, v/vt, v/vt/vn or v//vn. */
+static cf_status parse_corner(obj_reader *r, obj_line *ln, const char *s, const char *e, int32_t *v, int32_t *vt)
+{
+    const char *slash1 = memchr(s, '/', (size_t)(e - s));
+    const char *vend = slash1 ? slash1 : e;
+    int64_t iv = 0, it = 0, in = 0;
+    int tl = (int)(e - s > 40 ? 40 : e - s);
+    if (!cfi_parse_int(s, vend, &iv)) return fail(r, ln, CF_ERR_PARSE, "bad face index '%.*s'", tl, s);
+    *vt = -1;
+    bool has_vt = false;
+    if (slash1) {
+        const char *t = slash1 + 1;
+        const char *slash2 = memchr(t, '/', (size_t)(e - t));
+        const char *tend = slash2 ? slash2 : e;
+        if (tend > t) {
+            if (!cfi_parse_int(t, tend, &it)) return fail(r, ln, CF_ERR_PARSE, "bad face index '%.*s'", tl, s);
+            has_vt = true;
+        } else if (!slash2) {
+            return fail(r, ln, CF_ERR_PARSE, "bad face index '%.*s'", tl, s); /* "v/" */
+        }
+        /* The normal index is checked for syntax only: normals are ignored. */
+        if (slash2 && !cfi_parse_int(slash2 + 1, e, &in))
+            return fail(r, ln, CF_ERR_PARSE, "bad face index '%.*s'", tl, s);
+    }
+    int64_t rv = resolve(iv, r->nv);
+    if (rv < 0)
+        return fail(r, ln, CF_ERR_INDEX_RANGE, "vertex index %lld out of range (%d vertices defined so far)",
+                    (long long)iv, r->nv);
+    *v = (int32_t)rv;
+    if (has_vt) {
+        int64_t rt = resolve(it, r->nvt);
+        if (rt < 0)
+            return fail(r, ln, CF_ERR_INDEX_RANGE,
+                        "texture index %lld out of range (%d texture coordinates defined so far)", (long long)it,
+                        r->nvt);
+        *vt = (int32_t)rt;
+    }
+    return CF_OK;
+}
+
+static cf_status parse_face(obj_reader *r, obj_line *ln)
+{
+    cf_context *ctx = r->ctx;
+    const char *s, *e;
+    int32_t v0 = -1, t0 = -1, vp = -1, tp = -1;
+    int64_t corners = 0;
+    int face_uv = -1;
+    while (next_token(ln, &s, &e)) {
+        int32_t v = -1, t = -1;
+        cf_status st = parse_corner(r, ln, s, e, &v, &t);
+        if (st != CF_OK) return st;
+        int this_uv = t >= 0;
+        if (face_uv < 0) face_uv = this_uv;
+        else if (face_uv != this_uv)
+            return fail(r, ln, CF_ERR_PARSE, "face mixes corners with and without a texture index");
+        if (corners == 0) {
+            v0 = v;
+            t0 = t;
+        } else if (corners >= 2) {
+            if (r->b.triangles.count / 3 >= CFI_MAX_ELEMENTS) return fail(r, ln, CF_ERR_PARSE, "too many faces");
+            if (cfi_push_int3(ctx, &r->b.triangles, v0, vp, v) != CF_OK) return CF_ERR_NOMEM;
+            if (r->uv_mode == 1 && !r->uv_dropped && face_uv == 1 &&
+                cfi_push_int3(ctx, &r->b.uv_triangles, t0, tp, t) != CF_OK)
+                return CF_ERR_NOMEM;
+        }
+        vp = v;
+        tp = t;
+        ++corners;
+        if (corners == 2 && r->uv_mode < 0) r->uv_mode = face_uv;
+    }
+    if (corners < 3) return fail(r, ln, CF_ERR_PARSE, "face has %lld vertices", (long long)corners);
+    if (!r->uv_dropped && face_uv != r->uv_mode) {
+        cfi_log(ctx, CF_LOG_WARNING, "%s: line %lld: only some faces have texture indices; texture coordinates dropped",
+                r->name, (long long)ln->number);
+        r->uv_dropped = true;
+    }
+    if (corners > 3) {
+        if (r->b.polygon_count == INT32_MAX) return fail(r, ln, CF_ERR_PARSE, "too many polygons");
+        r->b.polygon_count++;
+    }
+    return CF_OK;
+}
+
+static bool is_word(const char *s, const char *e, const char *w)
+{
+    size_t n = strlen(w);
+    return (size_t)(e - s) == n && memcmp(s, w, n) == 0;
+}
+
+cf_status cfi_read_obj(cf_context *ctx, const char *buf, size_t size, const char *name, cf_mesh_data **out)
+{
+    obj_reader r;
+    memset(&r, 0, sizeof r);
+    r.ctx = ctx;
+    r.name = name;
+    r.uv_mode = -1;
+    cfi_builder_init(&r.b, ctx);
+    const char *p = buf, *end = buf + size;
+    obj_line ln;
+    memset(&ln, 0, sizeof ln);
+    cf_status st = CF_OK;
+    while (p < end && st == CF_OK) {
+        const char *nl = memchr(p, '\n', (size_t)(end - p));
+        ln.p = p;
+        ln.end = nl ? nl : end;
+        ln.number++;
+        ln.last_unterminated = nl == NULL;
+        p = nl ? nl + 1 : end;
+        const char *s, *e;
+        if (!next_token(&ln, &s, &e) || *s == '#') continue;
+        if (is_word(s, e, "v")) {
+            ln.keyword = "vertex";
+            st = parse_vertex(&r, &ln);
+        } else if (is_word(s, e, "vt")) {
+            ln.keyword = "texture coordinate";
+            st = parse_texcoord(&r, &ln);
+        } else if (is_word(s, e, "f")) {
+            ln.keyword = "face";
+            st = parse_face(&r, &ln);
+        } else if (is_word(s, e, "vn") || is_word(s, e, "vp") || is_word(s, e, "o") || is_word(s, e, "g") ||
+                   is_word(s, e, "s") || is_word(s, e, "usemtl") || is_word(s, e, "mtllib")) {
+            continue;
+        } else if (!r.warned_unknown) {
+            cfi_log(ctx, CF_LOG_WARNING, "%s: line %lld: unknown keyword '%.*s' ignored (further ones silently)", name,
+                    (long long)ln.number, (int)(e - s > 40 ? 40 : e - s), s);
+            r.warned_unknown = true;
+        }
+    }
+    if (st != CF_OK) {
+        cfi_builder_free(&r.b);
+        return st;
+    }
+    if (r.uv_mode == 1 && !r.uv_dropped) {
+        r.b.uv_per_corner = true;
+    } else {
+        /* vt lines no face refers to carry no usable information. */
+        cfi_buf_free(ctx, &r.b.uv);
+        cfi_buf_free(ctx, &r.b.uv_triangles);
+    }
+    if (r.b.polygon_count > 0)
+        cfi_log(ctx, CF_LOG_WARNING, "%s: %d polygons with more than 3 vertices were fan-triangulated", name,
+                r.b.polygon_count);
+    return cfi_builder_finish(&r.b, out);
+}

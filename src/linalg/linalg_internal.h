@@ -1,0 +1,50 @@
+/*
+ * Internal part of the sparse linear-algebra layer: the per-context CHOLMOD
+ * state, status checking after every CHOLMOD call, and zero-copy CHOLMOD
+ * headers over cf_sparse arrays. Only files in src/linalg/ include this
+ * header (it includes cholmod.h).
+ */
+#ifndef CF_LINALG_LINALG_INTERNAL_H
+#define CF_LINALG_LINALG_INTERNAL_H
+
+#include "core/core.h"
+#include "curvflow/linalg.h"
+
+#include <cholmod.h>
+
+/* CHOLMOD's Common for ctx, started on first use (print = 0, error handler
+ * installed, OpenMP threads limited; see cholmod_state.c) and finished by
+ * cf_context_destroy. Statuses: CF_OK, CF_ERR_NOMEM. */
+cf_status cfi_cholmod_common(cf_context *ctx, cholmod_common **out);
+
+/* Restores the analysis parameters of Common that the layer changes
+ * (ordering methods, postorder, supernodal switch) to our defaults. */
+void cfi_cholmod_reset_parameters(cholmod_common *c);
+
+/* Converts Common->status after a CHOLMOD call `what` into a cf_status with
+ * a message (CHOLMOD's own message included when its error handler ran).
+ * `ok` is the call's own success indicator (nonzero pointer / TRUE).
+ * Warnings other than NOT_POSDEF are ignored (CHOLMOD_DSMALL only reports a
+ * tiny pivot). */
+cf_status cfi_cholmod_check(cf_context *ctx, cholmod_common *c, int ok, const char *what);
+
+/* Clears the record of CHOLMOD's last error message (before a call). */
+void cfi_cholmod_clear_message(void);
+
+/* A cholmod_sparse header sharing a's arrays (no copy). stype: 0 unsymmetric,
+ * 1 use the upper triangle. */
+void cfi_cholmod_view(const cf_sparse *a, int stype, cholmod_sparse *view);
+
+/* Index of the first non-finite entry of x[0..n), or -1. */
+int64_t cfi_first_nonfinite(const double *x, int64_t n);
+
+/* Allocates an empty nrows x ncols matrix with room for nnz entries
+ * (colptr zeroed). Statuses: CF_OK, CF_ERR_INVALID_ARG (nnz > INT32_MAX),
+ * CF_ERR_NOMEM. */
+cf_status cfi_sparse_alloc(cf_context *ctx, int32_t nrows, int32_t ncols, int64_t nnz, cf_sparse **out);
+
+/* Copies of a, or of a with the mirrored lower triangle when a is
+ * upper_only (a full symmetric matrix). */
+cf_status cfi_sparse_copy(cf_context *ctx, const cf_sparse *a, cf_sparse **out);
+
+#endif /* CF_LINALG_LINALG_INTERNAL_H */

@@ -1,0 +1,712 @@
+/*
+ * cf_mesh: validation of a flat triangle list and the connectivity tables
+ * built once from it (edges, halfedge twins, edge faces, vertex rings,
+ * vertex-face incidence, boundary loops, components, Euler characteristic,
+ * genus).
+ *
+ * Everything is O(V + F): halfedges are grouped by their undirected vertex
+ * pair with two stable counting sorts (by larger, then by smaller vertex),
+ * so edges come out in lexicographic (i, j) order and no per-edge
+ * allocation is needed. The same pass serves cf_mesh_create (stop at the
+ * first defect) and cf_mesh_validate (count all defects).
+ */
+#include "mesh/mesh_internal.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+/* ------------------------------------------------------------------------ */
+/* Defect recording: strict mode stops at the first defect, report mode
+ * counts them all and keeps the first message. */
+
+typedef struct checker {
+    cf_context *ctx;
+    cf_mesh_report *report; /* NULL in strict mode */
+    cf_status first;
+    char message[256];
+} checker;
+
+CF_PRINTF(4, 5)
+static bool defect(checker *c, int32_t *counter, cf_status status, const char *fmt, ...)
+{
+    if (c->first == CF_OK) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(c->message, sizeof c->message, fmt, ap);
+        va_end(ap);
+        c->first = status;
+    }
+    if (counter && *counter < INT32_MAX) ++*counter;
+    return c->report == NULL; /* stop in strict mode */
+}
+
+static const char *nonfinite_word(double x) { return isnan(x) ? "NaN" : "infinite"; }
+
+/* ------------------------------------------------------------------------ */
+/* Halfedge grouping */
+
+/* Scratch shared by the checks and the build. */
+typedef struct scratch {
+    int32_t nv, nf;
+    uint8_t *face_ok;     /* nf: face passed index checks (report mode skips bad ones) */
+    int32_t *order;       /* nh_ok: halfedges sorted by (min, max) vertex, then index */
+    int32_t nh_ok;        /* halfedges taking part */
+    int32_t *tmp;         /* 3 nf */
+    int32_t *count;       /* nv + 1 */
+    int32_t *uf;          /* 3 nf: union-find over corners */
+} scratch;
+
+static void scratch_free(cf_context *ctx, scratch *s)
+{
+    size_t nh = (size_t)s->nf * 3;
+    CFI_FREE(ctx, s->face_ok, s->nf);
+    CFI_FREE(ctx, s->order, nh);
+    CFI_FREE(ctx, s->tmp, nh);
+    CFI_FREE(ctx, s->count, (size_t)s->nv + 1);
+    CFI_FREE(ctx, s->uf, nh);
+}
+
+static cf_status scratch_alloc(cf_context *ctx, scratch *s, int32_t nv, int32_t nf)
+{
+    memset(s, 0, sizeof *s);
+    s->nv = nv;
+    s->nf = nf;
+    size_t nh = (size_t)nf * 3;
+    s->face_ok = CFI_ALLOC(ctx, uint8_t, nf);
+    s->order = CFI_ALLOC(ctx, int32_t, nh);
+    s->tmp = CFI_ALLOC(ctx, int32_t, nh);
+    s->count = CFI_ALLOC(ctx, int32_t, (size_t)nv + 1);
+    s->uf = CFI_ALLOC(ctx, int32_t, nh);
+    if (!s->face_ok || !s->order || !s->tmp || !s->count || !s->uf) {
+        scratch_free(ctx, s);
+        return CF_ERR_NOMEM;
+    }
+    return CF_OK;
+}
+
+static inline int32_t he_lo(const int32_t *tri, int32_t h)
+{
+    int32_t a = tri[h], b = tri[cfi_he_next(h)];
+    return a < b ? a : b;
+}
+static inline int32_t he_hi(const int32_t *tri, int32_t h)
+{
+    int32_t a = tri[h], b = tri[cfi_he_next(h)];
+    return a < b ? b : a;
+}
+
+/* Stable counting sort of src[0..n) by key(h) into dst. */
+static void counting_sort(const int32_t *tri, int32_t nv, const int32_t *src, int32_t n, int32_t *dst,
+                          int32_t *count, bool by_lo)
+{
+    memset(count, 0, ((size_t)nv + 1) * sizeof *count);
+    for (int32_t i = 0; i < n; ++i) {
+        int32_t k = by_lo ? he_lo(tri, src[i]) : he_hi(tri, src[i]);
+        ++count[k + 1];
+    }
+    for (int32_t v = 0; v < nv; ++v) count[v + 1] += count[v];
+    for (int32_t i = 0; i < n; ++i) {
+        int32_t k = by_lo ? he_lo(tri, src[i]) : he_hi(tri, src[i]);
+        dst[count[k]++] = src[i];
+    }
+}
+
+static void sort_halfedges(const int32_t *tri, scratch *s)
+{
+    int32_t n = 0;
+    for (int32_t f = 0; f < s->nf; ++f)
+        if (s->face_ok[f])
+            for (int32_t k = 0; k < 3; ++k) s->tmp[n++] = 3 * f + k;
+    s->nh_ok = n;
+    /* LSD radix: by the larger vertex, then stably by the smaller one. */
+    counting_sort(tri, s->nv, s->tmp, n, s->order, s->count, false);
+    counting_sort(tri, s->nv, s->order, n, s->tmp, s->count, true);
+    memcpy(s->order, s->tmp, (size_t)n * sizeof *s->order);
+}
+
+/* End of the group of equal keys starting at position i of order. */
+static int32_t group_end(const int32_t *tri, const scratch *s, int32_t i)
+{
+    int32_t lo = he_lo(tri, s->order[i]), hi = he_hi(tri, s->order[i]);
+    int32_t j = i + 1;
+    while (j < s->nh_ok && he_lo(tri, s->order[j]) == lo && he_hi(tri, s->order[j]) == hi) ++j;
+    return j;
+}
+
+static int32_t uf_find(int32_t *uf, int32_t x)
+{
+    while (uf[x] != x) {
+        uf[x] = uf[uf[x]];
+        x = uf[x];
+    }
+    return x;
+}
+
+static void uf_union(int32_t *uf, int32_t a, int32_t b)
+{
+    a = uf_find(uf, a);
+    b = uf_find(uf, b);
+    if (a == b) return;
+    /* the smaller index becomes the root: keeps results deterministic */
+    if (a < b) uf[b] = a;
+    else uf[a] = b;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Validation in the documented order. Returns CF_OK when the caller may go
+ * on; in strict mode the first defect is returned as an error status. */
+
+static cf_status check_arguments(cf_context *ctx, const cf_mesh_desc *d)
+{
+    if (!d) return cfi_error(ctx, CF_ERR_INVALID_ARG, "mesh description is NULL");
+    if (d->vertex_count < 0 || d->face_count < 0)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "negative counts (%d vertices, %d faces)", d->vertex_count,
+                         d->face_count);
+    if (d->face_count > INT32_MAX / 12 || d->vertex_count > INT32_MAX / 4)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "mesh too large (%d vertices, %d faces)", d->vertex_count,
+                         d->face_count);
+    if (d->vertex_count > 0 && !d->positions) return cfi_error(ctx, CF_ERR_INVALID_ARG, "positions are NULL");
+    if (d->face_count > 0 && !d->triangles) return cfi_error(ctx, CF_ERR_INVALID_ARG, "triangles are NULL");
+    if (d->uv) {
+        if (d->uv_count <= 0) return cfi_error(ctx, CF_ERR_INVALID_ARG, "uv given with uv_count %d", d->uv_count);
+        if (!d->uv_triangles && d->uv_count != d->vertex_count)
+            return cfi_error(ctx, CF_ERR_INVALID_ARG,
+                             "per-vertex uv needs uv_count == vertex_count (%d != %d)", d->uv_count,
+                             d->vertex_count);
+    } else if (d->uv_triangles || d->uv_count != 0) {
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "uv_count or uv_triangles given without uv");
+    }
+    return CF_OK;
+}
+
+static double face_area_ratio(const double *p, const int32_t *t, double *longest2)
+{
+    const double *a = p + 3 * (size_t)t[0], *b = p + 3 * (size_t)t[1], *c = p + 3 * (size_t)t[2];
+    double u[3], v[3], w[3];
+    for (int k = 0; k < 3; ++k) {
+        u[k] = b[k] - a[k];
+        v[k] = c[k] - a[k];
+        w[k] = c[k] - b[k];
+    }
+    double x = u[1] * v[2] - u[2] * v[1], y = u[2] * v[0] - u[0] * v[2], z = u[0] * v[1] - u[1] * v[0];
+    double lu = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
+    double lv = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+    double lw = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
+    double l = lu > lv ? lu : lv;
+    *longest2 = l > lw ? l : lw;
+    return 0.5 * sqrt(x * x + y * y + z * z);
+}
+
+/* Runs every check; fills s (sorted halfedges, face_ok). */
+static cf_status run_checks(checker *c, const cf_mesh_desc *d, scratch *s)
+{
+    cf_context *ctx = c->ctx;
+    cf_mesh_report dummy;
+    cf_mesh_report *r = c->report ? c->report : &dummy;
+    memset(&dummy, 0, sizeof dummy);
+    const int32_t nv = d->vertex_count, nf = d->face_count;
+    const int32_t *tri = d->triangles;
+    const double *p = d->positions;
+
+    if (nv == 0 || nf == 0) {
+        defect(c, NULL, CF_ERR_BAD_MESH, "empty mesh (%d vertices, %d faces)", nv, nf);
+        return c->first;
+    }
+
+    /* 1. indices in range */
+    for (int32_t f = 0; f < nf; ++f) {
+        s->face_ok[f] = 1;
+        for (int k = 0; k < 3; ++k) {
+            int32_t v = tri[3 * (size_t)f + k];
+            if (v < 0 || v >= nv) {
+                s->face_ok[f] = 0;
+                if (defect(c, &r->index_out_of_range, CF_ERR_INDEX_RANGE,
+                           "face %d: vertex index %d out of range [0, %d)", f, v, nv))
+                    return c->first;
+                break;
+            }
+        }
+    }
+    /* 2. repeated index */
+    for (int32_t f = 0; f < nf; ++f) {
+        if (!s->face_ok[f]) continue;
+        const int32_t *t = tri + 3 * (size_t)f;
+        int32_t rep = t[0] == t[1] || t[0] == t[2] ? t[0] : (t[1] == t[2] ? t[1] : -1);
+        if (rep >= 0) {
+            s->face_ok[f] = 0;
+            if (defect(c, &r->repeated_index, CF_ERR_REPEATED_INDEX, "face %d: vertex %d repeated", f, rep))
+                return c->first;
+        }
+    }
+    /* 3. non-finite coordinates */
+    static const char axis[3] = {'x', 'y', 'z'};
+    for (int32_t v = 0; v < nv; ++v)
+        for (int k = 0; k < 3; ++k) {
+            double x = p[3 * (size_t)v + k];
+            if (!isfinite(x)) {
+                if (defect(c, &r->nonfinite_coordinates, CF_ERR_NONFINITE, "vertex %d: coordinate %c is %s", v,
+                           axis[k], nonfinite_word(x)))
+                    return c->first;
+                break;
+            }
+        }
+    /* 3b. texture coordinates */
+    if (d->uv) {
+        if (d->uv_triangles)
+            for (int32_t f = 0; f < nf; ++f)
+                for (int k = 0; k < 3; ++k) {
+                    int32_t t = d->uv_triangles[3 * (size_t)f + k];
+                    if (t < 0 || t >= d->uv_count) {
+                        if (defect(c, &r->index_out_of_range, CF_ERR_INDEX_RANGE,
+                                   "face %d: uv index %d out of range [0, %d)", f, t, d->uv_count))
+                            return c->first;
+                        break;
+                    }
+                }
+        for (int32_t i = 0; i < d->uv_count; ++i)
+            for (int k = 0; k < 2; ++k) {
+                double x = d->uv[2 * (size_t)i + k];
+                if (!isfinite(x)) {
+                    if (defect(c, &r->nonfinite_coordinates, CF_ERR_NONFINITE, "uv %d: coordinate %c is %s", i,
+                               k ? 'v' : 'u', nonfinite_word(x)))
+                        return c->first;
+                    break;
+                }
+            }
+    }
+    /* 4. zero-area faces: area <= 1e-14 * (longest edge)^2 (scale-free) */
+    for (int32_t f = 0; f < nf; ++f) {
+        if (!s->face_ok[f]) continue;
+        double l2;
+        double area = face_area_ratio(p, tri + 3 * (size_t)f, &l2);
+        if (!isfinite(area) || !isfinite(l2)) continue; /* already reported as non-finite */
+        if (area <= 1e-14 * l2) {
+            if (defect(c, &r->degenerate_faces, CF_ERR_DEGENERATE_FACE, "face %d: zero area", f)) return c->first;
+        }
+    }
+
+    sort_halfedges(tri, s);
+
+    /* 5. edges with more than two faces; report the face that first makes
+     * an edge exceed two (the third-lowest face index of its group). */
+    {
+        int32_t best_face = -1, best_i = 0, best_n = 0;
+        for (int32_t i = 0; i < s->nh_ok;) {
+            int32_t j = group_end(tri, s, i);
+            if (j - i > 2) {
+                if (r) ++r->nonmanifold_edges;
+                int32_t f3 = cfi_he_face(s->order[i + 2]);
+                if (best_face < 0 || f3 < best_face) {
+                    best_face = f3;
+                    best_i = i;
+                    best_n = j - i;
+                }
+            }
+            i = j;
+        }
+        if (best_face >= 0) {
+            int32_t h = s->order[best_i];
+            int32_t count = 0;
+            defect(c, &count, CF_ERR_NONMANIFOLD_EDGE, "face %d: edge (%d, %d) is shared by %d faces", best_face,
+                   he_lo(tri, h), he_hi(tri, h), best_n);
+            if (!c->report) return c->first;
+        }
+    }
+
+    /* 6. non-manifold vertices: corners around a vertex joined across
+     * two-face edges (ignoring direction) must form a single fan. */
+    for (int32_t h = 0; h < 3 * nf; ++h) s->uf[h] = h;
+    for (int32_t i = 0; i < s->nh_ok;) {
+        int32_t j = group_end(tri, s, i);
+        if (j - i == 2) {
+            int32_t h1 = s->order[i], h2 = s->order[i + 1];
+            if (tri[h1] == tri[h2]) { /* same direction */
+                uf_union(s->uf, h1, h2);
+                uf_union(s->uf, cfi_he_next(h1), cfi_he_next(h2));
+            } else {
+                uf_union(s->uf, h1, cfi_he_next(h2));
+                uf_union(s->uf, cfi_he_next(h1), h2);
+            }
+        }
+        i = j;
+    }
+    {
+        /* fans per vertex = number of root corners at that vertex */
+        int32_t *fans = s->count; /* nv + 1, free now */
+        memset(fans, 0, ((size_t)nv + 1) * sizeof *fans);
+        for (int32_t h = 0; h < 3 * nf; ++h)
+            if (s->face_ok[cfi_he_face(h)] && uf_find(s->uf, h) == h) ++fans[tri[h]];
+        for (int32_t v = 0; v < nv; ++v)
+            if (fans[v] > 1) {
+                if (defect(c, &r->nonmanifold_vertices, CF_ERR_NONMANIFOLD_VERTEX,
+                           "vertex %d: its faces form %d separate fans", v, fans[v]))
+                    return c->first;
+            }
+    }
+
+    /* 7. orientation: the two faces of an edge traverse it in opposite
+     * directions. Report the pair with the lowest face index. */
+    {
+        int32_t bf1 = -1, bf2 = -1, bh = -1;
+        for (int32_t i = 0; i < s->nh_ok;) {
+            int32_t j = group_end(tri, s, i);
+            if (j - i == 2 && tri[s->order[i]] == tri[s->order[i + 1]]) {
+                int32_t f1 = cfi_he_face(s->order[i]), f2 = cfi_he_face(s->order[i + 1]);
+                if (r) ++r->inconsistent_orientation_edges;
+                if (bf1 < 0 || f1 < bf1 || (f1 == bf1 && f2 < bf2)) {
+                    bf1 = f1;
+                    bf2 = f2;
+                    bh = s->order[i];
+                }
+            }
+            i = j;
+        }
+        if (bf1 >= 0) {
+            int32_t count = 0;
+            defect(c, &count, CF_ERR_ORIENTATION,
+                   "faces %d and %d: edge (%d, %d) is traversed in the same direction by both", bf1, bf2,
+                   tri[bh], tri[cfi_he_next(bh)]);
+            if (!c->report) return c->first;
+        }
+    }
+
+    /* 8. unreferenced vertices */
+    {
+        int32_t *used = s->count;
+        memset(used, 0, ((size_t)nv + 1) * sizeof *used);
+        for (int32_t f = 0; f < nf; ++f)
+            if (s->face_ok[f])
+                for (int k = 0; k < 3; ++k) used[tri[3 * (size_t)f + k]] = 1;
+        for (int32_t v = 0; v < nv; ++v)
+            if (!used[v]) {
+                if (defect(c, &r->unreferenced_vertices, CF_ERR_BAD_MESH, "vertex %d is not used by any face", v))
+                    return c->first;
+            }
+    }
+    (void)ctx;
+    return c->report ? CF_OK : c->first;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Building the tables of a valid mesh */
+
+void cf_mesh_destroy(cf_mesh **mesh)
+{
+    if (!mesh || !*mesh) return;
+    cf_mesh *m = *mesh;
+    cf_context *ctx = m->ctx;
+    size_t nv = (size_t)m->nv, nf = (size_t)m->nf, ne = (size_t)m->ne;
+    CFI_FREE(ctx, m->positions, 3 * nv);
+    CFI_FREE(ctx, m->triangles, 3 * nf);
+    CFI_FREE(ctx, m->edge_vertices, 2 * ne);
+    CFI_FREE(ctx, m->halfedge_edge, 3 * nf);
+    CFI_FREE(ctx, m->halfedge_twin, 3 * nf);
+    CFI_FREE(ctx, m->edge_faces, 2 * ne);
+    CFI_FREE(ctx, m->edge_halfedge, ne);
+    CFI_FREE(ctx, m->vertex_on_boundary, nv);
+    CFI_FREE(ctx, m->vertex_component, nv);
+    CFI_FREE(ctx, m->face_component, nf);
+    CFI_FREE(ctx, m->ring_offsets, nv + 1);
+    CFI_FREE(ctx, m->ring_neighbors, 2 * ne);
+    CFI_FREE(ctx, m->ring_edges, 2 * ne);
+    CFI_FREE(ctx, m->vface_offsets, nv + 1);
+    CFI_FREE(ctx, m->vface_faces, 3 * nf);
+    CFI_FREE(ctx, m->boundary_loop_offsets, (size_t)m->boundary_loop_count + 1);
+    CFI_FREE(ctx, m->boundary_loop_vertices, (size_t)m->boundary_vertex_count);
+    CFI_FREE(ctx, m->uv, 2 * (size_t)m->uv_count);
+    if (m->uv_triangles) CFI_FREE(ctx, m->uv_triangles, 3 * nf);
+    cfi_free(ctx, m, sizeof *m);
+    *mesh = NULL;
+}
+
+static cf_status build_edges(cf_mesh *m, const scratch *s)
+{
+    cf_context *ctx = m->ctx;
+    const int32_t *tri = m->triangles;
+    int32_t ne = 0;
+    for (int32_t i = 0; i < s->nh_ok; i = group_end(tri, s, i)) ++ne;
+    m->ne = ne;
+    m->edge_vertices = CFI_ALLOC(ctx, int32_t, 2 * (size_t)ne);
+    m->halfedge_edge = CFI_ALLOC(ctx, int32_t, 3 * (size_t)m->nf);
+    m->halfedge_twin = CFI_ALLOC(ctx, int32_t, 3 * (size_t)m->nf);
+    m->edge_faces = CFI_ALLOC(ctx, int32_t, 2 * (size_t)ne);
+    m->edge_halfedge = CFI_ALLOC(ctx, int32_t, ne);
+    m->vertex_on_boundary = CFI_ALLOC(ctx, uint8_t, m->nv);
+    if (!m->edge_vertices || !m->halfedge_edge || !m->halfedge_twin || !m->edge_faces || !m->edge_halfedge ||
+        !m->vertex_on_boundary)
+        return CF_ERR_NOMEM;
+    int32_t e = 0;
+    for (int32_t i = 0; i < s->nh_ok; ++e) {
+        int32_t j = group_end(tri, s, i);
+        int32_t h1 = s->order[i], h2 = j - i == 2 ? s->order[i + 1] : -1;
+        int32_t lo = he_lo(tri, h1), hi = he_hi(tri, h1);
+        m->edge_vertices[2 * e] = lo;
+        m->edge_vertices[2 * e + 1] = hi;
+        m->edge_faces[2 * e] = -1;
+        m->edge_faces[2 * e + 1] = -1;
+        m->edge_halfedge[e] = h1;
+        m->halfedge_edge[h1] = e;
+        m->halfedge_twin[h1] = h2;
+        m->edge_faces[2 * e + (tri[h1] == lo ? 0 : 1)] = cfi_he_face(h1);
+        if (h2 >= 0) {
+            m->halfedge_edge[h2] = e;
+            m->halfedge_twin[h2] = h1;
+            m->edge_faces[2 * e + (tri[h2] == lo ? 0 : 1)] = cfi_he_face(h2);
+        } else {
+            m->vertex_on_boundary[lo] = 1;
+            m->vertex_on_boundary[hi] = 1;
+        }
+        i = j;
+    }
+    return CF_OK;
+}
+
+static cf_status build_incidence(cf_mesh *m)
+{
+    cf_context *ctx = m->ctx;
+    const int32_t nv = m->nv, nf = m->nf, ne = m->ne;
+    m->ring_offsets = CFI_ALLOC(ctx, int32_t, (size_t)nv + 1);
+    m->ring_neighbors = CFI_ALLOC(ctx, int32_t, 2 * (size_t)ne);
+    m->ring_edges = CFI_ALLOC(ctx, int32_t, 2 * (size_t)ne);
+    m->vface_offsets = CFI_ALLOC(ctx, int32_t, (size_t)nv + 1);
+    m->vface_faces = CFI_ALLOC(ctx, int32_t, 3 * (size_t)nf);
+    if (!m->ring_offsets || !m->ring_neighbors || !m->ring_edges || !m->vface_offsets || !m->vface_faces)
+        return CF_ERR_NOMEM;
+    /* Rings: edges are sorted by (i, j), so filling in edge order lists each
+     * vertex's neighbours in increasing order. */
+    for (int32_t e = 0; e < ne; ++e) {
+        ++m->ring_offsets[m->edge_vertices[2 * e] + 1];
+        ++m->ring_offsets[m->edge_vertices[2 * e + 1] + 1];
+    }
+    for (int32_t v = 0; v < nv; ++v) m->ring_offsets[v + 1] += m->ring_offsets[v];
+    int32_t *fill = m->vface_offsets; /* borrowed as a cursor, rebuilt below */
+    memcpy(fill, m->ring_offsets, ((size_t)nv + 1) * sizeof *fill);
+    for (int32_t e = 0; e < ne; ++e) {
+        int32_t a = m->edge_vertices[2 * e], b = m->edge_vertices[2 * e + 1];
+        m->ring_neighbors[fill[a]] = b;
+        m->ring_edges[fill[a]++] = e;
+        m->ring_neighbors[fill[b]] = a;
+        m->ring_edges[fill[b]++] = e;
+    }
+    memset(m->vface_offsets, 0, ((size_t)nv + 1) * sizeof *m->vface_offsets);
+    for (int32_t h = 0; h < 3 * nf; ++h) ++m->vface_offsets[m->triangles[h] + 1];
+    for (int32_t v = 0; v < nv; ++v) m->vface_offsets[v + 1] += m->vface_offsets[v];
+    /* faces in increasing order; use vface_faces positions via a cursor
+     * reconstructed from the offsets (vertex v's cursor is offsets[v]). */
+    for (int32_t h = 0; h < 3 * nf; ++h) m->vface_faces[m->vface_offsets[m->triangles[h]]++] = cfi_he_face(h);
+    for (int32_t v = nv; v > 0; --v) m->vface_offsets[v] = m->vface_offsets[v - 1];
+    m->vface_offsets[0] = 0;
+    return CF_OK;
+}
+
+/* Boundary loops and components; tmp holds at least 3 nf + nv + 1 ints. */
+static cf_status build_loops_components(cf_mesh *m, scratch *s)
+{
+    cf_context *ctx = m->ctx;
+    const int32_t nv = m->nv, nf = m->nf, ne = m->ne;
+    const int32_t *tri = m->triangles;
+    /* Outgoing boundary halfedge per vertex: unique on a manifold mesh. */
+    int32_t *out_he = s->count; /* nv + 1 */
+    int32_t nb = 0;
+    for (int32_t v = 0; v < nv; ++v) out_he[v] = -1;
+    for (int32_t h = 0; h < 3 * nf; ++h)
+        if (m->halfedge_twin[h] < 0) {
+            out_he[tri[h]] = h;
+            ++nb;
+        }
+    m->boundary_vertex_count = nb;
+    if (nb > 0) { /* NULL for closed meshes */
+        m->boundary_loop_vertices = CFI_ALLOC(ctx, int32_t, nb);
+        if (!m->boundary_loop_vertices) return CF_ERR_NOMEM;
+    }
+    int32_t *starts = s->tmp; /* up to nb + 1 */
+    int32_t loops = 0, n = 0;
+    for (int32_t v = 0; v < nv; ++v) {
+        if (out_he[v] < 0) continue;
+        starts[loops++] = n;
+        int32_t w = v;
+        while (out_he[w] >= 0) {
+            int32_t h = out_he[w];
+            out_he[w] = -1; /* visited */
+            m->boundary_loop_vertices[n++] = w;
+            w = tri[cfi_he_next(h)];
+        }
+        if (CF_NEVER(w != v)) return cfi_error(ctx, CF_ERR_BAD_MESH, "vertex %d: boundary loop does not close", v);
+    }
+    starts[loops] = n;
+    m->boundary_loop_count = loops;
+    m->boundary_loop_offsets = CFI_ALLOC(ctx, int32_t, (size_t)loops + 1);
+    if (!m->boundary_loop_offsets) return CF_ERR_NOMEM;
+    memcpy(m->boundary_loop_offsets, starts, ((size_t)loops + 1) * sizeof *starts);
+
+    /* Components over vertices (union-find along edges), numbered in order
+     * of their lowest vertex. */
+    m->vertex_component = CFI_ALLOC(ctx, int32_t, nv);
+    m->face_component = CFI_ALLOC(ctx, int32_t, nf);
+    if (!m->vertex_component || !m->face_component) return CF_ERR_NOMEM;
+    int32_t *uf = s->uf; /* 3 nf >= nv since every vertex is used */
+    for (int32_t v = 0; v < nv; ++v) uf[v] = v;
+    for (int32_t e = 0; e < ne; ++e) uf_union(uf, m->edge_vertices[2 * e], m->edge_vertices[2 * e + 1]);
+    int32_t nc = 0;
+    for (int32_t v = 0; v < nv; ++v) {
+        int32_t r = uf_find(uf, v);
+        m->vertex_component[v] = r == v ? nc++ : m->vertex_component[r];
+    }
+    m->component_count = nc;
+    for (int32_t f = 0; f < nf; ++f) m->face_component[f] = m->vertex_component[tri[3 * (size_t)f]];
+
+    /* Genus: sum over components of (2 - chi_c - b_c) / 2. */
+    int64_t *chi = (int64_t *)cfi_alloc_array(ctx, (size_t)nc * 2, sizeof(int64_t));
+    if (!chi) return CF_ERR_NOMEM;
+    int64_t *bc = chi + nc;
+    for (int32_t v = 0; v < nv; ++v) ++chi[m->vertex_component[v]];
+    for (int32_t e = 0; e < ne; ++e) --chi[m->vertex_component[m->edge_vertices[2 * e]]];
+    for (int32_t f = 0; f < nf; ++f) ++chi[m->face_component[f]];
+    for (int32_t b = 0; b < loops; ++b) ++bc[m->vertex_component[m->boundary_loop_vertices[starts[b]]]];
+    int64_t genus = 0;
+    for (int32_t c = 0; c < nc; ++c) genus += (2 - chi[c] - bc[c]) / 2;
+    cfi_free(ctx, chi, (size_t)nc * 2 * sizeof(int64_t));
+    m->genus = (int32_t)genus;
+    m->euler_characteristic = nv - ne + nf;
+    return CF_OK;
+}
+
+static cf_status copy_input(cf_mesh *m, const cf_mesh_desc *d)
+{
+    cf_context *ctx = m->ctx;
+    m->positions = CFI_ALLOC(ctx, double, 3 * (size_t)m->nv);
+    m->triangles = CFI_ALLOC(ctx, int32_t, 3 * (size_t)m->nf);
+    if (!m->positions || !m->triangles) return CF_ERR_NOMEM;
+    memcpy(m->positions, d->positions, 3 * (size_t)m->nv * sizeof(double));
+    memcpy(m->triangles, d->triangles, 3 * (size_t)m->nf * sizeof(int32_t));
+    if (d->uv) {
+        m->uv = CFI_ALLOC(ctx, double, 2 * (size_t)d->uv_count);
+        if (!m->uv) return CF_ERR_NOMEM;
+        m->uv_count = d->uv_count;
+        memcpy(m->uv, d->uv, 2 * (size_t)d->uv_count * sizeof(double));
+        m->uv_triangles = CFI_ALLOC(ctx, int32_t, 3 * (size_t)m->nf);
+        if (!m->uv_triangles) return CF_ERR_NOMEM;
+        memcpy(m->uv_triangles, d->uv_triangles ? d->uv_triangles : d->triangles,
+               3 * (size_t)m->nf * sizeof(int32_t));
+    }
+    return CF_OK;
+}
+
+cf_status cf_mesh_create(cf_context *ctx, const cf_mesh_desc *desc, cf_mesh **out)
+{
+    if (!ctx) return CF_ERR_INVALID_ARG;
+    if (!out) return cfi_error(ctx, CF_ERR_INVALID_ARG, "output pointer is NULL");
+    *out = NULL;
+    cf_status st = check_arguments(ctx, desc);
+    if (st != CF_OK) return st;
+
+    scratch s;
+    memset(&s, 0, sizeof s);
+    checker c = {ctx, NULL, CF_OK, ""};
+    if (desc->vertex_count == 0 || desc->face_count == 0)
+        return cfi_error(ctx, CF_ERR_BAD_MESH, "empty mesh (%d vertices, %d faces)", desc->vertex_count,
+                         desc->face_count);
+    if (scratch_alloc(ctx, &s, desc->vertex_count, desc->face_count) != CF_OK) return CF_ERR_NOMEM;
+    st = run_checks(&c, desc, &s);
+    if (st != CF_OK) {
+        scratch_free(ctx, &s);
+        return cfi_error(ctx, st, "%s", c.message);
+    }
+
+    cf_mesh *m = (cf_mesh *)cfi_calloc(ctx, 1, sizeof *m);
+    if (!m) {
+        scratch_free(ctx, &s);
+        return CF_ERR_NOMEM;
+    }
+    m->ctx = ctx;
+    m->nv = desc->vertex_count;
+    m->nf = desc->face_count;
+    st = copy_input(m, desc);
+    if (st == CF_OK) st = build_edges(m, &s);
+    if (st == CF_OK) st = build_incidence(m);
+    if (st == CF_OK) st = build_loops_components(m, &s);
+    scratch_free(ctx, &s);
+    if (st != CF_OK) {
+        cf_mesh_destroy(&m);
+        return st;
+    }
+    *out = m;
+    return CF_OK;
+}
+
+cf_status cf_mesh_validate(cf_context *ctx, const cf_mesh_desc *desc, cf_mesh_report *report)
+{
+    if (!ctx) return CF_ERR_INVALID_ARG;
+    if (!report) return cfi_error(ctx, CF_ERR_INVALID_ARG, "report is NULL");
+    memset(report, 0, sizeof *report);
+    cf_status st = check_arguments(ctx, desc);
+    if (st != CF_OK) return st;
+    checker c = {ctx, report, CF_OK, ""};
+    if (desc->vertex_count == 0 || desc->face_count == 0) {
+        report->first_status = CF_ERR_BAD_MESH;
+        snprintf(report->first_message, sizeof report->first_message, "empty mesh (%d vertices, %d faces)",
+                 desc->vertex_count, desc->face_count);
+        return CF_OK;
+    }
+    scratch s;
+    if (scratch_alloc(ctx, &s, desc->vertex_count, desc->face_count) != CF_OK) return CF_ERR_NOMEM;
+    run_checks(&c, desc, &s);
+    scratch_free(ctx, &s);
+    report->first_status = c.first;
+    snprintf(report->first_message, sizeof report->first_message, "%s", c.message);
+    return CF_OK;
+}
+
+/* ------------------------------------------------------------------------ */
+
+void cfi_mesh_split4_triangles(const cf_mesh *mesh, int32_t *out)
+{
+    const int32_t nv = mesh->nv;
+    for (int32_t f = 0; f < mesh->nf; ++f) {
+        const int32_t *t = mesh->triangles + 3 * (size_t)f;
+        const int32_t *he = mesh->halfedge_edge + 3 * (size_t)f;
+        int32_t a = t[0], b = t[1], c = t[2];
+        int32_t mab = nv + he[0], mbc = nv + he[1], mca = nv + he[2];
+        int32_t *o = out + 12 * (size_t)f;
+        o[0] = a, o[1] = mab, o[2] = mca;
+        o[3] = mab, o[4] = b, o[5] = mbc;
+        o[6] = mca, o[7] = mbc, o[8] = c;
+        o[9] = mab, o[10] = mbc, o[11] = mca;
+    }
+}
+
+/* Accessors */
+int32_t cf_mesh_vertex_count(const cf_mesh *mesh) { return mesh ? mesh->nv : 0; }
+int32_t cf_mesh_face_count(const cf_mesh *mesh) { return mesh ? mesh->nf : 0; }
+int32_t cf_mesh_edge_count(const cf_mesh *mesh) { return mesh ? mesh->ne : 0; }
+int32_t cf_mesh_boundary_loop_count(const cf_mesh *mesh) { return mesh ? mesh->boundary_loop_count : 0; }
+int32_t cf_mesh_component_count(const cf_mesh *mesh) { return mesh ? mesh->component_count : 0; }
+int32_t cf_mesh_euler_characteristic(const cf_mesh *mesh) { return mesh ? mesh->euler_characteristic : 0; }
+int32_t cf_mesh_genus(const cf_mesh *mesh) { return mesh ? mesh->genus : 0; }
+const double *cf_mesh_positions(const cf_mesh *mesh) { return mesh ? mesh->positions : NULL; }
+const int32_t *cf_mesh_triangles(const cf_mesh *mesh) { return mesh ? mesh->triangles : NULL; }
+const int32_t *cf_mesh_edge_vertices(const cf_mesh *mesh) { return mesh ? mesh->edge_vertices : NULL; }
+const int32_t *cf_mesh_halfedge_edge(const cf_mesh *mesh) { return mesh ? mesh->halfedge_edge : NULL; }
+const int32_t *cf_mesh_halfedge_twin(const cf_mesh *mesh) { return mesh ? mesh->halfedge_twin : NULL; }
+const int32_t *cf_mesh_edge_faces(const cf_mesh *mesh) { return mesh ? mesh->edge_faces : NULL; }
+const uint8_t *cf_mesh_vertex_on_boundary(const cf_mesh *mesh) { return mesh ? mesh->vertex_on_boundary : NULL; }
+const int32_t *cf_mesh_vertex_component(const cf_mesh *mesh) { return mesh ? mesh->vertex_component : NULL; }
+const int32_t *cf_mesh_boundary_loop_offsets(const cf_mesh *mesh)
+{
+    return mesh ? mesh->boundary_loop_offsets : NULL;
+}
+const int32_t *cf_mesh_boundary_loop_vertices(const cf_mesh *mesh)
+{
+    return mesh ? mesh->boundary_loop_vertices : NULL;
+}
+const int32_t *cf_mesh_vertex_ring_offsets(const cf_mesh *mesh) { return mesh ? mesh->ring_offsets : NULL; }
+const int32_t *cf_mesh_vertex_neighbors(const cf_mesh *mesh) { return mesh ? mesh->ring_neighbors : NULL; }
+const int32_t *cf_mesh_vertex_edges(const cf_mesh *mesh) { return mesh ? mesh->ring_edges : NULL; }
+const int32_t *cf_mesh_vertex_face_offsets(const cf_mesh *mesh) { return mesh ? mesh->vface_offsets : NULL; }
+const int32_t *cf_mesh_vertex_faces(const cf_mesh *mesh) { return mesh ? mesh->vface_faces : NULL; }
+int32_t cf_mesh_uv_count(const cf_mesh *mesh) { return mesh ? mesh->uv_count : 0; }
+const double *cf_mesh_uv(const cf_mesh *mesh) { return mesh ? mesh->uv : NULL; }
+const int32_t *cf_mesh_uv_triangles(const cf_mesh *mesh) { return mesh ? mesh->uv_triangles : NULL; }
+cf_context *cf_mesh_context(const cf_mesh *mesh) { return mesh ? mesh->ctx : NULL; }

@@ -1,0 +1,498 @@
+/*
+ * Baseline curvature flows on the common flow interface (the flows the
+ * papers compare against; formulas, energies and the scale-free time step
+ * rule are in include/curvflow/baseline_flows.h):
+ *  - explicit mean curvature flow (forward Euler);
+ *  - implicit mean curvature flow, Desbrun, Meyer, Schroeder, Barr 1999,
+ *    "Implicit fairing ...", Sec. 4: (M + tau L) x' = M x (backward Euler);
+ *  - conformalized mean curvature flow, Kazhdan, Solomon, Ben-Chen 2012,
+ *    "Can mean-curvature flow be modified to be non-singular?", Eq. (4):
+ *    the stiffness L is frozen at the initial mesh, only M follows the flow;
+ *  - explicit and implicit bi-Laplacian flows (Taubin-style fourth-order
+ *    smoothing), the L2 gradient flow of (1/2) x^T L M^-1 L x.
+ *
+ * Everything a step needs (the Laplacian pattern and its slot map, the
+ * Cholesky analysis, work vectors) is allocated in create; steps only refill
+ * values, refactorise and solve.
+ */
+#include "curvflow/baseline_flows.h"
+
+#include "curvflow/linalg.h"
+#include "curvflow/ops.h"
+#include "methods/flow_internal.h"
+#include "ops/cotan_laplacian.h"
+
+#include <math.h>
+#include <stddef.h>
+#include <string.h>
+
+/* An explicit step that raises its energy by more than this fraction is
+ * taken as unstable: below the stability limit forward Euler on these
+ * gradient flows lowers the energy, while an unstable mode grows
+ * geometrically and raises it, so a rise is the earliest sign of it (a
+ * factor test such as "rose by 50 %" misses modes that grow slowly). The
+ * slack only absorbs rounding. */
+#define BASELINE_MAX_RISE 1e-9
+
+typedef struct baseline_state {
+    cf_baseline_options opt;
+    int32_t nv;
+    double tau;             /* actual time step (scaled, see the header) */
+    cf_sparse *l;           /* cotan Laplacian of the current positions (pattern fixed) */
+    int64_t *slot_map;      /* 9 nf slots of L's triplets */
+    int64_t slot_count;
+    int64_t *l_diag;        /* nv: slot of L(i, i) */
+    double *l0_values;      /* conformal MCF: L values of the initial mesh (nnz) */
+    cf_sparse *a;           /* system matrix (implicit flows); == l for implicit/conformal MCF */
+    int64_t *a_diag;        /* nv: slot of A(i, i) */
+    int64_t *pos;           /* nv workspace for the bi-Laplacian product, -1 when unused */
+    cf_cholesky *chol;
+    double *mass;           /* nv lumped vertex areas */
+    double *x;              /* 3 nv column-major coordinates */
+    double *b;              /* 3 nv right-hand sides */
+    double *r;              /* 3 nv residual / interleaved work */
+    double *y;              /* 3 nv interleaved work */
+    double centroid0[3];
+} baseline_state;
+
+static const char *const mass_choices[] = {"barycentric", "voronoi", NULL};
+
+static const cf_param_desc baseline_params[] = {
+    {"time_step", CF_PARAM_DOUBLE, offsetof(cf_baseline_options, time_step), 1e-300, 1e300, NULL,
+     "scale-free time step (explicit: units of h^2 or h^4, implicit: of area or area^2)"},
+    {"mass", CF_PARAM_CHOICE, offsetof(cf_baseline_options, mass), 0, 1, mass_choices,
+     "lumped mass matrix: barycentric or voronoi (mixed Voronoi, Meyer 2003)"},
+    {"rescale", CF_PARAM_BOOL, offsetof(cf_baseline_options, rescale), 0, 1, NULL,
+     "keep total area and centroid of the start shape after each step (Kazhdan 2012)"},
+    {"tolerance", CF_PARAM_DOUBLE, offsetof(cf_baseline_options, tolerance), 0, 1, NULL,
+     "converged when a step lowers the energy by less than this fraction (0: never)"},
+};
+#define BASELINE_PARAM_COUNT ((int32_t)(sizeof baseline_params / sizeof baseline_params[0]))
+
+cf_status cf_baseline_options_default(cf_flow_kind kind, cf_baseline_options *o)
+{
+    if (!o) return CF_ERR_INVALID_ARG;
+    memset(o, 0, sizeof *o);
+    o->mass = CF_MASS_LUMPED_BARYCENTRIC;
+    o->rescale = 0;
+    o->tolerance = 0.0;
+    switch (kind) {
+    case CF_FLOW_EXPLICIT_MCF: o->time_step = 0.1; break;           /* ~1/3 of the stability limit */
+    case CF_FLOW_IMPLICIT_MCF: o->time_step = 1e-3; break;          /* a sphere loses ~5 % of R^2 per step */
+    case CF_FLOW_CONFORMAL_MCF: o->time_step = 1e-3; break;
+    case CF_FLOW_EXPLICIT_BILAPLACIAN: o->time_step = 0.01; break;  /* ~1/5 of the stability limit */
+    case CF_FLOW_IMPLICIT_BILAPLACIAN: o->time_step = 1e-5; break;
+    default: return CF_ERR_INVALID_ARG;
+    }
+    return CF_OK;
+}
+
+static void default_explicit_mcf(void *o) { cf_baseline_options_default(CF_FLOW_EXPLICIT_MCF, o); }
+static void default_implicit_mcf(void *o) { cf_baseline_options_default(CF_FLOW_IMPLICIT_MCF, o); }
+static void default_conformal_mcf(void *o) { cf_baseline_options_default(CF_FLOW_CONFORMAL_MCF, o); }
+static void default_explicit_bilaplacian(void *o) { cf_baseline_options_default(CF_FLOW_EXPLICIT_BILAPLACIAN, o); }
+static void default_implicit_bilaplacian(void *o) { cf_baseline_options_default(CF_FLOW_IMPLICIT_BILAPLACIAN, o); }
+
+/* ---- helpers ------------------------------------------------------------ */
+
+static cf_flow_kind kind_of(const cf_flow *flow) { return flow->options.kind; }
+
+static int is_bilaplacian(const cf_flow *flow)
+{
+    return kind_of(flow) == CF_FLOW_EXPLICIT_BILAPLACIAN || kind_of(flow) == CF_FLOW_IMPLICIT_BILAPLACIAN;
+}
+
+/* L and the lumped masses of the current positions. */
+static cf_status assemble(cf_flow *flow, baseline_state *s)
+{
+    cf_status st = cfi_cotan_laplacian_refill(s->l, flow->mesh, flow->positions, s->slot_map);
+    if (st != CF_OK) return st;
+    cf_dual_area_kind dk = s->opt.mass == CF_MASS_LUMPED_VORONOI ? CF_DUAL_AREA_MIXED_VORONOI : CF_DUAL_AREA_BARYCENTRIC;
+    st = cf_vertex_areas(flow->ctx, flow->mesh, flow->positions, dk, s->mass);
+    if (st != CF_OK) return st;
+    for (int32_t i = 0; i < s->nv; ++i)
+        if (!(s->mass[i] > 0.0)) return cfi_error(flow->ctx, CF_ERR_NUMERICAL, "vertex %d: dual area is %g", i, s->mass[i]);
+    return CF_OK;
+}
+
+/* (1/2) sum_i |(L x)_i|^2 / m_i with L, M already assembled at x; leaves
+ * L x (interleaved) in s->y. */
+static double bilaplacian_energy(const cf_flow *flow, baseline_state *s)
+{
+    int32_t nv = s->nv;
+    for (int c = 0; c < 3; ++c) {
+        for (int32_t i = 0; i < nv; ++i) s->x[(size_t)c * nv + i] = flow->positions[3 * (size_t)i + c];
+        cf_sparse_multiply(s->l, s->x + (size_t)c * nv, s->r + (size_t)c * nv);
+    }
+    double e = 0.0;
+    for (int32_t i = 0; i < nv; ++i) {
+        double q = 0.0;
+        for (int c = 0; c < 3; ++c) {
+            double v = s->r[(size_t)c * nv + i];
+            s->y[3 * (size_t)i + c] = v;
+            q += v * v;
+        }
+        e += q / s->mass[i];
+    }
+    return 0.5 * e;
+}
+
+/* Energy of the current positions; assembles L, M there for the
+ * bi-Laplacian energy. */
+static cf_status current_energy(cf_flow *flow, baseline_state *s, double *energy, double *assemble_seconds)
+{
+    if (is_bilaplacian(flow)) {
+        double t0 = cfi_now_seconds();
+        cf_status st = assemble(flow, s);
+        if (assemble_seconds) *assemble_seconds += cfi_now_seconds() - t0;
+        if (st != CF_OK) return st;
+        *energy = bilaplacian_energy(flow, s);
+        return CF_OK;
+    }
+    return cf_total_area(flow->ctx, flow->mesh, flow->positions, energy);
+}
+
+static void mass_centroid(const baseline_state *s, const double *x, double c[3])
+{
+    double w = 0.0;
+    c[0] = c[1] = c[2] = 0.0;
+    for (int32_t i = 0; i < s->nv; ++i) {
+        for (int k = 0; k < 3; ++k) c[k] += s->mass[i] * x[3 * (size_t)i + k];
+        w += s->mass[i];
+    }
+    for (int k = 0; k < 3; ++k) c[k] = w > 0.0 ? c[k] / w : 0.0;
+}
+
+/* Kazhdan et al. 2012, Sec. 5: restore the initial area and centroid. */
+static cf_status rescale(cf_flow *flow, baseline_state *s)
+{
+    double area = 0.0;
+    cf_status st = cf_total_area(flow->ctx, flow->mesh, flow->positions, &area);
+    if (st != CF_OK) return st;
+    if (!(area > 0.0)) return cfi_error(flow->ctx, CF_ERR_NUMERICAL, "rescale: total area is %g", area);
+    st = cf_vertex_areas(flow->ctx, flow->mesh, flow->positions, CF_DUAL_AREA_BARYCENTRIC, s->mass);
+    if (st != CF_OK) return st;
+    double c[3];
+    mass_centroid(s, flow->positions, c);
+    double k = sqrt(flow->initial_area / area);
+    for (int32_t i = 0; i < s->nv; ++i)
+        for (int d = 0; d < 3; ++d) {
+            double *p = &flow->positions[3 * (size_t)i + d];
+            *p = s->centroid0[d] + k * (*p - c[d]);
+        }
+    return CF_OK;
+}
+
+/* A = tau * L D^-1 L (pattern of L L) + D, D = diag(mass); L and mass
+ * assembled. Row-by-column product with a dense position workspace, no
+ * allocation. */
+static void fill_bilaplacian_system(baseline_state *s)
+{
+    const cf_sparse *l = s->l;
+    cf_sparse *a = s->a;
+    int64_t nnz = cf_sparse_nnz(a);
+    for (int64_t p = 0; p < nnz; ++p) a->values[p] = 0.0;
+    for (int32_t j = 0; j < s->nv; ++j) {
+        for (int32_t p = a->colptr[j]; p < a->colptr[j + 1]; ++p) s->pos[a->rowind[p]] = p;
+        for (int32_t p = l->colptr[j]; p < l->colptr[j + 1]; ++p) {
+            int32_t k = l->rowind[p];
+            double lkj = l->values[p] / s->mass[k];
+            for (int32_t q = l->colptr[k]; q < l->colptr[k + 1]; ++q) {
+                int64_t slot = s->pos[l->rowind[q]];
+                if (CF_NEVER(slot < 0)) continue;
+                a->values[slot] += s->tau * l->values[q] * lkj;
+            }
+        }
+        for (int32_t p = a->colptr[j]; p < a->colptr[j + 1]; ++p) s->pos[a->rowind[p]] = -1;
+    }
+    for (int32_t i = 0; i < s->nv; ++i) a->values[s->a_diag[i]] += s->mass[i];
+}
+
+/* ---- create / destroy --------------------------------------------------- */
+
+static void baseline_destroy(cf_flow *flow)
+{
+    baseline_state *s = flow->impl;
+    if (!s) return;
+    cf_context *ctx = flow->ctx;
+    size_t nv = (size_t)s->nv;
+    int64_t nnz_l = s->l ? cf_sparse_nnz(s->l) : 0;
+    cf_cholesky_destroy(&s->chol);
+    if (s->a != s->l) cf_sparse_destroy(&s->a);
+    cf_sparse_destroy(&s->l);
+    CFI_FREE(ctx, s->slot_map, s->slot_count);
+    CFI_FREE(ctx, s->l_diag, nv);
+    CFI_FREE(ctx, s->a_diag, nv);
+    CFI_FREE(ctx, s->l0_values, nnz_l);
+    CFI_FREE(ctx, s->pos, nv);
+    CFI_FREE(ctx, s->mass, nv);
+    CFI_FREE(ctx, s->x, 3 * nv);
+    CFI_FREE(ctx, s->b, 3 * nv);
+    CFI_FREE(ctx, s->r, 3 * nv);
+    CFI_FREE(ctx, s->y, 3 * nv);
+    CFI_FREE(ctx, s, 1);
+    flow->impl = NULL;
+}
+
+static cf_status find_diagonal(cf_context *ctx, const cf_sparse *m, int64_t *diag, const char *what)
+{
+    for (int32_t i = 0; i < m->ncols; ++i) {
+        diag[i] = cf_sparse_find(m, i, i);
+        if (diag[i] < 0) return cfi_error(ctx, CF_ERR_BAD_MESH, "vertex %d: no diagonal entry in %s", i, what);
+    }
+    return CF_OK;
+}
+
+static cf_status baseline_create(cf_flow *flow, const void *options)
+{
+    cf_context *ctx = flow->ctx;
+    const cf_mesh *mesh = flow->mesh;
+    const cf_baseline_options *opt = options;
+    cf_flow_kind kind = kind_of(flow);
+    if (!(opt->time_step > 0.0) || !isfinite(opt->time_step))
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter 'time_step': must be positive, got %g", opt->time_step);
+    if (opt->mass != CF_MASS_LUMPED_BARYCENTRIC && opt->mass != CF_MASS_LUMPED_VORONOI)
+        return cfi_error(ctx, CF_ERR_UNSUPPORTED, "parameter 'mass': only lumped (barycentric, voronoi) is supported");
+    if (!(opt->tolerance >= 0.0))
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter 'tolerance': must be >= 0, got %g", opt->tolerance);
+
+    baseline_state *s = CFI_ALLOC(ctx, baseline_state, 1);
+    if (!s) return CF_ERR_NOMEM;
+    flow->impl = s;
+    s->opt = *opt;
+    s->nv = mesh->nv;
+    size_t nv = (size_t)mesh->nv;
+    s->slot_count = cfi_cotan_laplacian_triplet_count(mesh);
+    s->slot_map = CFI_ALLOC(ctx, int64_t, s->slot_count);
+    s->l_diag = CFI_ALLOC(ctx, int64_t, nv);
+    s->a_diag = CFI_ALLOC(ctx, int64_t, nv);
+    s->mass = CFI_ALLOC(ctx, double, nv);
+    s->x = CFI_ALLOC(ctx, double, 3 * nv);
+    s->b = CFI_ALLOC(ctx, double, 3 * nv);
+    s->r = CFI_ALLOC(ctx, double, 3 * nv);
+    s->y = CFI_ALLOC(ctx, double, 3 * nv);
+    if (!s->slot_map || !s->l_diag || !s->a_diag || !s->mass || !s->x || !s->b || !s->r || !s->y) return CF_ERR_NOMEM;
+
+    /* rescale's reference centroid, with the barycentric masses it uses */
+    cf_status st = cf_vertex_areas(ctx, mesh, flow->positions, CF_DUAL_AREA_BARYCENTRIC, s->mass);
+    if (st != CF_OK) return st;
+    mass_centroid(s, flow->positions, s->centroid0);
+    st = cfi_cotan_laplacian_pattern(ctx, mesh, flow->positions, &s->l, s->slot_map);
+    if (st != CF_OK) return st;
+    st = find_diagonal(ctx, s->l, s->l_diag, "the Laplacian");
+    if (st != CF_OK) return st;
+    st = assemble(flow, s);
+    if (st != CF_OK) return st;
+
+    /* Scale-free step (header): h^2, h^4 from the mean edge length, A0, A0^2. */
+    double h = 0.0;
+    for (int32_t e = 0; e < mesh->ne; ++e) {
+        const double *p = flow->positions + 3 * (size_t)mesh->edge_vertices[2 * e];
+        const double *q = flow->positions + 3 * (size_t)mesh->edge_vertices[2 * e + 1];
+        h += sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]));
+    }
+    h = mesh->ne > 0 ? h / mesh->ne : 0.0;
+    double a0 = flow->initial_area;
+    if (!(h > 0.0) || !(a0 > 0.0)) return cfi_error(ctx, CF_ERR_BAD_MESH, "mesh has zero size (mean edge %g, area %g)", h, a0);
+    switch (kind) {
+    case CF_FLOW_EXPLICIT_MCF: s->tau = opt->time_step * h * h; break;
+    case CF_FLOW_EXPLICIT_BILAPLACIAN: s->tau = opt->time_step * h * h * h * h; break;
+    case CF_FLOW_IMPLICIT_MCF:
+    case CF_FLOW_CONFORMAL_MCF: s->tau = opt->time_step * a0; break;
+    case CF_FLOW_IMPLICIT_BILAPLACIAN: s->tau = opt->time_step * a0 * a0; break;
+    default: return cfi_error(ctx, CF_ERR_INVALID_ARG, "not a baseline flow kind: %d", (int)kind);
+    }
+
+    cf_cholesky_options copt;
+    cf_cholesky_options_default(&copt);
+    copt.block_size = 1;
+    if (kind == CF_FLOW_IMPLICIT_MCF || kind == CF_FLOW_CONFORMAL_MCF) {
+        /* A = M + tau L has L's pattern: A is L's storage, refilled each step. */
+        s->a = s->l;
+        memcpy(s->a_diag, s->l_diag, nv * sizeof(int64_t));
+        if (kind == CF_FLOW_CONFORMAL_MCF) {
+            int64_t nnz = cf_sparse_nnz(s->l);
+            s->l0_values = CFI_ALLOC(ctx, double, nnz);
+            if (!s->l0_values) return CF_ERR_NOMEM;
+            memcpy(s->l0_values, s->l->values, (size_t)nnz * sizeof(double));
+        }
+        st = cf_cholesky_create(ctx, s->a, &copt, &s->chol);
+        if (st != CF_OK) return st;
+    } else if (kind == CF_FLOW_IMPLICIT_BILAPLACIAN) {
+        st = cf_sparse_product(ctx, s->l, s->l, &s->a);
+        if (st != CF_OK) return st;
+        s->a->symmetric = 1;
+        s->a->upper_only = 0;
+        s->pos = CFI_ALLOC(ctx, int64_t, nv);
+        if (!s->pos) return CF_ERR_NOMEM;
+        for (size_t i = 0; i < nv; ++i) s->pos[i] = -1;
+        st = find_diagonal(ctx, s->a, s->a_diag, "the bi-Laplacian");
+        if (st != CF_OK) return st;
+        st = cf_cholesky_create(ctx, s->a, &copt, &s->chol);
+        if (st != CF_OK) return st;
+    }
+
+    double energy = 0.0;
+    st = current_energy(flow, s, &energy, NULL);
+    if (st != CF_OK) return st;
+    memset(&flow->info, 0, sizeof flow->info);
+    flow->info.energy = energy;
+    flow->info.energy_terms[0] = energy;
+    flow->info.term_names[0] = is_bilaplacian(flow) ? "bilaplacian" : "area";
+    return CF_OK;
+}
+
+static cf_status baseline_reset(cf_flow *flow)
+{
+    baseline_state *s = flow->impl;
+    double energy = 0.0;
+    cf_status st = current_energy(flow, s, &energy, NULL);
+    if (st != CF_OK) return st;
+    flow->info.energy = energy;
+    flow->info.energy_terms[0] = energy;
+    flow->converged = 0;
+    return CF_OK;
+}
+
+/* ---- steps -------------------------------------------------------------- */
+
+/* Finishes a step: optional rescale, energy, growth check (explicit flows),
+ * convergence test. */
+static cf_status finish_step(cf_flow *flow, baseline_state *s, cf_flow_info *info, int explicit_flow)
+{
+    cf_status st = CF_OK;
+    if (s->opt.rescale) {
+        st = rescale(flow, s);
+        if (st != CF_OK) return st;
+    }
+    double energy = 0.0;
+    st = current_energy(flow, s, &energy, &info->assemble_seconds);
+    if (st != CF_OK) return st;
+    double previous = flow->info.energy;
+    if (explicit_flow && isfinite(energy) && energy > (1.0 + BASELINE_MAX_RISE) * previous)
+        return cfi_error(flow->ctx, CF_ERR_NUMERICAL,
+                         "%s: energy rose from %g to %g, time_step %g is above the stability limit",
+                         flow->method->name, previous, energy, s->opt.time_step);
+    info->time_step = s->tau;
+    info->energy = energy;
+    info->energy_terms[0] = energy;
+    info->term_names[0] = is_bilaplacian(flow) ? "bilaplacian" : "area";
+    if (s->opt.tolerance > 0.0 && previous > 0.0 && fabs(previous - energy) < s->opt.tolerance * previous)
+        flow->converged = 1;
+    return CF_OK;
+}
+
+static cf_status explicit_step(cf_flow *flow, cf_flow_info *info)
+{
+    baseline_state *s = flow->impl;
+    int32_t nv = s->nv;
+    double t0 = cfi_now_seconds();
+    cf_status st = assemble(flow, s);
+    if (st != CF_OK) return st;
+    if (kind_of(flow) == CF_FLOW_EXPLICIT_MCF) {
+        /* y = L x (interleaved) */
+        st = cfi_cotan_laplacian_apply(flow->ctx, flow->mesh, flow->positions, 3, flow->positions, s->y);
+        if (st != CF_OK) return st;
+        info->assemble_seconds = cfi_now_seconds() - t0;
+        double t1 = cfi_now_seconds();
+        for (int32_t i = 0; i < nv; ++i)
+            for (int c = 0; c < 3; ++c) flow->positions[3 * (size_t)i + c] -= s->tau * s->y[3 * (size_t)i + c] / s->mass[i];
+        info->solve_seconds = cfi_now_seconds() - t1;
+    } else {
+        /* y = L M^-1 L x, then x -= tau M^-1 y */
+        (void)bilaplacian_energy(flow, s); /* leaves L x in s->y */
+        info->assemble_seconds = cfi_now_seconds() - t0;
+        double t1 = cfi_now_seconds();
+        for (int c = 0; c < 3; ++c)
+            for (int32_t i = 0; i < nv; ++i) s->b[(size_t)c * nv + i] = s->y[3 * (size_t)i + c] / s->mass[i];
+        for (int c = 0; c < 3; ++c) cf_sparse_multiply(s->l, s->b + (size_t)c * nv, s->r + (size_t)c * nv);
+        for (int32_t i = 0; i < nv; ++i)
+            for (int c = 0; c < 3; ++c)
+                flow->positions[3 * (size_t)i + c] -= s->tau * s->r[(size_t)c * nv + i] / s->mass[i];
+        info->solve_seconds = cfi_now_seconds() - t1;
+    }
+    return finish_step(flow, s, info, 1);
+}
+
+static cf_status implicit_step(cf_flow *flow, cf_flow_info *info)
+{
+    baseline_state *s = flow->impl;
+    int32_t nv = s->nv;
+    cf_flow_kind kind = kind_of(flow);
+    double t0 = cfi_now_seconds();
+    cf_status st;
+    if (kind == CF_FLOW_CONFORMAL_MCF) {
+        /* Kazhdan 2012, Eq. (4): stiffness frozen at the initial mesh. */
+        cf_dual_area_kind dk =
+            s->opt.mass == CF_MASS_LUMPED_VORONOI ? CF_DUAL_AREA_MIXED_VORONOI : CF_DUAL_AREA_BARYCENTRIC;
+        st = cf_vertex_areas(flow->ctx, flow->mesh, flow->positions, dk, s->mass);
+        if (st != CF_OK) return st;
+        for (int32_t i = 0; i < nv; ++i)
+            if (!(s->mass[i] > 0.0))
+                return cfi_error(flow->ctx, CF_ERR_NUMERICAL, "vertex %d: dual area is %g", i, s->mass[i]);
+        int64_t nnz = cf_sparse_nnz(s->a);
+        for (int64_t p = 0; p < nnz; ++p) s->a->values[p] = s->tau * s->l0_values[p];
+        for (int32_t i = 0; i < nv; ++i) s->a->values[s->a_diag[i]] += s->mass[i];
+    } else {
+        st = assemble(flow, s);
+        if (st != CF_OK) return st;
+        if (kind == CF_FLOW_IMPLICIT_MCF) {
+            /* Desbrun 1999, Eq. (9) with the mass matrix: (M + tau L) x' = M x */
+            int64_t nnz = cf_sparse_nnz(s->a);
+            for (int64_t p = 0; p < nnz; ++p) s->a->values[p] *= s->tau;
+            for (int32_t i = 0; i < nv; ++i) s->a->values[s->a_diag[i]] += s->mass[i];
+        } else {
+            fill_bilaplacian_system(s);
+        }
+    }
+    for (int c = 0; c < 3; ++c)
+        for (int32_t i = 0; i < nv; ++i) s->b[(size_t)c * nv + i] = s->mass[i] * flow->positions[3 * (size_t)i + c];
+    info->assemble_seconds = cfi_now_seconds() - t0;
+
+    double t1 = cfi_now_seconds();
+    st = cf_cholesky_factorize(s->chol, s->a);
+    if (st != CF_OK) return st;
+    info->factorize_seconds = cfi_now_seconds() - t1;
+    double t2 = cfi_now_seconds();
+    st = cf_cholesky_solve(s->chol, 3, s->b, s->x);
+    if (st != CF_OK) return st;
+    info->solve_seconds = cfi_now_seconds() - t2;
+
+    /* relative residual |A x' - M x| / |M x| of the three solves */
+    double rr = 0.0, bb = 0.0;
+    for (int c = 0; c < 3; ++c) {
+        double *r = s->r + (size_t)c * nv;
+        memcpy(r, s->b + (size_t)c * nv, (size_t)nv * sizeof(double));
+        cf_sparse_multiply_add(s->a, 1.0, s->x + (size_t)c * nv, -1.0, r);
+        const double *b = s->b + (size_t)c * nv;
+        for (int32_t i = 0; i < nv; ++i) {
+            rr += r[i] * r[i];
+            bb += b[i] * b[i];
+        }
+    }
+    info->residuals[0] = bb > 0.0 ? sqrt(rr / bb) : sqrt(rr);
+    info->residual_names[0] = "solve";
+    for (int32_t i = 0; i < nv; ++i)
+        for (int c = 0; c < 3; ++c) flow->positions[3 * (size_t)i + c] = s->x[(size_t)c * nv + i];
+    return finish_step(flow, s, info, 0);
+}
+
+#define BASELINE_METHOD(sym, kind, name, desc, defaults, stepfn)                                                \
+    const cfi_flow_method sym = {kind,          name,           desc,          sizeof(cf_baseline_options),    \
+                                 defaults,      baseline_params, BASELINE_PARAM_COUNT, baseline_create,       \
+                                 stepfn,        baseline_reset, baseline_destroy}
+
+BASELINE_METHOD(cfi_explicit_mcf_method, CF_FLOW_EXPLICIT_MCF, "explicit-mcf",
+                "explicit (forward Euler) mean curvature flow; energy: area", default_explicit_mcf, explicit_step);
+BASELINE_METHOD(cfi_implicit_mcf_method, CF_FLOW_IMPLICIT_MCF, "implicit-mcf",
+                "implicit mean curvature flow (Desbrun et al. 1999, backward Euler); energy: area",
+                default_implicit_mcf, implicit_step);
+BASELINE_METHOD(cfi_conformal_mcf_method, CF_FLOW_CONFORMAL_MCF, "conformal-mcf",
+                "conformalized mean curvature flow (Kazhdan, Solomon, Ben-Chen 2012); energy: area",
+                default_conformal_mcf, implicit_step);
+BASELINE_METHOD(cfi_explicit_bilaplacian_method, CF_FLOW_EXPLICIT_BILAPLACIAN, "explicit-bilaplacian",
+                "explicit bi-Laplacian flow (Taubin-style); energy: (1/2) x^T L M^-1 L x",
+                default_explicit_bilaplacian, explicit_step);
+BASELINE_METHOD(cfi_implicit_bilaplacian_method, CF_FLOW_IMPLICIT_BILAPLACIAN, "implicit-bilaplacian",
+                "implicit bi-Laplacian flow (backward Euler); energy: (1/2) x^T L M^-1 L x",
+                default_implicit_bilaplacian, implicit_step);

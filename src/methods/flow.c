@@ -1,0 +1,458 @@
+/*
+ * The common flow layer (include/curvflow/flow.h): registry of the methods,
+ * generic option parsing from each method's parameter table, and the
+ * per-step safety net shared by every method (saved state, finiteness
+ * checks, restore on failure, area/volume drift, timing, progress callback).
+ */
+#include "methods/flow_internal.h"
+
+#include "curvflow/ops.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+/* One entry per cf_flow_kind, in enum order. */
+static const cfi_flow_method *const registry[CF_FLOW_KIND_COUNT] = {
+    &cfi_explicit_mcf_method,
+    &cfi_implicit_mcf_method,
+    &cfi_conformal_mcf_method,
+    &cfi_explicit_bilaplacian_method,
+    &cfi_implicit_bilaplacian_method,
+    &cfi_spin_willmore_method,
+    &cfi_stretch_bend_edit_method,
+};
+
+const cfi_flow_method *cfi_flow_method_of(cf_flow_kind kind)
+{
+    if ((int)kind < 0 || (int)kind >= CF_FLOW_KIND_COUNT) return NULL;
+    const cfi_flow_method *m = registry[kind];
+    if (CF_NEVER(m->kind != kind)) return NULL;
+    return m;
+}
+
+const char *cf_flow_kind_name(cf_flow_kind kind)
+{
+    const cfi_flow_method *m = cfi_flow_method_of(kind);
+    return m ? m->name : NULL;
+}
+
+const char *cf_flow_kind_description(cf_flow_kind kind)
+{
+    const cfi_flow_method *m = cfi_flow_method_of(kind);
+    return m ? m->description : NULL;
+}
+
+cf_status cf_flow_kind_from_name(const char *name, cf_flow_kind *kind)
+{
+    if (!name || !kind) return CF_ERR_INVALID_ARG;
+    for (int k = 0; k < CF_FLOW_KIND_COUNT; ++k) {
+        if (strcmp(registry[k]->name, name) == 0) {
+            *kind = (cf_flow_kind)k;
+            return CF_OK;
+        }
+    }
+    return CF_ERR_INVALID_ARG;
+}
+
+/* ---- options ------------------------------------------------------------ */
+
+cf_status cf_flow_options_default(cf_flow_kind kind, cf_flow_options *options)
+{
+    const cfi_flow_method *m = cfi_flow_method_of(kind);
+    if (!m || !options) return CF_ERR_INVALID_ARG;
+    if (CF_NEVER(m->options_size > CF_FLOW_OPTIONS_STORAGE)) return CF_ERR_INVALID_ARG;
+    memset(options, 0, sizeof *options);
+    options->kind = kind;
+    if (m->options_default) m->options_default(options->storage.bytes);
+    return CF_OK;
+}
+
+void *cf_flow_options_method(cf_flow_options *options) { return options ? options->storage.bytes : NULL; }
+
+const void *cf_flow_options_method_const(const cf_flow_options *options)
+{
+    return options ? options->storage.bytes : NULL;
+}
+
+cf_status cf_flow_params(cf_flow_kind kind, const cf_param_desc **params, int32_t *count)
+{
+    const cfi_flow_method *m = cfi_flow_method_of(kind);
+    if (!m || !params || !count) return CF_ERR_INVALID_ARG;
+    *params = m->params;
+    *count = m->params ? m->param_count : 0;
+    return CF_OK;
+}
+
+static const cf_param_desc *find_param(const cfi_flow_method *m, const char *name)
+{
+    for (int32_t i = 0; m->params && i < m->param_count; ++i)
+        if (strcmp(m->params[i].name, name) == 0) return &m->params[i];
+    return NULL;
+}
+
+/* Appends the parameter names of m to buf ("a, b, c"). */
+static void list_param_names(const cfi_flow_method *m, char *buf, size_t size)
+{
+    size_t used = 0;
+    buf[0] = '\0';
+    for (int32_t i = 0; m->params && i < m->param_count && used + 1 < size; ++i) {
+        int n = snprintf(buf + used, size - used, "%s%s", i ? ", " : "", m->params[i].name);
+        if (n < 0) break;
+        used += (size_t)n;
+    }
+    if (used >= size) used = size - 1;
+    buf[used] = '\0';
+}
+
+static int parse_bool(const char *s, int32_t *out)
+{
+    static const char *const yes[] = {"1", "true", "yes", "on"};
+    static const char *const no[] = {"0", "false", "no", "off"};
+    for (size_t i = 0; i < sizeof yes / sizeof yes[0]; ++i) {
+        if (strcasecmp(s, yes[i]) == 0) { *out = 1; return 1; }
+        if (strcasecmp(s, no[i]) == 0) { *out = 0; return 1; }
+    }
+    return 0;
+}
+
+cf_status cf_flow_options_set(cf_context *ctx, cf_flow_options *options, const char *name, const char *value)
+{
+    if (!options) return cfi_error(ctx, CF_ERR_INVALID_ARG, "options is NULL");
+    if (!name || !value) return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter name or value is NULL");
+    const cfi_flow_method *m = cfi_flow_method_of(options->kind);
+    if (!m) return cfi_error(ctx, CF_ERR_INVALID_ARG, "options have an invalid method kind %d", (int)options->kind);
+    const cf_param_desc *p = find_param(m, name);
+    if (!p) {
+        char known[256];
+        list_param_names(m, known, sizeof known);
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter '%s': unknown for method %s (known: %s)", name, m->name,
+                         known[0] ? known : "none");
+    }
+    unsigned char *base = options->storage.bytes;
+    switch (p->type) {
+    case CF_PARAM_DOUBLE: {
+        char *end = NULL;
+        errno = 0;
+        double v = strtod(value, &end);
+        if (end == value || *end != '\0' || errno == ERANGE || !isfinite(v))
+            return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter '%s': '%s' is not a finite number", name, value);
+        if (v < p->min_value || v > p->max_value)
+            return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter '%s': %g is outside [%g, %g]", name, v, p->min_value,
+                             p->max_value);
+        memcpy(base + p->offset, &v, sizeof v);
+        return CF_OK;
+    }
+    case CF_PARAM_INT: {
+        char *end = NULL;
+        errno = 0;
+        long long v = strtoll(value, &end, 10);
+        if (end == value || *end != '\0' || errno == ERANGE || v < INT32_MIN || v > INT32_MAX)
+            return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter '%s': '%s' is not an integer", name, value);
+        if ((double)v < p->min_value || (double)v > p->max_value)
+            return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter '%s': %lld is outside [%g, %g]", name, v,
+                             p->min_value, p->max_value);
+        int32_t iv = (int32_t)v;
+        memcpy(base + p->offset, &iv, sizeof iv);
+        return CF_OK;
+    }
+    case CF_PARAM_BOOL: {
+        int32_t b = 0;
+        if (!parse_bool(value, &b))
+            return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter '%s': '%s' is not a boolean (true/false/yes/no/1/0)",
+                             name, value);
+        memcpy(base + p->offset, &b, sizeof b);
+        return CF_OK;
+    }
+    case CF_PARAM_CHOICE: {
+        for (int32_t i = 0; p->choices && p->choices[i]; ++i) {
+            if (strcmp(p->choices[i], value) == 0) {
+                memcpy(base + p->offset, &i, sizeof i);
+                return CF_OK;
+            }
+        }
+        char known[256];
+        size_t used = 0;
+        known[0] = '\0';
+        for (int32_t i = 0; p->choices && p->choices[i] && used + 1 < sizeof known; ++i) {
+            int n = snprintf(known + used, sizeof known - used, "%s%s", i ? ", " : "", p->choices[i]);
+            if (n < 0) break;
+            used += (size_t)n;
+        }
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter '%s': '%s' is not one of: %s", name, value, known);
+    }
+    }
+    return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter '%s': unknown parameter type", name);
+}
+
+cf_status cf_flow_options_format(const cf_flow_options *options, const cf_param_desc *param, char *buf, size_t size)
+{
+    if (!options || !param || !buf || size == 0) return CF_ERR_INVALID_ARG;
+    const unsigned char *base = options->storage.bytes;
+    if (param->offset >= CF_FLOW_OPTIONS_STORAGE) return CF_ERR_INVALID_ARG;
+    int n = 0;
+    switch (param->type) {
+    case CF_PARAM_DOUBLE: {
+        double v;
+        memcpy(&v, base + param->offset, sizeof v);
+        n = snprintf(buf, size, "%.17g", v);
+        /* shortest text that round-trips */
+        for (int prec = 1; prec <= 17; ++prec) {
+            char tmp[64];
+            snprintf(tmp, sizeof tmp, "%.*g", prec, v);
+            if (strtod(tmp, NULL) == v) { n = snprintf(buf, size, "%s", tmp); break; }
+        }
+        break;
+    }
+    case CF_PARAM_INT: {
+        int32_t v;
+        memcpy(&v, base + param->offset, sizeof v);
+        n = snprintf(buf, size, "%d", (int)v);
+        break;
+    }
+    case CF_PARAM_BOOL: {
+        int32_t v;
+        memcpy(&v, base + param->offset, sizeof v);
+        n = snprintf(buf, size, "%s", v ? "true" : "false");
+        break;
+    }
+    case CF_PARAM_CHOICE: {
+        int32_t v;
+        memcpy(&v, base + param->offset, sizeof v);
+        const char *s = NULL;
+        for (int32_t i = 0; param->choices && param->choices[i]; ++i)
+            if (i == v) s = param->choices[i];
+        n = snprintf(buf, size, "%s", s ? s : "?");
+        break;
+    }
+    default: return CF_ERR_INVALID_ARG;
+    }
+    return (n < 0 || (size_t)n >= size) ? CF_ERR_INVALID_ARG : CF_OK;
+}
+
+/* ---- flow life cycle ---------------------------------------------------- */
+
+static int32_t first_nonfinite_vertex(const double *x, int32_t nv)
+{
+    for (int32_t v = 0; v < nv; ++v)
+        if (!isfinite(x[3 * v]) || !isfinite(x[3 * v + 1]) || !isfinite(x[3 * v + 2])) return v;
+    return -1;
+}
+
+/* Area and volume of the current positions into *info, with drifts. */
+static cf_status measure(cf_flow *flow, cf_flow_info *info)
+{
+    double area = 0.0, volume = 0.0;
+    cf_status st = cf_total_area(flow->ctx, flow->mesh, flow->positions, &area);
+    if (st == CF_OK) st = cf_enclosed_volume(flow->ctx, flow->mesh, flow->positions, &volume);
+    if (st != CF_OK) return st;
+    info->area = area;
+    info->volume = volume;
+    info->area_drift = flow->initial_area > 0.0 ? area / flow->initial_area - 1.0 : 0.0;
+    info->volume_drift = flow->initial_volume != 0.0 ? volume / flow->initial_volume - 1.0 : 0.0;
+    return CF_OK;
+}
+
+void cf_flow_destroy(cf_flow **pflow)
+{
+    if (!pflow || !*pflow) return;
+    cf_flow *flow = *pflow;
+    cf_context *ctx = flow->ctx;
+    if (flow->method && flow->method->destroy) flow->method->destroy(flow);
+    int32_t nv = flow->mesh->nv;
+    CFI_FREE(ctx, flow->positions, 3 * (size_t)nv);
+    CFI_FREE(ctx, flow->saved_positions, 3 * (size_t)nv);
+    CFI_FREE(ctx, flow, 1);
+    *pflow = NULL;
+}
+
+cf_status cf_flow_create(cf_context *ctx, const cf_mesh *mesh, const double *positions, const cf_flow_options *options,
+                         cf_flow **out)
+{
+    if (!ctx) return CF_ERR_INVALID_ARG;
+    if (!out) return cfi_error(ctx, CF_ERR_INVALID_ARG, "flow output pointer is NULL");
+    *out = NULL;
+    if (!mesh) return cfi_error(ctx, CF_ERR_INVALID_ARG, "mesh is NULL");
+    if (!options) return cfi_error(ctx, CF_ERR_INVALID_ARG, "flow options are NULL");
+    const cfi_flow_method *m = cfi_flow_method_of(options->kind);
+    if (!m) return cfi_error(ctx, CF_ERR_INVALID_ARG, "unknown flow kind %d", (int)options->kind);
+    int32_t nv = mesh->nv;
+    const double *start = positions ? positions : mesh->positions;
+    int32_t bad = first_nonfinite_vertex(start, nv);
+    if (bad >= 0) return cfi_error(ctx, CF_ERR_NONFINITE, "vertex %d: starting position is not finite", bad);
+
+    cf_flow *flow = CFI_ALLOC(ctx, cf_flow, 1);
+    if (!flow) return CF_ERR_NOMEM;
+    flow->ctx = ctx;
+    flow->mesh = mesh;
+    flow->options = *options;
+    flow->positions = CFI_ALLOC(ctx, double, 3 * (size_t)nv);
+    flow->saved_positions = CFI_ALLOC(ctx, double, 3 * (size_t)nv);
+    if (!flow->positions || !flow->saved_positions) {
+        cf_flow_destroy(&flow);
+        return CF_ERR_NOMEM;
+    }
+    memcpy(flow->positions, start, 3 * (size_t)nv * sizeof(double));
+    memcpy(flow->saved_positions, start, 3 * (size_t)nv * sizeof(double));
+
+    double area = 0.0, volume = 0.0;
+    cf_status st = cf_total_area(ctx, mesh, flow->positions, &area);
+    if (st == CF_OK) st = cf_enclosed_volume(ctx, mesh, flow->positions, &volume);
+    if (st != CF_OK) {
+        cf_flow_destroy(&flow);
+        return st;
+    }
+    flow->initial_area = area;
+    flow->initial_volume = volume;
+
+    /* Only now is the method attached, so that destroy calls its destructor
+     * exactly when its create has run (it must accept a partial state). */
+    flow->method = m;
+    st = m->create(flow, flow->options.storage.bytes);
+    if (st != CF_OK) {
+        cf_flow_destroy(&flow);
+        return st;
+    }
+    flow->info.iteration = 0;
+    flow->info.time = 0.0;
+    flow->info.area = area;
+    flow->info.volume = volume;
+    flow->info.area_drift = 0.0;
+    flow->info.volume_drift = 0.0;
+    if (!isfinite(flow->info.energy)) {
+        cf_flow_destroy(&flow);
+        return cfi_error(ctx, CF_ERR_NUMERICAL, "%s: initial energy is not finite", m->name);
+    }
+    *out = flow;
+    return CF_OK;
+}
+
+/* After a failed step: put the last good state back, let the method
+ * resynchronise, and keep the step's status and message (prefixed with the
+ * iteration). */
+static cf_status fail_step(cf_flow *flow, cf_status status, int64_t iteration)
+{
+    cf_context *ctx = flow->ctx;
+    int32_t nv = flow->mesh->nv;
+    char message[CF_MESSAGE_CAPACITY];
+    memcpy(message, ctx->message, sizeof message);
+    memcpy(flow->positions, flow->saved_positions, 3 * (size_t)nv * sizeof(double));
+    if (flow->method->reset) (void)flow->method->reset(flow);
+    memcpy(ctx->message, message, sizeof message);
+    ctx->last_status = status;
+    cfi_error_prefix(ctx, "iteration %lld", (long long)iteration);
+    return status;
+}
+
+cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info)
+{
+    if (!flow) return CF_ERR_INVALID_ARG;
+    cf_context *ctx = flow->ctx;
+    int32_t nv = flow->mesh->nv;
+    int64_t iteration = flow->info.iteration + 1;
+    double t0 = cfi_now_seconds();
+
+    memcpy(flow->saved_positions, flow->positions, 3 * (size_t)nv * sizeof(double));
+    cf_flow_info step = {0};
+    step.iteration = iteration;
+    cf_status st = flow->method->step(flow, &step);
+    if (st != CF_OK) {
+        if (ctx->last_status != st) cfi_error(ctx, st, "%s step failed (%s)", flow->method->name, cf_status_name(st));
+        return fail_step(flow, st, iteration);
+    }
+    int32_t bad = first_nonfinite_vertex(flow->positions, nv);
+    if (bad >= 0) {
+        cfi_error(ctx, CF_ERR_NUMERICAL, "vertex %d: position is not finite", bad);
+        return fail_step(flow, CF_ERR_NUMERICAL, iteration);
+    }
+    if (!isfinite(step.energy)) {
+        cfi_error(ctx, CF_ERR_NUMERICAL, "energy is %s", isnan(step.energy) ? "NaN" : "infinite");
+        return fail_step(flow, CF_ERR_NUMERICAL, iteration);
+    }
+    st = measure(flow, &step);
+    if (st != CF_OK) return fail_step(flow, st, iteration);
+    if (!isfinite(step.area) || !isfinite(step.volume)) {
+        cfi_error(ctx, CF_ERR_NUMERICAL, "area or volume is not finite");
+        return fail_step(flow, CF_ERR_NUMERICAL, iteration);
+    }
+    step.iteration = iteration;
+    step.time = flow->info.time + step.time_step;
+    step.total_seconds = cfi_now_seconds() - t0;
+    flow->info = step;
+    if (info) *info = step;
+    if (flow->progress && flow->progress(flow->progress_user, &flow->info) != 0)
+        return cfi_error(ctx, CF_ERR_CANCELLED, "iteration %lld: cancelled by the progress callback",
+                         (long long)iteration);
+    return CF_OK;
+}
+
+cf_status cf_flow_run(cf_flow *flow, int64_t steps, cf_flow_info *info)
+{
+    if (!flow) return CF_ERR_INVALID_ARG;
+    if (steps < 0) return cfi_error(flow->ctx, CF_ERR_INVALID_ARG, "steps must be >= 0, got %lld", (long long)steps);
+    cf_status st = CF_OK;
+    for (int64_t i = 0; i < steps && !flow->converged; ++i) {
+        st = cf_flow_step(flow, NULL);
+        if (st != CF_OK) break;
+    }
+    if (info) *info = flow->info;
+    return st;
+}
+
+void cf_flow_set_progress(cf_flow *flow, cf_progress_fn fn, void *user)
+{
+    if (!flow) return;
+    flow->progress = fn;
+    flow->progress_user = user;
+}
+
+const double *cf_flow_positions(const cf_flow *flow) { return flow ? flow->positions : NULL; }
+
+cf_status cf_flow_set_positions(cf_flow *flow, const double *positions)
+{
+    if (!flow) return CF_ERR_INVALID_ARG;
+    cf_context *ctx = flow->ctx;
+    if (!positions) return cfi_error(ctx, CF_ERR_INVALID_ARG, "positions are NULL");
+    int32_t nv = flow->mesh->nv;
+    int32_t bad = first_nonfinite_vertex(positions, nv);
+    if (bad >= 0) return cfi_error(ctx, CF_ERR_NONFINITE, "vertex %d: position is not finite", bad);
+    memcpy(flow->saved_positions, flow->positions, 3 * (size_t)nv * sizeof(double));
+    memcpy(flow->positions, positions, 3 * (size_t)nv * sizeof(double));
+    cf_status st = flow->method->reset ? flow->method->reset(flow) : CF_OK;
+    if (st == CF_OK) st = measure(flow, &flow->info);
+    if (st != CF_OK) {
+        char message[CF_MESSAGE_CAPACITY];
+        memcpy(message, ctx->message, sizeof message);
+        memcpy(flow->positions, flow->saved_positions, 3 * (size_t)nv * sizeof(double));
+        if (flow->method->reset) (void)flow->method->reset(flow);
+        memcpy(ctx->message, message, sizeof message);
+        ctx->last_status = st;
+        return st;
+    }
+    flow->converged = 0;
+    return CF_OK;
+}
+
+const cf_mesh *cf_flow_mesh(const cf_flow *flow) { return flow ? flow->mesh : NULL; }
+cf_flow_kind cf_flow_get_kind(const cf_flow *flow) { return flow ? flow->options.kind : CF_FLOW_KIND_COUNT; }
+double cf_flow_energy(const cf_flow *flow) { return flow ? flow->info.energy : NAN; }
+const cf_flow_info *cf_flow_last_info(const cf_flow *flow) { return flow ? &flow->info : NULL; }
+int32_t cf_flow_converged(const cf_flow *flow) { return flow ? flow->converged : 0; }
+
+cf_status cf_flow_apply(cf_context *ctx, const cf_mesh *mesh, const cf_flow_options *options, int64_t steps,
+                        double *out_positions, cf_flow_info *info)
+{
+    if (!ctx) return CF_ERR_INVALID_ARG;
+    if (!out_positions) return cfi_error(ctx, CF_ERR_INVALID_ARG, "out_positions is NULL");
+    cf_flow *flow = NULL;
+    cf_status st = cf_flow_create(ctx, mesh, NULL, options, &flow);
+    if (st != CF_OK) return st;
+    st = cf_flow_run(flow, steps, info);
+    /* The state reached is returned also on failure (it is the last good one). */
+    memcpy(out_positions, flow->positions, 3 * (size_t)mesh->nv * sizeof(double));
+    cf_flow_destroy(&flow);
+    return st;
+}

@@ -1,0 +1,206 @@
+/*
+ * Facewise quaternionic matrix X(rho) of Crane, Pinkall, Schroeder 2013,
+ * App. G, as a real symmetric 4 nv x 4 nv matrix (each quaternion entry is
+ * the 4 x 4 matrix of left multiplication, Le Folgoc Eq. (7)), plus the edge
+ * transformation of the vertex-based spin transformation (Crane et al. 2011).
+ * The pattern and a slot per 4 x 4 block column are computed once; every
+ * fill then writes values in place without allocating.
+ */
+#include "methods/spin_willmore/spin_internal.h"
+
+#include <math.h>
+#include <string.h>
+
+cf_status cfi_dirac_create(cf_context *ctx, const cf_mesh *mesh, cfi_dirac **out)
+{
+    *out = NULL;
+    int32_t nv = mesh->nv, nf = mesh->nf;
+    if ((int64_t)nv * 4 > INT32_MAX) return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin: mesh too large (%d vertices)", nv);
+    cfi_dirac *d = CFI_ALLOC(ctx, cfi_dirac, 1);
+    if (!d) return CF_ERR_NOMEM;
+    d->nv = nv;
+    d->nf = nf;
+    int64_t ntrip = (int64_t)nf * 144;
+    int32_t *rows = CFI_ALLOC(ctx, int32_t, ntrip);
+    int32_t *cols = CFI_ALLOC(ctx, int32_t, ntrip);
+    int64_t *slots = CFI_ALLOC(ctx, int64_t, ntrip);
+    d->block_slot = CFI_ALLOC(ctx, int64_t, (int64_t)nf * 36);
+    d->diag_slot = CFI_ALLOC(ctx, int64_t, (int64_t)nv * 4);
+    cf_status st = CF_OK;
+    if (!rows || !cols || !slots || !d->block_slot || !d->diag_slot) {
+        st = CF_ERR_NOMEM;
+        goto done;
+    }
+    /* triplet t = ((k * 9 + m * 3 + n) * 4 + c) * 4 + r: entry (4 i + r, 4 j + c) */
+    int64_t t = 0;
+    for (int32_t k = 0; k < nf; ++k) {
+        const int32_t *tri = mesh->triangles + 3 * k;
+        for (int m = 0; m < 3; ++m)
+            for (int n = 0; n < 3; ++n)
+                for (int c = 0; c < 4; ++c)
+                    for (int r = 0; r < 4; ++r, ++t) {
+                        rows[t] = 4 * tri[m] + r;
+                        cols[t] = 4 * tri[n] + c;
+                    }
+    }
+    st = cf_sparse_from_triplets(ctx, 4 * nv, 4 * nv, ntrip, rows, cols, NULL, 1, &d->x, slots);
+    if (st != CF_OK) goto done;
+    for (int64_t b = 0; b < (int64_t)nf * 36; ++b) d->block_slot[b] = slots[4 * b];
+    for (int32_t k = 0; k < nf; ++k) {
+        for (int m = 0; m < 3; ++m) {
+            int32_t i = mesh->triangles[3 * k + m];
+            for (int c = 0; c < 4; ++c) d->diag_slot[4 * i + c] = slots[(((int64_t)k * 9 + m * 4) * 4 + c) * 4 + c];
+        }
+    }
+    /* The block rows must be contiguous in each column (rows sorted, unique). */
+    for (int64_t b = 0; b < (int64_t)nf * 36; ++b) {
+        if (CF_NEVER(slots[4 * b + 3] != slots[4 * b] + 3)) {
+            st = cfi_error(ctx, CF_ERR_NUMERICAL, "spin: unexpected sparse layout of the Dirac matrix");
+            goto done;
+        }
+    }
+done:
+    CFI_FREE(ctx, rows, ntrip);
+    CFI_FREE(ctx, cols, ntrip);
+    CFI_FREE(ctx, slots, ntrip);
+    if (st != CF_OK) {
+        cfi_dirac_destroy(ctx, &d);
+        return st;
+    }
+    *out = d;
+    return CF_OK;
+}
+
+void cfi_dirac_destroy(cf_context *ctx, cfi_dirac **d)
+{
+    if (!d || !*d) return;
+    cfi_dirac *p = *d;
+    cf_sparse_destroy(&p->x);
+    CFI_FREE(ctx, p->block_slot, (int64_t)p->nf * 36);
+    CFI_FREE(ctx, p->diag_slot, (int64_t)p->nv * 4);
+    CFI_FREE(ctx, p, 1);
+    *d = NULL;
+}
+
+cf_status cfi_dirac_fill(cfi_dirac *d, const cf_mesh *mesh, const double *positions, const double *rho,
+                         double shift)
+{
+    double *val = d->x->values;
+    memset(val, 0, (size_t)cf_sparse_nnz(d->x) * sizeof(double));
+    for (int32_t k = 0; k < mesh->nf; ++k) {
+        const int32_t *tri = mesh->triangles + 3 * k;
+        double e[3][3];
+        for (int m = 0; m < 3; ++m) {
+            /* edge opposite corner m, running counter-clockwise */
+            const double *a = positions + 3 * tri[(m + 1) % 3];
+            const double *b = positions + 3 * tri[(m + 2) % 3];
+            for (int c = 0; c < 3; ++c) e[m][c] = b[c] - a[c];
+        }
+        double nrm[3] = {e[2][1] * e[0][2] - e[2][2] * e[0][1], e[2][2] * e[0][0] - e[2][0] * e[0][2],
+                         e[2][0] * e[0][1] - e[2][1] * e[0][0]};
+        double area = 0.5 * sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
+        if (!(area > 0.0)) return cfi_error(mesh->ctx, CF_ERR_DEGENERATE_FACE, "face %d: zero area in the Dirac matrix", k);
+        double r[3] = {0.0, 0.0, 0.0};
+        if (rho)
+            for (int m = 0; m < 3; ++m) r[m] = rho[tri[m]];
+        for (int m = 0; m < 3; ++m) {
+            for (int n = 0; n < 3; ++n) {
+                /* Crane 2013, App. G: X_mn = -e_m e_n / (4A) + (rho_m e_n - rho_n e_m) / 6 + A rho_m rho_n / 9;
+                 * for imaginary e: e_m e_n = -<e_m, e_n> + e_m x e_n. */
+                const double *em = e[m], *en = e[n];
+                double q[4];
+                q[0] = (em[0] * en[0] + em[1] * en[1] + em[2] * en[2]) / (4.0 * area) + area * r[m] * r[n] / 9.0;
+                double cr[3] = {em[1] * en[2] - em[2] * en[1], em[2] * en[0] - em[0] * en[2],
+                                em[0] * en[1] - em[1] * en[0]};
+                for (int c = 0; c < 3; ++c) q[1 + c] = -cr[c] / (4.0 * area) + (r[m] * en[c] - r[n] * em[c]) / 6.0;
+                if (m == n) q[0] += shift * area / 3.0;
+                /* columns of the left-multiplication matrix of q */
+                const int64_t *s = d->block_slot + ((int64_t)k * 9 + m * 3 + n) * 4;
+                double *c0 = val + s[0], *c1 = val + s[1], *c2 = val + s[2], *c3 = val + s[3];
+                c0[0] += q[0]; c0[1] += q[1]; c0[2] += q[2]; c0[3] += q[3];
+                c1[0] -= q[1]; c1[1] += q[0]; c1[2] += q[3]; c1[3] -= q[2];
+                c2[0] -= q[2]; c2[1] -= q[3]; c2[2] += q[0]; c2[3] += q[1];
+                c3[0] -= q[3]; c3[1] += q[2]; c3[2] -= q[1]; c3[3] += q[0];
+            }
+        }
+    }
+    return CF_OK;
+}
+
+void cfi_dirac_fix_boundary(cfi_dirac *d, const cf_mesh *mesh, double *rhs)
+{
+    cf_sparse *x = d->x;
+    const uint8_t *onb = mesh->vertex_on_boundary;
+    int32_t n = x->ncols;
+    for (int32_t i = 0; i < n; ++i) rhs[i] = 0.0;
+    /* -X_IB lambda_B with lambda_B = 1 = (1, 0, 0, 0): column 4 j of boundary j */
+    for (int32_t j = 0; j < d->nv; ++j) {
+        if (!onb[j]) continue;
+        int32_t col = 4 * j;
+        for (int32_t p = x->colptr[col]; p < x->colptr[col + 1]; ++p) rhs[x->rowind[p]] -= x->values[p];
+    }
+    for (int32_t col = 0; col < n; ++col) {
+        int cb = onb[col / 4];
+        for (int32_t p = x->colptr[col]; p < x->colptr[col + 1]; ++p) {
+            int32_t row = x->rowind[p];
+            if (cb || onb[row / 4]) x->values[p] = row == col ? 1.0 : 0.0;
+        }
+    }
+    for (int32_t j = 0; j < d->nv; ++j) {
+        if (!onb[j]) continue;
+        rhs[4 * j] = 1.0;
+        rhs[4 * j + 1] = rhs[4 * j + 2] = rhs[4 * j + 3] = 0.0;
+    }
+}
+
+/* Hamilton product of (w, x, y, z) arrays. */
+static inline void qmul(const double *a, const double *b, double *o)
+{
+    o[0] = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3];
+    o[1] = a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2];
+    o[2] = a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1];
+    o[3] = a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0];
+}
+
+/* imaginary part of conj(a) v b for imaginary v */
+static inline void sandwich(const double *a, const double *v, const double *b, double *o)
+{
+    double ac[4] = {a[0], -a[1], -a[2], -a[3]}, vq[4] = {0.0, v[0], v[1], v[2]}, t[4], u[4];
+    qmul(ac, vq, t);
+    qmul(t, b, u);
+    o[0] = u[1];
+    o[1] = u[2];
+    o[2] = u[3];
+}
+
+void cfi_spin_transform_edges(const cf_mesh *mesh, const double *positions, const double *lambda, double *out)
+{
+    for (int32_t e = 0; e < mesh->ne; ++e) {
+        int32_t i = mesh->edge_vertices[2 * e], j = mesh->edge_vertices[2 * e + 1];
+        double v[3] = {positions[3 * j] - positions[3 * i], positions[3 * j + 1] - positions[3 * i + 1],
+                       positions[3 * j + 2] - positions[3 * i + 2]};
+        const double *li = lambda + 4 * i, *lj = lambda + 4 * j;
+        double aa[3], ab[3], ba[3], bb[3];
+        sandwich(li, v, li, aa);
+        sandwich(li, v, lj, ab);
+        sandwich(lj, v, li, ba);
+        sandwich(lj, v, lj, bb);
+        /* Crane et al. 2011 (NOTES.md): average of the similarity transforms at both ends */
+        for (int c = 0; c < 3; ++c) out[3 * e + c] = (aa[c] + bb[c]) / 3.0 + (ab[c] + ba[c]) / 6.0;
+    }
+}
+
+double cfi_spin_integrability_error(const cf_mesh *mesh, const double *positions, const double *edges)
+{
+    double num = 0.0, den = 0.0;
+    for (int32_t e = 0; e < mesh->ne; ++e) {
+        int32_t i = mesh->edge_vertices[2 * e], j = mesh->edge_vertices[2 * e + 1];
+        for (int c = 0; c < 3; ++c) {
+            double g = positions[3 * j + c] - positions[3 * i + c];
+            double t = edges[3 * e + c];
+            num += (g - t) * (g - t);
+            den += t * t;
+        }
+    }
+    return den > 0.0 ? sqrt(num / den) : 0.0;
+}

@@ -1,0 +1,112 @@
+/*
+ * Internal pieces of the spin-transformation machinery (Crane, Pinkall,
+ * Schroeder 2011/2013) shared by cf_spin_transform and the conformal
+ * Willmore flow, plus a test hook exposing per-step diagnostics.
+ *
+ * Quaternion fields are stored as 4 doubles per vertex (w, x, y, z), which is
+ * also the row layout of the real 4 nv x 4 nv matrix X: entry 4 i + c.
+ */
+#ifndef CF_METHODS_SPIN_WILLMORE_SPIN_INTERNAL_H
+#define CF_METHODS_SPIN_WILLMORE_SPIN_INTERNAL_H
+
+#include "core/core.h"
+#include "curvflow/flow.h"
+#include "curvflow/linalg.h"
+#include "curvflow/spin_willmore.h"
+#include "mesh/mesh_internal.h"
+
+/* The facewise matrix X(rho) of Crane 2013, App. G, as a real symmetric
+ * 4 nv x 4 nv matrix with a fixed pattern; values are refilled in place. */
+typedef struct cfi_dirac {
+    cf_sparse *x;
+    int64_t *block_slot;   /* 36 nf: slot of entry (4 i, 4 j + c) for face k, pair (m, n), column c */
+    int64_t *diag_slot;    /* 4 nv: slot of entry (4 i + c, 4 i + c) */
+    int32_t nv, nf;
+} cfi_dirac;
+
+cf_status cfi_dirac_create(cf_context *ctx, const cf_mesh *mesh, cfi_dirac **out);
+void cfi_dirac_destroy(cf_context *ctx, cfi_dirac **d);
+
+/* Fills X(rho) + shift * M (M: barycentric vertex areas) for `positions`.
+ * rho may be NULL (rho = 0). Sign: X = (D - P rho)^* A (D - P rho) with
+ * (D lambda)_k = -sum_j e_j lambda_j / (2 A_k), e_j the ccw edge opposite j. */
+cf_status cfi_dirac_fill(cfi_dirac *d, const cf_mesh *mesh, const double *positions, const double *rho,
+                         double shift);
+
+/* Moves the columns of boundary vertices to the right-hand side for the
+ * Dirichlet data lambda_B = 1 (Crane 2013, Sec. 6.3.2): rhs (4 nv) receives
+ * -X_IB 1 on interior rows and 1 on boundary rows, and the boundary rows and
+ * columns of X become identity. */
+void cfi_dirac_fix_boundary(cfi_dirac *d, const cf_mesh *mesh, double *rhs);
+
+/* Transformed edge vectors (Crane et al. 2011; NOTES.md):
+ * e~_ij = 1/3 l_i' e l_i + 1/6 l_i' e l_j + 1/6 l_j' e l_i + 1/3 l_j' e l_j
+ * (l' = conj(l)), e = f_j - f_i for every edge i < j. out: 3 ne. */
+void cfi_spin_transform_edges(const cf_mesh *mesh, const double *positions, const double *lambda, double *out);
+
+/* Relative integrability error sqrt(sum_e |f_j - f_i - e~_e|^2 / sum_e |e~_e|^2). */
+double cfi_spin_integrability_error(const cf_mesh *mesh, const double *positions, const double *edges);
+
+
+/* Relative shift of the Dirac eigenproblem: X + eps M with
+ * eps = CFI_SPIN_SHIFT * 4 pi / area (a fraction of 1/R^2 of the sphere of
+ * equal area), so that the singular X(0) can be factorised. */
+#define CFI_SPIN_SHIFT 1e-6
+
+/* Inverse power iteration (Crane 2013, Sec. 6.4.2) on a factorisation of
+ * X + eps M: lambda <- (X + eps M)^-1 M lambda, normalised to
+ * sum_i M_i |lambda_i|^2 = sum_i M_i. lambda (4 nv) holds the start on entry.
+ * work: 4 nv. mass: nv barycentric areas. */
+cf_status cfi_spin_power_iteration(cf_cholesky *chol, const double *mass, int32_t nv, int32_t iterations,
+                                   double *lambda, double *work);
+/* Rayleigh quotient lambda^T X lambda / lambda^T M lambda - eps. work: 4 nv. */
+double cfi_spin_rayleigh(const cf_sparse *x, const double *mass, int32_t nv, double eps, const double *lambda,
+                         double *work);
+
+/* Cotan Poisson problem L f~ = div e~ for recovering positions from edge
+ * vectors (Crane 2013, Eq. (6)): L's pattern is built once and refilled. */
+typedef struct cfi_poisson {
+    cf_sparse *l;
+    int64_t *slot_map;     /* cfi_cotan_laplacian_triplet_count entries */
+    int64_t slot_count;
+    int64_t *edge_slot;    /* ne: slot of entry (i, j), L_ij = -w_ij */
+    int64_t *diag_slot;    /* nv */
+    cf_cholesky *chol;
+    double *rhs;           /* 3 nv, column-major */
+    double *sol;           /* 3 nv */
+    int32_t nv, ne;
+} cfi_poisson;
+
+cf_status cfi_poisson_create(cf_context *ctx, const cf_mesh *mesh, const double *positions, cfi_poisson **out);
+void cfi_poisson_destroy(cf_context *ctx, cfi_poisson **p);
+/* Refills L for positions (values only). */
+cf_status cfi_poisson_refill(cfi_poisson *p, const cf_mesh *mesh, const double *positions);
+/* Solves for positions from edge vectors (3 ne) with the current L.
+ * fixed_boundary: boundary vertices keep their values from `fixed`
+ * (3 nv interleaved); otherwise L + shift I with shift relative to the mean
+ * diagonal (the caller fixes the translation).
+ * Overwrites L's values when fixed_boundary (refill before the next use).
+ * out: 3 nv interleaved. */
+cf_status cfi_poisson_solve(cfi_poisson *p, const cf_mesh *mesh, const double *edges, int fixed_boundary,
+                            const double *fixed, double *out, double *factor_seconds, double *solve_seconds);
+
+/* Diagnostics of the last step of a spin-willmore flow (test hook). */
+typedef struct cfi_spin_diagnostics {
+    int32_t constraint_count;       /* columns of the constraint basis before orthonormalisation */
+    int32_t constraint_rank;
+    double constraint_residual;     /* max_i |<rhodot, c_i>_M| / (|rhodot|_M |c_i|_M) over enforced constraints */
+    double total_curvature_change;  /* |<rhodot, 1>_M| / (|rhodot|_M |1|_M) */
+    double integrability_error;     /* cfi_spin_integrability_error of the step */
+    double eigenvalue;              /* Rayleigh quotient of lambda (shift removed) */
+    int32_t harmonic_dimension;     /* 2g used by the exactness constraint (0 if off) */
+    double mobius_norm;             /* |balancing term|_M added to rhodot */
+} cfi_spin_diagnostics;
+
+/* CF_ERR_INVALID_ARG unless the flow is a spin-willmore flow. */
+cf_status cfi_spin_willmore_diagnostics(const cf_flow *flow, cfi_spin_diagnostics *out);
+
+/* The flow direction rhodot (nv) and the prescribed rho (nv) of the last
+ * step, for tests; NULL if the flow is not spin-willmore. */
+const double *cfi_spin_willmore_last_rhodot(const cf_flow *flow);
+
+#endif /* CF_METHODS_SPIN_WILLMORE_SPIN_INTERNAL_H */

@@ -1,0 +1,336 @@
+/*
+ * Energy model and local step of Zhao & Gortler, "A Report on Shape
+ * Deformation with a Stretching and Bending Energy": the rotation terms of
+ * the stretching energy (Eq. 5, one rotation per triangle), ARAP spokes
+ * (Eq. 6) and spokes-and-rims (Eq. 7, one rotation per vertex), the
+ * mean-curvature bending energy (Eq. 15), and the local phase (Sec. 4.2):
+ * Procrustes rotations from the cross-covariance with determinant
+ * correction (Eq. 24) and u' = normalised K x'.
+ */
+#include "methods/stretch_bend_edit/sbe_internal.h"
+
+#include "curvflow/metrics.h"
+#include "curvflow/ops.h"
+
+#include <math.h>
+#include <string.h>
+
+void cfi_sbe_model_free(cfi_sbe_model *m)
+{
+    if (!m || !m->ctx) return;
+    cf_context *ctx = m->ctx;
+    int32_t nv = m->nv;
+    CFI_FREE(ctx, m->rot_offsets, (size_t)m->rot_count + 1);
+    CFI_FREE(ctx, m->term_ij, 2 * (size_t)m->term_count);
+    CFI_FREE(ctx, m->term_w, (size_t)m->term_count);
+    CFI_FREE(ctx, m->term_e, 3 * (size_t)m->term_count);
+    CFI_FREE(ctx, m->rest_sq, (size_t)m->rot_count);
+    CFI_FREE(ctx, m->rotations, 9 * (size_t)m->rot_count);
+    CFI_FREE(ctx, m->covariance, 9 * (size_t)m->rot_count);
+    cf_sparse_destroy(&m->k);
+    CFI_FREE(ctx, m->mass, (size_t)nv);
+    CFI_FREE(ctx, m->hm, (size_t)nv);
+    CFI_FREE(ctx, m->u, 3 * (size_t)nv);
+    CFI_FREE(ctx, m->xcol, 3 * (size_t)nv);
+    CFI_FREE(ctx, m->kx, 3 * (size_t)nv);
+    m->ctx = NULL;
+}
+
+static void set_term(cfi_sbe_model *m, int32_t t, int32_t i, int32_t j, double w, const double *rest)
+{
+    m->term_ij[2 * t] = i;
+    m->term_ij[2 * t + 1] = j;
+    m->term_w[t] = w;
+    for (int d = 0; d < 3; ++d) m->term_e[3 * t + d] = rest[3 * i + d] - rest[3 * j + d];
+}
+
+/* Eq. 5: one term per halfedge v->w of face t with weight cot of the corner
+ * opposite it, rotation R_t. */
+static void build_stretch_terms(cfi_sbe_model *m, const double *rest, const double *cot)
+{
+    const cf_mesh *mesh = m->mesh;
+    for (int32_t f = 0; f < mesh->nf; ++f) {
+        m->rot_offsets[f] = 3 * f;
+        for (int k = 0; k < 3; ++k) {
+            int32_t h = 3 * f + k;
+            int32_t v = mesh->triangles[h], w = mesh->triangles[cfi_he_next(h)];
+            set_term(m, h, v, w, cot[cfi_he_prev(h)], rest);
+        }
+    }
+    m->rot_offsets[mesh->nf] = 3 * mesh->nf;
+}
+
+/* Eq. 6 (spokes) and Eq. 7 (spokes and rims): rotation R_v per vertex over
+ * the edges of its cell, each with the full edge weight W = cot a + cot b
+ * (= 2 w_e of the project's L). The rims of v are the edges opposite v in
+ * its faces; with the spokes they form the set E(v), each edge once. */
+static void build_arap_terms(cfi_sbe_model *m, const double *rest, const double *w_edge, int rims)
+{
+    const cf_mesh *mesh = m->mesh;
+    int32_t t = 0;
+    for (int32_t v = 0; v < mesh->nv; ++v) {
+        m->rot_offsets[v] = t;
+        for (int32_t k = mesh->ring_offsets[v]; k < mesh->ring_offsets[v + 1]; ++k) {
+            int32_t e = mesh->ring_edges[k];
+            set_term(m, t++, v, mesh->ring_neighbors[k], 2.0 * w_edge[e], rest);
+        }
+        if (!rims) continue;
+        for (int32_t k = mesh->vface_offsets[v]; k < mesh->vface_offsets[v + 1]; ++k) {
+            int32_t f = mesh->vface_faces[k];
+            int32_t c = 0;
+            while (c < 3 && mesh->triangles[3 * f + c] != v) ++c;
+            if (CF_NEVER(c == 3)) continue;
+            int32_t h = 3 * f + (c + 1) % 3; /* the halfedge opposite corner c */
+            int32_t e = mesh->halfedge_edge[h];
+            set_term(m, t++, mesh->triangles[h], mesh->triangles[cfi_he_next(h)], 2.0 * w_edge[e], rest);
+        }
+    }
+    m->rot_offsets[mesh->nv] = t;
+}
+
+/* K = 2 L from the edge weights (K f)_v = sum_w W_vw (f_v - f_w) (Eq. 14
+ * times M_v), assembled once. */
+static cf_status build_k(cfi_sbe_model *m, const double *w_edge)
+{
+    cf_context *ctx = m->ctx;
+    const cf_mesh *mesh = m->mesh;
+    int64_t n = 4 * (int64_t)mesh->ne;
+    int32_t *rows = CFI_ALLOC(ctx, int32_t, n);
+    int32_t *cols = CFI_ALLOC(ctx, int32_t, n);
+    double *vals = CFI_ALLOC(ctx, double, n);
+    cf_status st = (rows && cols && vals) ? CF_OK : CF_ERR_NOMEM;
+    if (st == CF_OK) {
+        for (int32_t e = 0; e < mesh->ne; ++e) {
+            int32_t i = mesh->edge_vertices[2 * e], j = mesh->edge_vertices[2 * e + 1];
+            double w = 2.0 * w_edge[e];
+            int64_t b = 4 * (int64_t)e;
+            rows[b] = i; cols[b] = i; vals[b] = w;
+            rows[b + 1] = j; cols[b + 1] = j; vals[b + 1] = w;
+            rows[b + 2] = i; cols[b + 2] = j; vals[b + 2] = -w;
+            rows[b + 3] = j; cols[b + 3] = i; vals[b + 3] = -w;
+        }
+        st = cf_sparse_from_triplets(ctx, mesh->nv, mesh->nv, n, rows, cols, vals, 1, &m->k, NULL);
+    }
+    CFI_FREE(ctx, rows, n);
+    CFI_FREE(ctx, cols, n);
+    CFI_FREE(ctx, vals, n);
+    return st;
+}
+
+cf_status cfi_sbe_model_init(cfi_sbe_model *m, cf_context *ctx, const cf_mesh *mesh, const double *rest,
+                             const cf_stretch_bend_options *o)
+{
+    memset(m, 0, sizeof *m);
+    m->ctx = ctx;
+    m->mesh = mesh;
+    m->nv = mesh->nv;
+    int32_t nv = mesh->nv, nf = mesh->nf, ne = mesh->ne;
+    if (o->energy < 0 || o->energy >= CF_EDIT_ENERGY_COUNT)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "stretch-bend-edit: energy %d out of range", (int)o->energy);
+    if (!(o->lambda >= 0.0 && o->lambda <= 1.0))
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "stretch-bend-edit: lambda %g is not in [0, 1]", o->lambda);
+    m->energy = (cf_edit_energy)o->energy;
+    double lambda = o->energy == CF_EDIT_STRETCH ? 1.0 : o->energy == CF_EDIT_BEND ? 0.0 : o->lambda;
+    int arap = m->energy == CF_EDIT_ARAP || m->energy == CF_EDIT_ARAP_RIMS;
+
+    double *cot = CFI_ALLOC(ctx, double, 3 * (size_t)nf);
+    double *w_edge = CFI_ALLOC(ctx, double, (size_t)ne);
+    if (!cot || !w_edge) {
+        CFI_FREE(ctx, cot, 3 * (size_t)nf);
+        CFI_FREE(ctx, w_edge, (size_t)ne);
+        return CF_ERR_NOMEM;
+    }
+    cf_status st = cf_corner_cotangents(ctx, mesh, rest, cot);
+    if (st == CF_OK) st = cf_cotan_weights(ctx, mesh, rest, w_edge);
+    double area = 0.0;
+    if (st == CF_OK) st = cf_total_area(ctx, mesh, rest, &area);
+    if (st != CF_OK) goto done;
+    if (arap) {
+        m->alpha = 1.0;
+        m->beta = 0.0;
+    } else {
+        m->alpha = lambda / (o->scale_free ? area : 1.0);
+        m->beta = 1.0 - lambda;
+    }
+
+    if (m->energy == CF_EDIT_ARAP) {
+        m->rot_count = nv;
+        m->term_count = 2 * ne;
+    } else if (m->energy == CF_EDIT_ARAP_RIMS) {
+        m->rot_count = nv;
+        m->term_count = 2 * ne + 3 * nf;
+    } else if (m->alpha > 0.0) {
+        m->rot_count = nf;
+        m->term_count = 3 * nf;
+    }
+    m->rot_offsets = CFI_ALLOC(ctx, int32_t, (size_t)m->rot_count + 1);
+    m->term_ij = CFI_ALLOC(ctx, int32_t, 2 * (size_t)m->term_count);
+    m->term_w = CFI_ALLOC(ctx, double, (size_t)m->term_count);
+    m->term_e = CFI_ALLOC(ctx, double, 3 * (size_t)m->term_count);
+    m->rest_sq = CFI_ALLOC(ctx, double, (size_t)m->rot_count);
+    m->rotations = CFI_ALLOC(ctx, double, 9 * (size_t)m->rot_count);
+    m->covariance = CFI_ALLOC(ctx, double, 9 * (size_t)m->rot_count);
+    m->xcol = CFI_ALLOC(ctx, double, 3 * (size_t)nv);
+    m->kx = CFI_ALLOC(ctx, double, 3 * (size_t)nv);
+    if (!m->rot_offsets || (m->term_count && (!m->term_ij || !m->term_w || !m->term_e || !m->rest_sq ||
+                                              !m->rotations || !m->covariance)) ||
+        !m->xcol || !m->kx) {
+        st = CF_ERR_NOMEM;
+        goto done;
+    }
+    if (m->energy == CF_EDIT_ARAP || m->energy == CF_EDIT_ARAP_RIMS)
+        build_arap_terms(m, rest, w_edge, m->energy == CF_EDIT_ARAP_RIMS);
+    else if (m->term_count > 0)
+        build_stretch_terms(m, rest, cot);
+    else
+        m->rot_offsets[0] = 0;
+    for (int32_t r = 0; r < m->rot_count; ++r) {
+        double s = 0.0;
+        for (int32_t t = m->rot_offsets[r]; t < m->rot_offsets[r + 1]; ++t) {
+            const double *e = m->term_e + 3 * t;
+            s += m->term_w[t] * (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+        }
+        m->rest_sq[r] = s;
+        double *rot = m->rotations + 9 * r;
+        memset(rot, 0, 9 * sizeof(double));
+        rot[0] = rot[4] = rot[8] = 1.0;
+    }
+
+    if (m->beta > 0.0) {
+        m->mass = CFI_ALLOC(ctx, double, (size_t)nv);
+        m->hm = CFI_ALLOC(ctx, double, (size_t)nv);
+        m->u = CFI_ALLOC(ctx, double, 3 * (size_t)nv);
+        if (!m->mass || !m->hm || !m->u) {
+            st = CF_ERR_NOMEM;
+            goto done;
+        }
+        st = cf_vertex_areas(ctx, mesh, rest,
+                             o->mass == CF_EDIT_MASS_BARYCENTRIC ? CF_DUAL_AREA_BARYCENTRIC
+                                                                 : CF_DUAL_AREA_MIXED_VORONOI,
+                             m->mass);
+        if (st == CF_OK) st = build_k(m, w_edge);
+        if (st != CF_OK) goto done;
+        for (int32_t v = 0; v < nv; ++v) {
+            if (!(m->mass[v] > 0.0)) {
+                st = cfi_error(ctx, CF_ERR_BAD_MESH, "vertex %d: dual area %g is not positive", v, m->mass[v]);
+                goto done;
+            }
+            for (int d = 0; d < 3; ++d) m->xcol[d * nv + v] = rest[3 * v + d];
+        }
+        for (int d = 0; d < 3; ++d) cf_sparse_multiply(m->k, m->xcol + (size_t)d * nv, m->kx + (size_t)d * nv);
+        /* |H_v| M_v = |(K x)_v| (Sec. 3.2: "the norm of the mean curvature
+         * vector"); u' starts as the rest direction, zero where K x = 0
+         * (there |H_v| = 0 and u' does not enter the energy). */
+        for (int32_t v = 0; v < nv; ++v) {
+            double a = m->kx[v], b = m->kx[nv + v], c = m->kx[2 * nv + v];
+            double n = sqrt(a * a + b * b + c * c);
+            m->hm[v] = n;
+            double s = n > 0.0 ? 1.0 / n : 0.0;
+            m->u[v] = a * s;
+            m->u[nv + v] = b * s;
+            m->u[2 * nv + v] = c * s;
+        }
+    }
+done:
+    CFI_FREE(ctx, cot, 3 * (size_t)nf);
+    CFI_FREE(ctx, w_edge, (size_t)ne);
+    if (st != CF_OK) cfi_sbe_model_free(m);
+    return st;
+}
+
+cf_status cfi_sbe_local_step(cfi_sbe_model *m, const double *x, double *total)
+{
+    cf_context *ctx = m->ctx;
+    int32_t nv = m->nv;
+    double term_energy = 0.0;
+    /* Eq. 24: C_r = sum w e' e^T (deformed times rest); the rotation
+     * maximising tr(R^T C_r) minimises sum w |e' - R e|^2, and then
+     * sum w |e' - R e|^2 = sum w |e'|^2 - 2 tr(R^T C_r) + sum w |e|^2. */
+    for (int32_t r = 0; r < m->rot_count; ++r) {
+        double c[9] = {0};
+        double def_sq = 0.0;
+        for (int32_t t = m->rot_offsets[r]; t < m->rot_offsets[r + 1]; ++t) {
+            int32_t i = m->term_ij[2 * t], j = m->term_ij[2 * t + 1];
+            double w = m->term_w[t];
+            const double *e = m->term_e + 3 * t;
+            double q0 = x[3 * i] - x[3 * j], q1 = x[3 * i + 1] - x[3 * j + 1], q2 = x[3 * i + 2] - x[3 * j + 2];
+            def_sq += w * (q0 * q0 + q1 * q1 + q2 * q2);
+            double wq0 = w * q0, wq1 = w * q1, wq2 = w * q2;
+            c[0] += wq0 * e[0]; c[1] += wq0 * e[1]; c[2] += wq0 * e[2];
+            c[3] += wq1 * e[0]; c[4] += wq1 * e[1]; c[5] += wq1 * e[2];
+            c[6] += wq2 * e[0]; c[7] += wq2 * e[1]; c[8] += wq2 * e[2];
+        }
+        double *rot = m->rotations + 9 * r;
+        cf_status st = cf_rotation_from_covariance(c, rot);
+        if (st != CF_OK)
+            return cfi_error(ctx, CF_ERR_NUMERICAL, "%s %d: cross-covariance is not finite",
+                             m->rot_count == m->mesh->nf && m->rot_count != nv ? "face" : "rotation", r);
+        double tr = 0.0;
+        for (int k = 0; k < 9; ++k) tr += rot[k] * c[k];
+        term_energy += def_sq - 2.0 * tr + m->rest_sq[r];
+    }
+    double bend_energy = 0.0;
+    if (m->beta > 0.0) {
+        for (int32_t v = 0; v < nv; ++v)
+            for (int d = 0; d < 3; ++d) m->xcol[d * nv + v] = x[3 * v + d];
+        for (int d = 0; d < 3; ++d) cf_sparse_multiply(m->k, m->xcol + (size_t)d * nv, m->kx + (size_t)d * nv);
+        /* Sec. 4.2: u'_v = (K x')_v / |(K x')_v|; with the optimal u' the
+         * term of Eq. 15 is (|K x'|_v - M_v |H_v|)^2 / M_v. A zero vector
+         * keeps the previous direction (any unit vector is optimal then). */
+        for (int32_t v = 0; v < nv; ++v) {
+            double a = m->kx[v], b = m->kx[nv + v], c = m->kx[2 * nv + v];
+            double n = sqrt(a * a + b * b + c * c);
+            if (n > 0.0) {
+                m->u[v] = a / n;
+                m->u[nv + v] = b / n;
+                m->u[2 * nv + v] = c / n;
+            }
+            double diff = n - m->hm[v];
+            bend_energy += diff * diff / m->mass[v];
+        }
+    }
+    m->term_energy = term_energy;
+    m->bend_energy = bend_energy;
+    if (total) *total = m->alpha * term_energy + m->beta * bend_energy;
+    if (!isfinite(term_energy) || !isfinite(bend_energy))
+        return cfi_error(ctx, CF_ERR_NUMERICAL, "stretch-bend-edit: energy is not finite");
+    return CF_OK;
+}
+
+double cfi_sbe_fixed_energy(const cfi_sbe_model *m, const double *x)
+{
+    int32_t nv = m->nv;
+    double e_terms = 0.0;
+    for (int32_t r = 0; r < m->rot_count; ++r) {
+        const double *rot = m->rotations + 9 * r;
+        for (int32_t t = m->rot_offsets[r]; t < m->rot_offsets[r + 1]; ++t) {
+            int32_t i = m->term_ij[2 * t], j = m->term_ij[2 * t + 1];
+            const double *e = m->term_e + 3 * t;
+            double s = 0.0;
+            for (int d = 0; d < 3; ++d) {
+                double q = x[3 * i + d] - x[3 * j + d] - (rot[3 * d] * e[0] + rot[3 * d + 1] * e[1] + rot[3 * d + 2] * e[2]);
+                s += q * q;
+            }
+            e_terms += m->term_w[t] * s;
+        }
+    }
+    double e_bend = 0.0;
+    if (m->beta > 0.0) {
+        /* sum_v M_v |(K x)_v / M_v - |H_v| u'_v|^2 (Eq. 15), K applied by
+         * its columns so the model's scratch buffers stay untouched. */
+        for (int32_t v = 0; v < nv; ++v) {
+            double kx[3] = {0, 0, 0};
+            for (int32_t p = m->k->colptr[v]; p < m->k->colptr[v + 1]; ++p) {
+                int32_t w = m->k->rowind[p];
+                for (int d = 0; d < 3; ++d) kx[d] += m->k->values[p] * x[3 * w + d]; /* K symmetric */
+            }
+            double s = 0.0;
+            for (int d = 0; d < 3; ++d) {
+                double q = kx[d] / m->mass[v] - m->hm[v] / m->mass[v] * m->u[(size_t)d * nv + v];
+                s += q * q;
+            }
+            e_bend += m->mass[v] * s;
+        }
+    }
+    return m->alpha * e_terms + m->beta * e_bend;
+}

@@ -1,0 +1,65 @@
+/*
+ * Internal interface of the stretch/bend editing method: the energy model
+ * (terms, rotations, bending data) shared by the flow and the energy
+ * evaluation, so tests can reach the pieces.
+ */
+#ifndef CF_METHODS_STRETCH_BEND_EDIT_SBE_INTERNAL_H
+#define CF_METHODS_STRETCH_BEND_EDIT_SBE_INTERNAL_H
+
+#include "core/core.h"
+#include "curvflow/linalg.h"
+#include "curvflow/stretch_bend_edit.h"
+#include "mesh/mesh_internal.h"
+
+/* The rotation part of every energy is a sum of "terms"
+ *     w |(x'_i - x'_j) - R_r (x_i - x_j)|^2
+ * grouped by rotation r (one per face for E_s, one per vertex for ARAP).
+ * The bending part is sum_v (|(K x')_v| - hm_v)^2 / M_v at the optimal u'. */
+typedef struct cfi_sbe_model {
+    cf_context *ctx;
+    const cf_mesh *mesh;
+    int32_t nv;
+    cf_edit_energy energy;
+    double alpha;            /* weight of the term energy in the total */
+    double beta;             /* weight of the bending energy in the total */
+    int32_t term_count;
+    int32_t rot_count;
+    int32_t *rot_offsets;    /* rot_count + 1 */
+    int32_t *term_ij;        /* 2 term_count */
+    double *term_w;          /* term_count */
+    double *term_e;          /* 3 term_count, rest x_i - x_j */
+    double *rest_sq;         /* rot_count: sum w |e|^2 */
+    double *rotations;       /* 9 rot_count, row-major */
+    double *covariance;      /* 9 rot_count, scratch */
+    cf_sparse *k;            /* K = 2 L (rest), only when beta > 0 */
+    double *mass;            /* nv rest dual areas M_v (beta > 0) */
+    double *hm;              /* nv |(K x)_v| at rest = M_v |H_v| (beta > 0) */
+    double *u;               /* 3 nv column-major unit vectors u' (beta > 0) */
+    double *xcol;            /* 3 nv column-major scratch */
+    double *kx;              /* 3 nv column-major scratch */
+    double term_energy;      /* last local step: E_s or E_arap (unweighted) */
+    double bend_energy;      /* last local step: E_db (unweighted) */
+} cfi_sbe_model;
+
+/* Builds the model on `rest` (3 nv, interleaved). */
+cf_status cfi_sbe_model_init(cfi_sbe_model *m, cf_context *ctx, const cf_mesh *mesh, const double *rest,
+                             const cf_stretch_bend_options *options);
+void cfi_sbe_model_free(cfi_sbe_model *m);
+
+/* Local step at `x` (3 nv interleaved): optimal rotations and u', and the
+ * energies E(x) with them (term_energy, bend_energy); returns the total. */
+cf_status cfi_sbe_local_step(cfi_sbe_model *m, const double *x, double *total);
+
+/* For tests, on a CF_FLOW_STRETCH_BEND_EDIT flow: the global phase alone
+ * into x (3 nv) with the flow's current rotations and u'; the gradient
+ * (3 nv interleaved) of the energy with rotations and u' held fixed, from
+ * the assembled system (2 (A x - rhs)); the energy model. */
+typedef struct cf_flow cf_flow;
+cf_status cfi_sbe_flow_global_solve(cf_flow *flow, double *x);
+cf_status cfi_sbe_flow_gradient(cf_flow *flow, const double *x, double *grad);
+cfi_sbe_model *cfi_sbe_flow_model(cf_flow *flow);
+/* Energy at x with the model's current rotations and u' held fixed
+ * (Eqs. 5-7 and 15 before minimising over R, u'). */
+double cfi_sbe_fixed_energy(const cfi_sbe_model *m, const double *x);
+
+#endif /* CF_METHODS_STRETCH_BEND_EDIT_SBE_INTERNAL_H */

@@ -1,0 +1,39 @@
+/*
+ * Internal assembly path of the cotan Laplacian for flows that update the
+ * geometry every step: the pattern (and the map from each per-face triplet
+ * to its slot in L->values) is built once, then values are refilled in place
+ * without allocating. Same sign as cf_cotan_laplacian (positive
+ * semi-definite).
+ */
+#ifndef CF_OPS_COTAN_LAPLACIAN_H
+#define CF_OPS_COTAN_LAPLACIAN_H
+
+#include "curvflow/linalg.h"
+#include "mesh/mesh_internal.h"
+
+/* Triplets per face: 3 diagonal entries then (i, j), (j, i) for each of the
+ * three halfedges. */
+#define CFI_COTAN_TRIPLETS_PER_FACE 9
+
+/* Number of slot_map entries (9 nf). */
+int64_t cfi_cotan_laplacian_triplet_count(const cf_mesh *mesh);
+
+/* Builds L for `positions` (nv x nv, symmetric) and fills the caller's
+ * slot_map (cfi_cotan_laplacian_triplet_count entries). */
+cf_status cfi_cotan_laplacian_pattern(cf_context *ctx, const cf_mesh *mesh, const double *positions,
+                                      cf_sparse **out, int64_t *slot_map);
+
+/* Overwrites L's values with the cotan Laplacian of `positions`, using the
+ * slot_map from cfi_cotan_laplacian_pattern. No allocation; positions are
+ * not checked for finiteness (the caller's step does). Fails with
+ * CF_ERR_DEGENERATE_FACE (message names the face) on a zero-area face, L
+ * then holds partial values. */
+cf_status cfi_cotan_laplacian_refill(cf_sparse *l, const cf_mesh *mesh, const double *positions,
+                                     const int64_t *slot_map);
+
+/* Applies L to a vertex function without forming the matrix: y = L x for
+ * `dim` interleaved components (x, y: dim nv, entry v * dim + c). */
+cf_status cfi_cotan_laplacian_apply(cf_context *ctx, const cf_mesh *mesh, const double *positions, int32_t dim,
+                                    const double *x, double *y);
+
+#endif /* CF_OPS_COTAN_LAPLACIAN_H */

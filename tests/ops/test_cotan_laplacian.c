@@ -1,0 +1,229 @@
+/* Cotan Laplacian: L 1 = 0, symmetry, PSD, linear precision on a flat grid,
+ * agreement with the per-edge weights and the refill path. */
+#include "curvflow/generate.h"
+#include "curvflow/ops.h"
+#include "ops/cotan_laplacian.h"
+#include "test.h"
+
+#include <stdlib.h>
+
+static uint64_t rng_state = 0x853c49e6748fea9bull;
+static double urand(void)
+{
+    rng_state = rng_state * 6364136223846793005ull + 1442695040888963407ull;
+    return (double)(rng_state >> 11) / 9007199254740992.0 * 2.0 - 1.0;
+}
+
+/* entry (i, j) of a CSC matrix, 0 if absent */
+static double entry(const cf_sparse *a, int32_t i, int32_t j)
+{
+    for (int32_t k = a->colptr[j]; k < a->colptr[j + 1]; ++k)
+        if (a->rowind[k] == i) return a->values[k];
+    return 0.0;
+}
+
+static void check_basic_properties(cf_context *ctx, const cf_mesh *mesh, const double *x)
+{
+    cf_sparse *l = NULL;
+    CHECK_OK(ctx, cf_cotan_laplacian(ctx, mesh, x, &l));
+    if (!l) return;
+    int32_t nv = cf_mesh_vertex_count(mesh);
+    CHECK(l->nrows == nv && l->ncols == nv);
+    double *ones = malloc(sizeof(double) * nv), *y = malloc(sizeof(double) * nv), *r = malloc(sizeof(double) * nv);
+    double scale = 0;
+    for (int32_t i = 0; i < nv; ++i) ones[i] = 1.0;
+    for (int64_t k = 0; k < cf_sparse_nnz(l); ++k) scale = fmax(scale, fabs(l->values[k]));
+    cf_sparse_multiply(l, ones, y);
+    for (int32_t i = 0; i < nv; ++i) CHECK_NEAR(y[i], 0.0, 0, 1e-13 * scale); /* L 1 = 0 */
+    /* symmetry, entry by entry */
+    for (int32_t j = 0; j < nv; ++j)
+        for (int32_t k = l->colptr[j]; k < l->colptr[j + 1]; ++k)
+            CHECK_NEAR(l->values[k], entry(l, j, l->rowind[k]), 0, 1e-15 * scale);
+    /* PSD on random vectors: x^T L x = sum_e w_e (x_i - x_j)^2 >= 0 need not
+     * hold edge by edge (negative weights), but the sum is a Dirichlet
+     * energy and must be >= 0 (-roundoff) */
+    for (int t = 0; t < 20; ++t) {
+        for (int32_t i = 0; i < nv; ++i) r[i] = urand();
+        cf_sparse_multiply(l, r, y);
+        double q = 0;
+        for (int32_t i = 0; i < nv; ++i) q += r[i] * y[i];
+        CHECK(q >= -1e-12 * scale * nv);
+    }
+    /* matrix-free application and per-edge weights agree with the matrix */
+    double *y2 = malloc(sizeof(double) * nv);
+    for (int32_t i = 0; i < nv; ++i) r[i] = urand();
+    cf_sparse_multiply(l, r, y);
+    CHECK_OK(ctx, cfi_cotan_laplacian_apply(ctx, mesh, x, 1, r, y2));
+    for (int32_t i = 0; i < nv; ++i) CHECK_NEAR(y2[i], y[i], 0, 1e-12 * scale);
+    int32_t ne = cf_mesh_edge_count(mesh);
+    const int32_t *ev = cf_mesh_edge_vertices(mesh);
+    double *w = malloc(sizeof(double) * ne);
+    CHECK_OK(ctx, cf_cotan_weights(ctx, mesh, x, w));
+    for (int32_t e = 0; e < ne; ++e) CHECK_NEAR(entry(l, ev[2 * e], ev[2 * e + 1]), -w[e], 0, 1e-14 * scale);
+    free(w);
+    free(y2);
+    free(ones);
+    free(y);
+    free(r);
+    cf_sparse_destroy(&l);
+}
+
+static void test_closed_and_open_meshes(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *m = NULL;
+    CHECK_OK(ctx, cf_generate_icosphere(ctx, 3, 1.5, &m));
+    if (m) check_basic_properties(ctx, m, cf_mesh_positions(m));
+    cf_mesh_destroy(&m);
+    CHECK_OK(ctx, cf_generate_torus(ctx, 2.0, 0.6, 30, 12, &m));
+    if (m) check_basic_properties(ctx, m, cf_mesh_positions(m));
+    cf_mesh_destroy(&m);
+    CHECK_OK(ctx, cf_generate_bumpy_plane(ctx, 16, 1.0, 0.2, 3u, &m));
+    if (m) check_basic_properties(ctx, m, cf_mesh_positions(m));
+    cf_mesh_destroy(&m);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+/* Linear precision: on a flat mesh the cotan Laplacian of a linear function
+ * vanishes at interior vertices (Pinkall & Polthier 1993), also on an
+ * irregular (jittered) grid. At boundary vertices it does not. */
+static void test_flat_grid_linear_precision(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *m = NULL;
+    CHECK_OK(ctx, cf_generate_grid(ctx, 12, 9, 2.0, 1.5, &m));
+    if (!m) return;
+    int32_t nv = cf_mesh_vertex_count(m);
+    const uint8_t *on_b = cf_mesh_vertex_on_boundary(m);
+    double *x = malloc(sizeof(double) * 3 * nv), *f = malloc(sizeof(double) * nv), *y = malloc(sizeof(double) * nv);
+    for (int32_t i = 0; i < 3 * nv; ++i) x[i] = cf_mesh_positions(m)[i];
+    for (int32_t v = 0; v < nv; ++v)
+        if (!on_b[v]) {
+            x[3 * v] += 0.04 * urand();
+            x[3 * v + 1] += 0.04 * urand();
+        }
+    cf_sparse *l = NULL;
+    CHECK_OK(ctx, cf_cotan_laplacian(ctx, m, x, &l));
+    for (int32_t v = 0; v < nv; ++v) f[v] = 0.3 + 1.7 * x[3 * v] - 2.9 * x[3 * v + 1];
+    cf_sparse_multiply(l, f, y);
+    int boundary_nonzero = 0;
+    for (int32_t v = 0; v < nv; ++v) {
+        if (!on_b[v]) CHECK_NEAR(y[v], 0.0, 0, 1e-12);
+        else boundary_nonzero += fabs(y[v]) > 1e-6;
+    }
+    CHECK(boundary_nonzero > 0);
+    cf_sparse_destroy(&l);
+    free(x);
+    free(f);
+    free(y);
+    cf_mesh_destroy(&m);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+/* Analytic weights: on a right isosceles grid cell the diagonal edge has
+ * weight cot(pi/2)... = 0 from both sides, axis edges 1/2 from each side. */
+static void test_grid_weights(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *m = NULL;
+    CHECK_OK(ctx, cf_generate_grid(ctx, 4, 4, 1.0, 1.0, &m));
+    if (!m) return;
+    int32_t ne = cf_mesh_edge_count(m);
+    const int32_t *ev = cf_mesh_edge_vertices(m);
+    const double *x = cf_mesh_positions(m);
+    const uint8_t *on_b = cf_mesh_vertex_on_boundary(m);
+    double *w = malloc(sizeof(double) * ne);
+    CHECK_OK(ctx, cf_cotan_weights(ctx, m, x, w));
+    for (int32_t e = 0; e < ne; ++e) {
+        const double *a = x + 3 * ev[2 * e], *b = x + 3 * ev[2 * e + 1];
+        int diagonal = a[0] != b[0] && a[1] != b[1];
+        int boundary_edge = on_b[ev[2 * e]] && on_b[ev[2 * e + 1]] && (a[0] == b[0] ? (a[0] == 0 || a[0] == 1)
+                                                                                       : (a[1] == 0 || a[1] == 1));
+        double expect = diagonal ? 0.0 : (boundary_edge ? 0.5 : 1.0);
+        CHECK_NEAR(w[e], expect, 0, 1e-14);
+    }
+    free(w);
+    cf_mesh_destroy(&m);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+/* The refill path reproduces a fresh assembly after the geometry changes,
+ * without allocating. */
+static void test_refill(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *m = NULL;
+    CHECK_OK(ctx, cf_generate_bumpy_sphere(ctx, 2, 0.2, 11u, &m));
+    if (!m) return;
+    int32_t nv = cf_mesh_vertex_count(m);
+    int64_t n = cfi_cotan_laplacian_triplet_count(m);
+    CHECK(n == 9 * (int64_t)cf_mesh_face_count(m));
+    int64_t *slots = malloc(sizeof(int64_t) * n);
+    cf_sparse *l = NULL, *fresh = NULL;
+    CHECK_OK(ctx, cfi_cotan_laplacian_pattern(ctx, m, cf_mesh_positions(m), &l, slots));
+    double *y = malloc(sizeof(double) * 3 * nv);
+    for (int32_t i = 0; i < 3 * nv; ++i) y[i] = cf_mesh_positions(m)[i] * (1.0 + 0.05 * urand());
+    int64_t allocs = cf_context_allocation_count(ctx);
+    CHECK_OK(ctx, cfi_cotan_laplacian_refill(l, m, y, slots));
+    CHECK(cf_context_allocation_count(ctx) == allocs);
+    CHECK_OK(ctx, cf_cotan_laplacian(ctx, m, y, &fresh));
+    CHECK(cf_sparse_nnz(l) == cf_sparse_nnz(fresh));
+    for (int64_t k = 0; k < cf_sparse_nnz(l); ++k) {
+        CHECK(l->rowind[k] == fresh->rowind[k]);
+        CHECK_NEAR(l->values[k], fresh->values[k], 0, 1e-13);
+    }
+    cf_sparse_destroy(&l);
+    cf_sparse_destroy(&fresh);
+    free(slots);
+    free(y);
+    cf_mesh_destroy(&m);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+static void test_failures(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *m = NULL;
+    CHECK_OK(ctx, cf_generate_icosphere(ctx, 1, 1.0, &m));
+    if (!m) return;
+    int32_t nv = cf_mesh_vertex_count(m);
+    cf_sparse *l = NULL;
+    CHECK_STATUS(cf_cotan_laplacian(ctx, m, NULL, &l), CF_ERR_INVALID_ARG);
+    CHECK_STATUS(cf_cotan_laplacian(ctx, NULL, cf_mesh_positions(m), &l), CF_ERR_INVALID_ARG);
+    /* collapse face 0 onto a point: zero area is reported with the face */
+    double *x = malloc(sizeof(double) * 3 * nv);
+    for (int32_t i = 0; i < 3 * nv; ++i) x[i] = cf_mesh_positions(m)[i];
+    const int32_t *t = cf_mesh_triangles(m);
+    for (int c = 0; c < 3; ++c) x[3 * t[1] + c] = x[3 * t[2] + c] = x[3 * t[0] + c];
+    CHECK_STATUS(cf_cotan_laplacian(ctx, m, x, &l), CF_ERR_DEGENERATE_FACE);
+    CHECK(l == NULL);
+    /* allocation failure at every allocation: clean NOMEM, no leak */
+    int64_t before = cf_context_allocation_count(ctx);
+    CHECK_OK(ctx, cf_cotan_laplacian(ctx, m, cf_mesh_positions(m), &l));
+    int64_t count = cf_context_allocation_count(ctx) - before;
+    cf_sparse_destroy(&l);
+    for (int64_t k = 1; k <= count; ++k) {
+        cf_context_fail_allocation(ctx, k, 0);
+        CHECK_STATUS(cf_cotan_laplacian(ctx, m, cf_mesh_positions(m), &l), CF_ERR_NOMEM);
+        CHECK(l == NULL);
+        cf_context_fail_allocation(ctx, 0, 0);
+    }
+    free(x);
+    cf_mesh_destroy(&m);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+int main(void)
+{
+    CFT_RUN(test_closed_and_open_meshes);
+    CFT_RUN(test_flat_grid_linear_precision);
+    CFT_RUN(test_grid_weights);
+    CFT_RUN(test_refill);
+    CFT_RUN(test_failures);
+    return cft_finish();
+}

@@ -19,6 +19,7 @@ int cli_generate(int argc, char **argv);
 int cli_flow(int argc, char **argv);
 int cli_compare(int argc, char **argv);
 int cli_demo(int argc, char **argv);
+int cli_render(int argc, char **argv);
 int cli_spin(int argc, char **argv);   /* cli/cmd_spin.c  (Crane 2013 SpinXForm) */
 int cli_curve(int argc, char **argv);  /* cli/cmd_curve.c (Crane 2013 isometric curve flow) */
 int cli_edit(int argc, char **argv);   /* cli/cmd_edit.c  (Zhao & Gortler editing) */

@@ -1,11 +1,146 @@
-/* curvflow spin — placeholder until the method lands. */
+/*
+ * curvflow spin IN --rho FILE|NAME -o OUT
+ * SpinXForm (Crane, Pinkall, Schroeder 2011/2013): spin transformation of a
+ * mesh from a prescribed change of mean curvature rho per vertex, read from
+ * a text file (one value per vertex, whitespace or newline separated, '#'
+ * comments) or from a PLY vertex property of that name.
+ */
 #include "cli.h"
+#include "common.h"
+#include "curvflow/io.h"
+#include "curvflow/spin_willmore.h"
 
-#include <stdio.h>
+#include <errno.h>
+#include <stdlib.h>
+#include <string.h>
+
+static void usage(FILE *out)
+{
+    fprintf(out,
+            "Usage: curvflow spin IN --rho FILE|NAME -o OUT [--scale S]\n"
+            "Spin transformation (Crane, Pinkall, Schroeder 2013, App. G): the output has mean\n"
+            "curvature H + rho (to first order) and is conformal to the input.\n"
+            "  --rho FILE|NAME  text file with one value per vertex (1/length), or the name of a\n"
+            "                   PLY vertex property of IN\n"
+            "  --scale S        multiply rho by S (default 1)\n"
+            "  -o OUT           output mesh (OBJ, OFF or PLY; texture coordinates are kept)\n");
+}
+
+/* Reads nv numbers from a text file; returns 0 or an exit code. */
+static int read_values(const char *path, int32_t nv, double *out)
+{
+    FILE *fp = fopen(path, "r");
+    if (!fp) {
+        fprintf(stderr, "curvflow: %s: cannot open (%s)\n", path, strerror(errno));
+        return CLI_EXIT_INPUT;
+    }
+    int32_t count = 0;
+    char line[4096];
+    int lineno = 0;
+    while (fgets(line, sizeof line, fp)) {
+        ++lineno;
+        char *s = line;
+        for (;;) {
+            while (*s == ' ' || *s == '\t' || *s == ',' || *s == '\r' || *s == '\n') ++s;
+            if (!*s || *s == '#') break;
+            char *end;
+            double v = strtod(s, &end);
+            if (end == s) {
+                fprintf(stderr, "curvflow: %s:%d: expected a number\n", path, lineno);
+                fclose(fp);
+                return CLI_EXIT_INPUT;
+            }
+            if (count >= nv) {
+                fprintf(stderr, "curvflow: %s: more than %d values (one per vertex expected)\n", path, nv);
+                fclose(fp);
+                return CLI_EXIT_INPUT;
+            }
+            out[count++] = v;
+            s = end;
+        }
+    }
+    fclose(fp);
+    if (count != nv) {
+        fprintf(stderr, "curvflow: %s: %d values, expected one per vertex (%d)\n", path, count, nv);
+        return CLI_EXIT_INPUT;
+    }
+    return CLI_EXIT_OK;
+}
 
 int cli_spin(int argc, char **argv)
 {
-    (void)argc; (void)argv;
-    fprintf(stderr, "curvflow spin: not implemented yet\n");
-    return CLI_EXIT_USAGE;
+    const char *in = NULL, *out = NULL, *rho_arg = NULL;
+    double scale = 1.0;
+    for (int i = 1; i < argc; ++i) {
+        const char *a = argv[i];
+        if (strcmp(a, "-h") == 0 || strcmp(a, "--help") == 0) {
+            usage(stdout);
+            return CLI_EXIT_OK;
+        } else if (strcmp(a, "--rho") == 0 && i + 1 < argc) {
+            rho_arg = argv[++i];
+        } else if ((strcmp(a, "-o") == 0 || strcmp(a, "--output") == 0) && i + 1 < argc) {
+            out = argv[++i];
+        } else if (strcmp(a, "--scale") == 0 && i + 1 < argc) {
+            if (!cli_parse_double("spin", "--scale", argv[++i], &scale)) return CLI_EXIT_USAGE;
+        } else if (a[0] == '-' && a[1] != '\0') {
+            return cli_usage_error("spin", "unknown or incomplete option '%s'", a);
+        } else if (!in) {
+            in = a;
+        } else {
+            return cli_usage_error("spin", "unexpected argument '%s'", a);
+        }
+    }
+    if (!in || !out || !rho_arg) return cli_usage_error("spin", "IN, --rho and -o are required");
+
+    cf_context *ctx = cli_context(false);
+    if (!ctx) return CLI_EXIT_NUMERICAL;
+    int code = CLI_EXIT_OK;
+    cf_mesh_data *data = NULL;
+    cf_mesh *mesh = NULL;
+    double *rho = NULL, *x = NULL;
+    cf_status st = cf_read_mesh_file(ctx, in, &data);
+    if (st != CF_OK) {
+        code = cli_fail(ctx, in, st);
+        goto done;
+    }
+    cf_mesh_desc desc;
+    cf_mesh_data_desc(data, &desc);
+    st = cf_mesh_create(ctx, &desc, &mesh);
+    if (st != CF_OK) {
+        code = cli_fail(ctx, in, st);
+        goto done;
+    }
+    int32_t nv = cf_mesh_vertex_count(mesh);
+    rho = malloc((size_t)nv * sizeof(double));
+    x = malloc(3 * (size_t)nv * sizeof(double));
+    if (!rho || !x) {
+        fprintf(stderr, "curvflow: out of memory\n");
+        code = CLI_EXIT_NUMERICAL;
+        goto done;
+    }
+    const cf_mesh_property *prop = cf_mesh_data_vertex_property(data, rho_arg);
+    if (prop) {
+        memcpy(rho, prop->values, (size_t)nv * sizeof(double));
+    } else {
+        code = read_values(rho_arg, nv, rho);
+        if (code != CLI_EXIT_OK) goto done;
+    }
+    for (int32_t i = 0; i < nv; ++i) rho[i] *= scale;
+    st = cf_spin_transform(ctx, mesh, NULL, rho, x);
+    if (st != CF_OK) {
+        code = cli_fail(ctx, "spin", st);
+        goto done;
+    }
+    cf_field field = {"rho", CF_FIELD_VERTEX, rho};
+    cf_mesh_format fmt;
+    int with_field = cf_mesh_format_from_path(ctx, out, &fmt) == CF_OK && fmt == CF_FORMAT_PLY;
+    st = cf_write_mesh_file(ctx, out, mesh, x, with_field ? &field : NULL, with_field ? 1 : 0);
+    if (st != CF_OK) code = cli_fail(ctx, out, st);
+done:
+    free(rho);
+    free(x);
+    cf_mesh_destroy(&mesh);
+    cf_mesh_data_destroy(&data);
+    cf_context_destroy(&ctx);
+    return code;
 }

@@ -198,7 +198,7 @@ int cli_progress_callback(void *user, const cf_flow_info *info)
         char bar[64];
         for (int i = 0; i < width; ++i) bar[i] = i < filled ? '#' : '.';
         bar[width] = '\0';
-        fprintf(stderr, "\r%s [%s] %lld/%lld  energy %.6g  area drift %+.2e  %.1f s ", p->method, bar,
+        fprintf(stderr, "\r%s [%s] %lld/%lld  energy %.6g  area drift %+.2e  %.1f s\x1b[K", p->method, bar,
                 (long long)info->iteration, (long long)p->total_steps, info->energy, info->area_drift,
                 cli_now() - p->start_seconds);
         p->bar_drawn = true;

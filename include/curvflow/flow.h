@@ -132,8 +132,9 @@ typedef struct cf_flow cf_flow;
 CF_API cf_status cf_flow_create(cf_context *ctx, const cf_mesh *mesh, const double *positions,
                                 const cf_flow_options *options, cf_flow **out);
 
-/* One step. On failure the state is the one before the step. info may be
- * NULL. */
+/* One step. On failure the state is the one before the step and the
+ * context message is prefixed "iteration N: ". The context's recorded error
+ * is cleared when the step starts. info may be NULL. */
 CF_API cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info);
 
 /* Up to `steps` steps, calling the progress callback after each. Stops

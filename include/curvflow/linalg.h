@@ -76,7 +76,7 @@ CF_API int64_t cf_sparse_find(const cf_sparse *a, int32_t i, int32_t j);
 /* ---- Cholesky (CHOLMOD, supernodal when it pays) ---------------------- */
 
 typedef enum cf_ordering {
-    CF_ORDERING_AUTO = 0,   /* METIS for large graphs, AMD otherwise */
+    CF_ORDERING_AUTO = 0,   /* AMD and METIS on the block graph; the one with less fill */
     CF_ORDERING_AMD = 1,
     CF_ORDERING_METIS = 2,
     CF_ORDERING_NATURAL = 3
@@ -177,13 +177,17 @@ CF_API void cf_lu_destroy(cf_lu **lu);
 
 /* Smallest eigenpairs of A v = lambda M v for symmetric positive semi-definite
  * A and diagonal positive M (m_diag; NULL means identity), by inverse power
- * iteration with M-orthogonalisation (subspace iteration for k > 1) on a
+ * iteration with M-orthogonalisation (subspace iteration on a block of
+ * k + max(2, k) columns, with a Rayleigh-Ritz step each iteration) on a
  * factorisation of A + shift M. `chol` may be a factorisation of that
  * matrix the caller keeps (then a and shift are only used for the Rayleigh
- * quotient); if NULL one is made and freed. vectors: n x k, column-major;
- * on entry a starting guess (or zeros for a deterministic default), on exit
- * M-orthonormal. Stops when the eigen-residual |A v - lambda M v|_M-1 is
- * below tol * |A v| or after max_iterations. */
+ * quotients); if NULL one is made and freed. vectors: n x k, column-major;
+ * on entry a starting guess (or all zeros for a deterministic default), on
+ * exit M-orthonormal, eigenvalues ascending (Rayleigh quotients). Stops
+ * when every eigen-residual |A v - lambda M v|_{M^-1} is below tolerance
+ * times a Gershgorin bound of the spectrum of M^-1 A (a scale that stays
+ * meaningful for eigenvalue 0), or after max_iterations
+ * (CF_ERR_NOT_CONVERGED, outputs hold the last iterate). */
 typedef struct cf_eigen_options {
     int32_t max_iterations;  /* default 50 */
     double tolerance;        /* default 1e-10 */
@@ -193,6 +197,17 @@ CF_API void cf_eigen_options_default(cf_eigen_options *options);
 CF_API cf_status cf_smallest_eigenvectors(cf_context *ctx, const cf_sparse *a, const double *m_diag,
                                           cf_cholesky *chol, int32_t k, const cf_eigen_options *options,
                                           double *vectors, double *eigenvalues, int32_t *iterations);
+
+/* One step of inverse (subspace) iteration with a factorisation the caller
+ * keeps (of A + s M): vectors <- M-orthonormalised chol^-1 (M vectors).
+ * vectors: n x k column-major, in/out; work: caller-allocated n x k doubles
+ * (no allocation here, so it suits step loops); rank (may be NULL)
+ * receives the number of independent columns kept. m_diag NULL: identity. */
+CF_API cf_status cf_inverse_iteration_step(cf_cholesky *chol, const double *m_diag, int32_t k, double *vectors,
+                                           double *work, int32_t *rank);
+
+/* Rayleigh quotient v^T A v / v^T M v; work: n doubles. */
+CF_API double cf_rayleigh_quotient(const cf_sparse *a, const double *m_diag, const double *v, double *work);
 
 /* Orthonormalises the k columns of basis (n x k, column-major) in place
  * under <u, v> = sum_i w_i u_i v_i (w NULL: identity), by modified

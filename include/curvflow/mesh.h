@@ -86,16 +86,19 @@ CF_API const int32_t *cf_mesh_edge_faces(const cf_mesh *mesh);      /* 2 ne: fac
 CF_API const uint8_t *cf_mesh_vertex_on_boundary(const cf_mesh *mesh); /* nv flags */
 CF_API const int32_t *cf_mesh_vertex_component(const cf_mesh *mesh);   /* nv */
 /* Boundary loops: loop b has vertices loop_vertices[offsets[b] .. offsets[b+1]),
- * in the direction of the boundary halfedges (interior on the left). */
+ * in the direction of the boundary halfedges (interior on the left), starting
+ * at the loop's lowest vertex; loops ordered by that vertex. loop_vertices is
+ * NULL for a closed mesh. Edges are in lexicographic (i, j) order. */
 CF_API const int32_t *cf_mesh_boundary_loop_offsets(const cf_mesh *mesh);  /* loops + 1 */
 CF_API const int32_t *cf_mesh_boundary_loop_vertices(const cf_mesh *mesh);
 /* Vertex rings as compressed rows: neighbours of v are
- * vertex_neighbors[offsets[v] .. offsets[v+1]), with the joining edges at the
- * same positions in vertex_edges. */
+ * vertex_neighbors[offsets[v] .. offsets[v+1]), in increasing order, with the
+ * joining edges at the same positions in vertex_edges. */
 CF_API const int32_t *cf_mesh_vertex_ring_offsets(const cf_mesh *mesh);    /* nv + 1 */
 CF_API const int32_t *cf_mesh_vertex_neighbors(const cf_mesh *mesh);
 CF_API const int32_t *cf_mesh_vertex_edges(const cf_mesh *mesh);
-/* Faces around v: vertex_faces[face_offsets[v] .. face_offsets[v+1]). */
+/* Faces around v: vertex_faces[face_offsets[v] .. face_offsets[v+1]), in
+ * increasing order. */
 CF_API const int32_t *cf_mesh_vertex_face_offsets(const cf_mesh *mesh);    /* nv + 1 */
 CF_API const int32_t *cf_mesh_vertex_faces(const cf_mesh *mesh);
 

@@ -126,6 +126,15 @@ CF_API cf_status cf_point_to_surface_distance(cf_context *ctx, int32_t n, const 
                                               const cf_mesh *mesh, const double *positions, double *dist,
                                               double *max_dist, double *rms_dist, int32_t *argmax);
 
+/* Convenience for shape reconstruction on one connectivity: aligns `a` to
+ * `b` by cf_similarity_align (vertex correspondence, uniform weights;
+ * with_scale = 0 for rigid only), then measures the distance from each
+ * aligned vertex of `a` to the surface of `b`. max_dist / rms_dist
+ * (optional) are in the units of `b`; scale (optional) receives the scale
+ * applied to `a`. */
+CF_API cf_status cf_aligned_surface_distance(cf_context *ctx, const cf_mesh *mesh, const double *a, const double *b,
+                                             int with_scale, double *max_dist, double *rms_dist, double *scale);
+
 #ifdef __cplusplus
 }
 #endif

@@ -120,8 +120,11 @@ CF_API cf_status cf_divergence(cf_context *ctx, const cf_mesh *mesh, const doubl
 
 /* Basis of harmonic 1-forms (Crane 2013, App. C.1): 2g columns of ne values
  * each, column-major, orthonormal under the *1 inner product.
- * *dimension receives 2g; `basis` must hold ne * 2g doubles (pass NULL to
- * query the dimension only). Deterministic (seeded). */
+ * *dimension receives 2g (g summed over components); `basis` must hold
+ * ne * 2g doubles (pass NULL to query the dimension only). Deterministic
+ * (seeded). Closed meshes only: a mesh with boundary gives
+ * CF_ERR_UNSUPPORTED. Other statuses: CF_ERR_INVALID_ARG, CF_ERR_NONFINITE,
+ * CF_ERR_DEGENERATE_FACE, CF_ERR_NOMEM, solver errors. */
 CF_API cf_status cf_harmonic_basis(cf_context *ctx, const cf_mesh *mesh, const double *positions, int32_t *dimension,
                                    double *basis);
 

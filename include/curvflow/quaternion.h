@@ -29,8 +29,9 @@ CF_API cf_quat cf_quat_inverse(cf_quat a);                 /* conj / |a|^2; zero
 CF_API cf_quat cf_quat_normalize(cf_quat a);
 /* Unit quaternion rotating by `angle` radians about the unit axis. */
 CF_API cf_quat cf_quat_from_axis_angle(const double axis[3], double angle);
-/* conj(q) v q for an imaginary v (a rotation by q^-1 scaled by |q|^2 ...
- * exactly the map used by spin transformations, Crane et al. 2011). */
+/* conj(q) v q for an imaginary v: the map of spin transformations (Crane
+ * et al. 2011), i.e. the inverse of the rotation q v conj(q), scaled by
+ * |q|^2. */
 CF_API void cf_quat_conj_sandwich(cf_quat q, const double v[3], double out[3]);
 
 /* Real 4 x 4 matrix of left multiplication p -> q p (row-major, 16

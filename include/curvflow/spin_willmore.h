@@ -12,7 +12,7 @@
  *    rhodot = -2 H projected onto the constraints (Crane 2013, Sec. 4/6.1:
  *    mu~ = (1 - 2 tau) mu). The flow is stable for 0 < tau < 1 and
  *    tau = 1/2 removes the (projected) curvature deviation to first order in
- *    one step. The default is 0.45 (docs/spin.md says why).
+ *    one step. The default is 0.5 (docs/spin.md says why).
  *
  * Use through the common flow interface (curvflow/flow.h) with kind
  * CF_FLOW_SPIN_WILLMORE; the options struct below is the method part of
@@ -41,7 +41,7 @@ typedef enum cf_spin_boundary_mode {
 } cf_spin_boundary_mode;
 
 typedef struct cf_spin_willmore_options {
-    double time_step;          /* tau, rho = -2 tau H (projected); stable for tau < 1. Default 0.45 */
+    double time_step;          /* tau, rho = -2 tau H (projected); stable for tau < 1. Default 0.5 */
     int32_t total_curvature;   /* constraint <rhodot, 1> = 0 (App. B). Default 1 */
     int32_t inversion;         /* constraints <rhodot, N^x,y,z> = 0 (App. D). Default 1 */
     int32_t exactness;         /* constraints <rhodot, Z_i^x,y,z> = 0 for genus > 0 (App. C). Default 1 */

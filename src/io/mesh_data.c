@@ -256,7 +256,8 @@ bool cfi_parse_int(const char *s, const char *e, int64_t *v)
     int64_t x = 0;
     for (; s < e; ++s) {
         if (*s < '0' || *s > '9') return false;
-        if (x < ((int64_t)1 << 62)) x = x * 10 + (*s - '0');
+        /* saturate at 2^62 without ever overflowing */
+        x = x <= ((int64_t)1 << 58) ? x * 10 + (*s - '0') : ((int64_t)1 << 62);
     }
     *v = neg ? -x : x;
     return true;

@@ -117,10 +117,11 @@ static cf_status read_body(off_reader *r, cfi_mesh_builder *b)
     if (nv > CFI_MAX_ELEMENTS || nf > CFI_MAX_ELEMENTS)
         return fail(r, CF_ERR_PARSE, "counts %lld vertices, %lld faces are too large", (long long)nv, (long long)nf);
     /* Each vertex line takes at least 6 bytes ("0 0 0\n"), each face line 8
-     * ("3 0 1 2\n"): reject a header promising more than the file can hold
-     * before allocating anything for it. */
+     * ("3 0 1 2\n"): reject a header promising far more than the file can
+     * hold before allocating anything for it (half the minimum, so that a
+     * file cut a little short still gets the precise message below). */
     size_t remaining = (size_t)(r->buf_end - r->p);
-    if ((uint64_t)nv * 6 + (uint64_t)nf * 8 > (uint64_t)remaining + 2)
+    if ((uint64_t)nv * 3 + (uint64_t)nf * 4 > (uint64_t)remaining + 1)
         return fail(r, CF_ERR_TRUNCATED, "header declares %lld vertices and %lld faces but only %zu bytes follow",
                     (long long)nv, (long long)nf, remaining);
     if (cfi_buf_reserve(ctx, &b->positions, (size_t)nv * 3) != CF_OK) return CF_ERR_NOMEM;

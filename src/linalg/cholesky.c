@@ -35,6 +35,8 @@ void cf_cholesky_options_default(cf_cholesky_options *options)
 
 int32_t cf_cholesky_size(const cf_cholesky *chol) { return chol ? chol->n : 0; }
 
+cf_context *cfi_cholesky_context(const cf_cholesky *chol) { return chol ? chol->ctx : NULL; }
+
 void cf_cholesky_timings(const cf_cholesky *chol, cf_solver_timings *timings)
 {
     if (!timings) return;
@@ -95,8 +97,8 @@ static cf_status block_pattern(cf_context *ctx, const cf_sparse *a, int32_t b, c
 
 /* Fill-reducing permutation of the block graph, expanded to a: perm[b K + d]
  * = b perm_blocks[K] + d. The block ordering comes from CHOLMOD's symbolic
- * analysis of the (small) block pattern, so AUTO applies CHOLMOD's own rule
- * (AMD, then METIS when AMD's fill is high, keeping the better). */
+ * analysis of the (small) block pattern; AUTO tries AMD and METIS there and
+ * keeps the one CHOLMOD rates best (least fill / flops). */
 static cf_status block_ordering(cf_cholesky *chol, const cf_sparse *a, int32_t b, cf_ordering ordering, int32_t *perm)
 {
     cf_context *ctx = chol->ctx;
@@ -110,7 +112,11 @@ static cf_status block_ordering(cf_cholesky *chol, const cf_sparse *a, int32_t b
     view.x = NULL;
     cfi_cholmod_reset_parameters(c);
     c->supernodal = CHOLMOD_SIMPLICIAL; /* symbolic only: we just want its permutation */
-    if (ordering != CF_ORDERING_AUTO) {
+    if (ordering == CF_ORDERING_AUTO) {
+        c->nmethods = 2;
+        c->method[0].ordering = CHOLMOD_AMD;
+        c->method[1].ordering = CHOLMOD_METIS;
+    } else {
         c->nmethods = 1;
         c->method[0].ordering = ordering == CF_ORDERING_AMD ? CHOLMOD_AMD
                               : ordering == CF_ORDERING_METIS ? CHOLMOD_METIS : CHOLMOD_NATURAL;

@@ -15,8 +15,9 @@
 #include <string.h>
 
 typedef struct linalg_state {
-    cholmod_common common;
+    cholmod_common common; /* first member: cfi_cholmod_reset_parameters casts back */
     int started;
+    struct cholmod_method_struct default_methods[CHOLMOD_MAXMETHODS + 1];
 } linalg_state;
 
 /* CHOLMOD's error handler receives no user pointer, so the text of the last
@@ -73,6 +74,8 @@ void cf_linalg_set_thread_fix(int enabled) { thread_fix_enabled = enabled != 0; 
 
 void cfi_cholmod_reset_parameters(cholmod_common *c)
 {
+    const linalg_state *s = (const linalg_state *)(const void *)c;
+    memcpy(c->method, s->default_methods, sizeof c->method);
     c->nmethods = 0;          /* CHOLMOD's own rule: AMD, METIS if AMD fills badly */
     c->postorder = 1;
     c->supernodal = CHOLMOD_AUTO;
@@ -108,6 +111,7 @@ cf_status cfi_cholmod_common(cf_context *ctx, cholmod_common **out)
         s->common.print = 0;
         s->common.error_handler = record_cholmod_error;
         if (s->common.status != CHOLMOD_OK) return cfi_error(ctx, CF_ERR_NOMEM, "cholmod_start failed");
+        memcpy(s->default_methods, s->common.method, sizeof s->default_methods);
         cfi_cholmod_reset_parameters(&s->common);
         s->started = 1;
     }

@@ -35,6 +35,9 @@ void cfi_cholmod_clear_message(void);
  * 1 use the upper triangle. */
 void cfi_cholmod_view(const cf_sparse *a, int stype, cholmod_sparse *view);
 
+/* The context a factorisation was created with. */
+cf_context *cfi_cholesky_context(const cf_cholesky *chol);
+
 /* Index of the first non-finite entry of x[0..n), or -1. */
 int64_t cfi_first_nonfinite(const double *x, int64_t n);
 

@@ -4,10 +4,11 @@
  * vertex-face incidence, boundary loops, components, Euler characteristic,
  * genus).
  *
- * Everything is O(V + F): halfedges are grouped by their undirected vertex
- * pair with two stable counting sorts (by larger, then by smaller vertex),
- * so edges come out in lexicographic (i, j) order and no per-edge
- * allocation is needed. The same pass serves cf_mesh_create (stop at the
+ * Everything is O(V + F) for bounded valence: halfedges are grouped by
+ * their undirected vertex pair with a counting sort by the smaller vertex
+ * and an insertion sort by the larger one inside each (small) bucket, so
+ * edges come out in lexicographic (i, j) order and no per-edge allocation
+ * is needed. The same pass serves cf_mesh_create (stop at the
  * first defect) and cf_mesh_validate (count all defects).
  */
 #include "mesh/mesh_internal.h"
@@ -56,6 +57,7 @@ typedef struct scratch {
     int32_t *tmp;         /* 3 nf */
     int32_t *count;       /* nv + 1 */
     int32_t *uf;          /* 3 nf: union-find over corners */
+    int32_t *gnext;       /* 3 nf: end of the key group starting at a position */
 } scratch;
 
 static void scratch_free(cf_context *ctx, scratch *s)
@@ -66,6 +68,7 @@ static void scratch_free(cf_context *ctx, scratch *s)
     CFI_FREE(ctx, s->tmp, nh);
     CFI_FREE(ctx, s->count, (size_t)s->nv + 1);
     CFI_FREE(ctx, s->uf, nh);
+    CFI_FREE(ctx, s->gnext, nh);
 }
 
 static cf_status scratch_alloc(cf_context *ctx, scratch *s, int32_t nv, int32_t nf)
@@ -79,7 +82,8 @@ static cf_status scratch_alloc(cf_context *ctx, scratch *s, int32_t nv, int32_t 
     s->tmp = CFI_ALLOC(ctx, int32_t, nh);
     s->count = CFI_ALLOC(ctx, int32_t, (size_t)nv + 1);
     s->uf = CFI_ALLOC(ctx, int32_t, nh);
-    if (!s->face_ok || !s->order || !s->tmp || !s->count || !s->uf) {
+    s->gnext = CFI_ALLOC(ctx, int32_t, nh);
+    if (!s->face_ok || !s->order || !s->tmp || !s->count || !s->uf || !s->gnext) {
         scratch_free(ctx, s);
         return CF_ERR_NOMEM;
     }
@@ -97,42 +101,94 @@ static inline int32_t he_hi(const int32_t *tri, int32_t h)
     return a < b ? b : a;
 }
 
-/* Stable counting sort of src[0..n) by key(h) into dst. */
-static void counting_sort(const int32_t *tri, int32_t nv, const int32_t *src, int32_t n, int32_t *dst,
-                          int32_t *count, bool by_lo)
+static inline bool pair_less(const int32_t *key, const int32_t *val, int32_t a, int32_t b)
 {
-    memset(count, 0, ((size_t)nv + 1) * sizeof *count);
-    for (int32_t i = 0; i < n; ++i) {
-        int32_t k = by_lo ? he_lo(tri, src[i]) : he_hi(tri, src[i]);
-        ++count[k + 1];
-    }
-    for (int32_t v = 0; v < nv; ++v) count[v + 1] += count[v];
-    for (int32_t i = 0; i < n; ++i) {
-        int32_t k = by_lo ? he_lo(tri, src[i]) : he_hi(tri, src[i]);
-        dst[count[k]++] = src[i];
+    return key[a] < key[b] || (key[a] == key[b] && val[a] < val[b]);
+}
+
+static void sift_down(int32_t *key, int32_t *val, int32_t root, int32_t n)
+{
+    for (;;) {
+        int32_t child = 2 * root + 1;
+        if (child >= n) return;
+        if (child + 1 < n && pair_less(key, val, child, child + 1)) ++child;
+        if (!pair_less(key, val, root, child)) return;
+        int32_t tk = key[root], tv = val[root];
+        key[root] = key[child], val[root] = val[child];
+        key[child] = tk, val[child] = tv;
+        root = child;
     }
 }
 
+/* Heap sort of n (key, val) pairs by key then val: O(n log n) for the rare
+ * vertex with a very large valence, where insertion sort would be O(n^2). */
+static void heap_sort_pairs(int32_t *key, int32_t *val, int32_t n)
+{
+    for (int32_t i = n / 2 - 1; i >= 0; --i) sift_down(key, val, i, n);
+    for (int32_t end = n - 1; end > 0; --end) {
+        int32_t tk = key[0], tv = val[0];
+        key[0] = key[end], val[0] = val[end];
+        key[end] = tk, val[end] = tv;
+        sift_down(key, val, 0, end);
+    }
+}
+
+/* Sorts the halfedges of the faces taking part by (smaller vertex, larger
+ * vertex, halfedge index): one counting sort by the smaller vertex (reads
+ * tri sequentially), then an insertion sort by the larger vertex inside each
+ * bucket (buckets hold ~3 halfedges on average). Then records, for each
+ * group of equal keys starting at position i, its end in gnext[i]. */
 static void sort_halfedges(const int32_t *tri, scratch *s)
 {
+    const int32_t nv = s->nv;
+    int32_t *count = s->count, *hi = s->tmp;
+    memset(count, 0, ((size_t)nv + 1) * sizeof *count);
     int32_t n = 0;
     for (int32_t f = 0; f < s->nf; ++f)
         if (s->face_ok[f])
-            for (int32_t k = 0; k < 3; ++k) s->tmp[n++] = 3 * f + k;
+            for (int32_t k = 0; k < 3; ++k) {
+                ++count[he_lo(tri, 3 * f + k) + 1];
+                ++n;
+            }
     s->nh_ok = n;
-    /* LSD radix: by the larger vertex, then stably by the smaller one. */
-    counting_sort(tri, s->nv, s->tmp, n, s->order, s->count, false);
-    counting_sort(tri, s->nv, s->order, n, s->tmp, s->count, true);
-    memcpy(s->order, s->tmp, (size_t)n * sizeof *s->order);
+    for (int32_t v = 0; v < nv; ++v) count[v + 1] += count[v];
+    for (int32_t f = 0; f < s->nf; ++f)
+        if (s->face_ok[f])
+            for (int32_t k = 0; k < 3; ++k) {
+                int32_t h = 3 * f + k, pos = count[he_lo(tri, h)]++;
+                s->order[pos] = h;
+                hi[pos] = he_hi(tri, h);
+            }
+    /* count[v] is now the end of bucket v (= start of bucket v + 1) */
+    int32_t start = 0;
+    for (int32_t v = 0; v < nv; ++v) {
+        const int32_t end = count[v];
+        if (end - start > 32) heap_sort_pairs(hi + start, s->order + start, end - start); /* high valence */
+        for (int32_t i = start + 1; i < end; ++i) { /* stable insertion sort by hi */
+            int32_t h = s->order[i], key = hi[i], j = i - 1;
+            while (j >= start && hi[j] > key) {
+                s->order[j + 1] = s->order[j];
+                hi[j + 1] = hi[j];
+                --j;
+            }
+            s->order[j + 1] = h;
+            hi[j + 1] = key;
+        }
+        for (int32_t i = start; i < end;) {
+            int32_t j = i + 1;
+            while (j < end && hi[j] == hi[i]) ++j;
+            s->gnext[i] = j;
+            i = j;
+        }
+        start = end;
+    }
 }
 
 /* End of the group of equal keys starting at position i of order. */
-static int32_t group_end(const int32_t *tri, const scratch *s, int32_t i)
+static inline int32_t group_end(const int32_t *tri, const scratch *s, int32_t i)
 {
-    int32_t lo = he_lo(tri, s->order[i]), hi = he_hi(tri, s->order[i]);
-    int32_t j = i + 1;
-    while (j < s->nh_ok && he_lo(tri, s->order[j]) == lo && he_hi(tri, s->order[j]) == hi) ++j;
-    return j;
+    (void)tri;
+    return s->gnext[i];
 }
 
 static int32_t uf_find(int32_t *uf, int32_t x)

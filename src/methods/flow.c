@@ -358,9 +358,11 @@ cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info)
     memcpy(flow->saved_positions, flow->positions, 3 * (size_t)nv * sizeof(double));
     cf_flow_info step = {0};
     step.iteration = iteration;
+    /* so that a failing method that records no message is noticed */
+    cf_context_clear_error(ctx);
     cf_status st = flow->method->step(flow, &step);
     if (st != CF_OK) {
-        if (ctx->last_status != st) cfi_error(ctx, st, "%s step failed (%s)", flow->method->name, cf_status_name(st));
+        if (ctx->last_status == CF_OK) cfi_error(ctx, st, "%s step failed (%s)", flow->method->name, cf_status_name(st));
         return fail_step(flow, st, iteration);
     }
     int32_t bad = first_nonfinite_vertex(flow->positions, nv);

@@ -1,9 +1,10 @@
 /*
  * Positive semi-definite cotan Laplacian (Pinkall & Polthier 1993; Desbrun
  * et al. 1999): (L f)_i = sum_j w_ij (f_i - f_j), w_ij = (cot a_ij + cot b_ij)/2,
- * one cotangent on boundary edges. Assembled in one pass from 9 triplets per
- * face (duplicates summed by cf_sparse_from_triplets), plus the per-edge
- * weights (the DEC Hodge star *1) and a matrix-free application.
+ * one cotangent on boundary edges. Assembled in one pass from nv + 2 ne
+ * triplets (per-vertex diagonal, per-edge off-diagonals), with a refill path
+ * into the fixed pattern, the per-edge weights (the DEC Hodge star *1) and a
+ * matrix-free application.
  */
 #include "ops/cotan_laplacian.h"
 
@@ -12,32 +13,18 @@
 
 int64_t cfi_cotan_laplacian_triplet_count(const cf_mesh *mesh)
 {
-    return mesh ? (int64_t)CFI_COTAN_TRIPLETS_PER_FACE * mesh->nf : 0;
+    return mesh ? (int64_t)mesh->nv + 2 * (int64_t)mesh->ne : 0;
 }
 
-/* Values of the 9 triplets of face f, in the layout of the header. */
-static cf_status face_values(cf_context *ctx, const cf_mesh *mesh, const double *positions, int32_t f, double *v)
-{
-    double cot[3];
-    cf_status s = cfi_face_cotangents(ctx, mesh, positions, f, cot, NULL);
-    if (s != CF_OK) return s;
-    for (int k = 0; k < 3; ++k) {
-        /* halfedge k runs t[k] -> t[k+1] and is opposite corner k+2 */
-        double w = 0.5 * cot[(k + 2) % 3];
-        /* the two halfedges of f touching corner k are k and k+2 */
-        v[k] = 0.5 * (cot[(k + 2) % 3] + cot[(k + 1) % 3]);
-        v[3 + 2 * k] = -w;
-        v[4 + 2 * k] = -w;
-    }
-    return CF_OK;
-}
-
+/* Per-edge assembly (nv + 2 ne triplets, 2.6x fewer than 9 per face): the
+ * weights are accumulated per edge, the diagonal per vertex. */
 cf_status cfi_cotan_laplacian_pattern(cf_context *ctx, const cf_mesh *mesh, const double *positions,
                                       cf_sparse **out, int64_t *slot_map)
 {
     cf_status s = cfi_ops_check(ctx, mesh, positions, out, "cotan_laplacian");
     if (s != CF_OK) return s;
     *out = NULL;
+    int32_t nv = mesh->nv, ne = mesh->ne;
     int64_t n = cfi_cotan_laplacian_triplet_count(mesh);
     int32_t *rows = CFI_ALLOC(ctx, int32_t, n);
     int32_t *cols = CFI_ALLOC(ctx, int32_t, n);
@@ -46,22 +33,31 @@ cf_status cfi_cotan_laplacian_pattern(cf_context *ctx, const cf_mesh *mesh, cons
         s = CF_ERR_NOMEM;
         goto done;
     }
-    for (int32_t f = 0; f < mesh->nf; ++f) {
-        const int32_t *t = mesh->triangles + 3 * f;
-        int64_t b = (int64_t)CFI_COTAN_TRIPLETS_PER_FACE * f;
-        s = face_values(ctx, mesh, positions, f, vals + b);
-        if (s != CF_OK) goto done;
-        for (int k = 0; k < 3; ++k) {
-            int32_t i = t[k], j = t[(k + 1) % 3];
-            rows[b + k] = i;
-            cols[b + k] = i;
-            rows[b + 3 + 2 * k] = i;
-            cols[b + 3 + 2 * k] = j;
-            rows[b + 4 + 2 * k] = j;
-            cols[b + 4 + 2 * k] = i;
-        }
+    /* weights into vals[nv + 2e] first (cf_cotan_weights checks again) */
+    for (int32_t v = 0; v < nv; ++v) {
+        rows[v] = cols[v] = v;
+        vals[v] = 0.0;
     }
-    s = cf_sparse_from_triplets(ctx, mesh->nv, mesh->nv, n, rows, cols, vals, 1, out, slot_map);
+    for (int32_t e = 0; e < ne; ++e) vals[nv + 2 * (int64_t)e] = 0.0;
+    for (int32_t f = 0; f < mesh->nf; ++f) {
+        double cot[3];
+        s = cfi_face_cotangents(ctx, mesh, positions, f, cot, NULL);
+        if (s != CF_OK) goto done;
+        for (int k = 0; k < 3; ++k) vals[nv + 2 * (int64_t)mesh->halfedge_edge[3 * f + k]] += 0.5 * cot[(k + 2) % 3];
+    }
+    for (int32_t e = 0; e < ne; ++e) {
+        int64_t b = nv + 2 * (int64_t)e;
+        int32_t i = mesh->edge_vertices[2 * e], j = mesh->edge_vertices[2 * e + 1];
+        double w = vals[b];
+        vals[i] += w;
+        vals[j] += w;
+        rows[b] = i;
+        cols[b] = j;
+        rows[b + 1] = j;
+        cols[b + 1] = i;
+        vals[b] = vals[b + 1] = -w;
+    }
+    s = cf_sparse_from_triplets(ctx, nv, nv, n, rows, cols, vals, 1, out, slot_map);
 done:
     CFI_FREE(ctx, rows, n);
     CFI_FREE(ctx, cols, n);
@@ -76,12 +72,21 @@ cf_status cfi_cotan_laplacian_refill(cf_sparse *l, const cf_mesh *mesh, const do
     cf_context *ctx = l->ctx;
     int64_t nnz = cf_sparse_nnz(l);
     for (int64_t k = 0; k < nnz; ++k) l->values[k] = 0.0;
+    const int64_t *edge_slot = slot_map + mesh->nv;
     for (int32_t f = 0; f < mesh->nf; ++f) {
-        double v[CFI_COTAN_TRIPLETS_PER_FACE];
-        cf_status s = face_values(ctx, mesh, positions, f, v);
+        double cot[3];
+        cf_status s = cfi_face_cotangents(ctx, mesh, positions, f, cot, NULL);
         if (s != CF_OK) return s;
-        const int64_t *slot = slot_map + (int64_t)CFI_COTAN_TRIPLETS_PER_FACE * f;
-        for (int k = 0; k < CFI_COTAN_TRIPLETS_PER_FACE; ++k) l->values[slot[k]] += v[k];
+        const int32_t *t = mesh->triangles + 3 * f;
+        for (int k = 0; k < 3; ++k) {
+            /* halfedge k runs t[k] -> t[k+1] and is opposite corner k+2 */
+            double w = 0.5 * cot[(k + 2) % 3];
+            int64_t e = mesh->halfedge_edge[3 * f + k];
+            l->values[edge_slot[2 * e]] -= w;
+            l->values[edge_slot[2 * e + 1]] -= w;
+            l->values[slot_map[t[k]]] += w;
+            l->values[slot_map[t[(k + 1) % 3]]] += w;
+        }
     }
     return CF_OK;
 }

@@ -11,11 +11,8 @@
 #include "curvflow/linalg.h"
 #include "mesh/mesh_internal.h"
 
-/* Triplets per face: 3 diagonal entries then (i, j), (j, i) for each of the
- * three halfedges. */
-#define CFI_COTAN_TRIPLETS_PER_FACE 9
-
-/* Number of slot_map entries (9 nf). */
+/* Number of slot_map entries: nv + 2 ne (layout: the diagonal entry of
+ * vertex v at v, then (i, j) and (j, i) of edge e at nv + 2e, nv + 2e + 1). */
 int64_t cfi_cotan_laplacian_triplet_count(const cf_mesh *mesh);
 
 /* Builds L for `positions` (nv x nv, symmetric) and fills the caller's

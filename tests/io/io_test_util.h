@@ -10,6 +10,7 @@
 #include "test.h"
 
 #include <dirent.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -113,7 +114,7 @@ static inline void iot_log_fn(void *user, cf_log_level level, const char *line)
 /* Number of leftover temporary files of `path` (".<base>.tmp-*" next to it). */
 static inline int iot_temp_files(const char *path)
 {
-    char dir[4096], prefix[512];
+    char dir[4200], prefix[4200];
     const char *slash = strrchr(path, '/');
     snprintf(dir, sizeof dir, "%.*s", slash ? (int)(slash - path) : 1, slash ? path : ".");
     snprintf(prefix, sizeof prefix, ".%s.tmp", slash ? slash + 1 : path);
@@ -127,12 +128,14 @@ static inline int iot_temp_files(const char *path)
     return n;
 }
 
+static inline bool iot_has(const char *msg, const char *part) { return !part || strstr(msg, part) != NULL; }
+
 /* Reads `text` as `fmt` from memory and checks status and a message part. */
 #define IOT_EXPECT(ctx, fmt, text, status, part) \
     do { \
         cf_mesh_data *iot_d_ = NULL; \
         CHECK_STATUS(cf_read_mesh_memory((ctx), (text), strlen(text), (fmt), "t", &iot_d_), (status)); \
-        if ((part) && !strstr(cf_context_message(ctx), (part))) \
+        if (!iot_has(cf_context_message(ctx), (part))) \
             cft_fail(__FILE__, __LINE__, "message '%s' lacks '%s'", cf_context_message(ctx), (part)); \
         if ((status) != CF_OK) CHECK(iot_d_ == NULL); \
         cf_mesh_data_destroy(&iot_d_); \

@@ -6,6 +6,7 @@
 #include "mesh/mesh_internal.h"
 #include "test.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -173,6 +174,42 @@ static void test_generated_fixtures(void)
     cf_context_destroy(&ctx);
 }
 
+/* Bipyramid over a 300-gon: both apexes have valence 300, which takes the
+ * O(k log k) sorting path for large buckets (and faces are listed in a
+ * scrambled order). */
+static void test_high_valence(void)
+{
+    enum { N = 300 };
+    static double pos[3 * (N + 2)];
+    static int32_t tri[3 * 2 * N];
+    pos[2] = 1.0, pos[5] = -1.0;
+    for (int i = 0; i < N; ++i) {
+        pos[3 * (i + 2)] = cos(2.0 * 3.14159265358979323846 * i / N);
+        pos[3 * (i + 2) + 1] = sin(2.0 * 3.14159265358979323846 * i / N);
+    }
+    for (int i = 0; i < N; ++i) {
+        int f = (7 * i) % N, a = 2 + i, b = 2 + (i + 1) % N; /* 7 is coprime to 300 */
+        int32_t *t = tri + 6 * f;
+        t[0] = 0, t[1] = a, t[2] = b; /* top, outward */
+        t[3] = 1, t[4] = b, t[5] = a; /* bottom */
+    }
+    cf_context *ctx = cft_context();
+    cf_mesh_desc d = {N + 2, pos, 2 * N, tri, 0, NULL, NULL};
+    cf_mesh *m = NULL;
+    CHECK_OK(ctx, cf_mesh_create(ctx, &d, &m));
+    CHECK(cf_mesh_edge_count(m) == 3 * N);
+    CHECK(cf_mesh_genus(m) == 0 && cf_mesh_euler_characteristic(m) == 2);
+    CHECK(cf_mesh_vertex_ring_offsets(m)[1] == N);
+    check_connectivity(m);
+    cf_mesh_destroy(&m);
+    /* the same with one face flipped is caught */
+    int32_t t0 = tri[1];
+    tri[1] = tri[2], tri[2] = t0;
+    CHECK_STATUS(cf_mesh_create(ctx, &d, &m), CF_ERR_ORIENTATION);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 /* A relabelled copy of a mesh (vertices and faces permuted, corners
  * rotated) has the same counts and valid tables. */
 static void test_relabelling(void)
@@ -217,6 +254,73 @@ static void test_relabelling(void)
     cf_mesh_destroy(&a);
     cf_mesh_destroy(&b);
     free(vp), free(fp), free(pos), free(tri);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+/* Random damage to a valid mesh (flipped faces, deleted faces, merged
+ * vertices, duplicated faces, moved vertices): cf_mesh_create must fail
+ * exactly when cf_mesh_validate reports a defect, with the same status and
+ * message, and every mesh it accepts must have consistent tables. */
+static void test_random_damage(void)
+{
+    cf_context *ctx = NULL; /* no log callback: hundreds of expected errors */
+    CHECK_OK(ctx, cf_context_create(&ctx));
+    cf_mesh *base = NULL;
+    CHECK_OK(ctx, cf_generate_icosphere(ctx, 1, 1.0, &base));
+    const int32_t nv = cf_mesh_vertex_count(base), nf0 = cf_mesh_face_count(base);
+    double *pos = malloc(sizeof(double) * 3 * (size_t)nv);
+    int32_t *tri = malloc(sizeof(int32_t) * 3 * (size_t)(nf0 + 8));
+    uint32_t s = 99u;
+    int accepted = 0, rejected = 0, mismatched = 0;
+    int kinds[8] = {0};
+    for (int trial = 0; trial < 400; ++trial) {
+        memcpy(pos, cf_mesh_positions(base), sizeof(double) * 3 * (size_t)nv);
+        memcpy(tri, cf_mesh_triangles(base), sizeof(int32_t) * 3 * (size_t)nf0);
+        int32_t nf = nf0;
+        int ops = 1 + trial % 3;
+        for (int o = 0; o < ops; ++o) {
+            s = s * 1664525u + 1013904223u;
+            uint32_t r = s >> 8;
+            int32_t f = (int32_t)(r % (uint32_t)nf), g = (int32_t)((r / 7u) % (uint32_t)nf);
+            switch ((r >> 16) % 5u) {
+            case 0: { int32_t t = tri[3 * f]; tri[3 * f] = tri[3 * f + 1]; tri[3 * f + 1] = t; break; } /* flip */
+            case 1: /* delete face f */
+                memmove(tri + 3 * f, tri + 3 * f + 3, sizeof(int32_t) * 3 * (size_t)(nf - f - 1));
+                --nf;
+                break;
+            case 2: tri[3 * f + (r % 3u)] = tri[3 * g + ((r >> 4) % 3u)]; break;            /* merge corners */
+            case 3: memcpy(tri + 3 * nf, tri + 3 * g, 3 * sizeof(int32_t)); ++nf; break;   /* duplicate */
+            default: memcpy(pos + 3 * tri[3 * f], pos + 3 * tri[3 * f + 1], 3 * sizeof(double)); break; /* collapse */
+            }
+            if (nf < 2) nf = 2;
+        }
+        cf_mesh_desc d = {nv, pos, nf, tri, 0, NULL, NULL};
+        cf_mesh_report rep;
+        CHECK_OK(ctx, cf_mesh_validate(ctx, &d, &rep));
+        cf_mesh *m = NULL;
+        cf_status st = cf_mesh_create(ctx, &d, &m);
+        if (st != rep.first_status) ++mismatched;
+        if (st == CF_OK) {
+            ++accepted;
+            check_connectivity(m);
+            cf_mesh_destroy(&m);
+        } else {
+            ++rejected;
+            if (strcmp(cf_context_message(ctx), rep.first_message) != 0) ++mismatched;
+            if (-st < 8 + 11 && -st >= 11) ++kinds[-st - 11];
+        }
+    }
+    fprintf(stderr, "   accepted %d, rejected %d (range %d, repeated %d, nonfinite %d, degenerate %d, "
+                    "edge %d, vertex %d, orientation %d)\n",
+            accepted, rejected, kinds[0], kinds[1], kinds[2], kinds[3], kinds[4], kinds[5], kinds[6]);
+    CHECK(mismatched == 0);
+    /* the damage must exercise both outcomes and most defect kinds */
+    CHECK(accepted > 10 && rejected > 100);
+    CHECK(kinds[1] > 0 && kinds[3] > 0 && kinds[4] > 0 && kinds[5] > 0 && kinds[6] > 0);
+    free(pos);
+    free(tri);
+    cf_mesh_destroy(&base);
     CHECK(cf_context_bytes_in_use(ctx) == 0);
     cf_context_destroy(&ctx);
 }
@@ -274,7 +378,9 @@ int main(void)
     CFT_RUN(test_tetrahedron);
     CFT_RUN(test_single_triangle_and_two_components);
     CFT_RUN(test_generated_fixtures);
+    CFT_RUN(test_high_valence);
     CFT_RUN(test_relabelling);
+    CFT_RUN(test_random_damage);
     CFT_RUN(test_allocation_failures);
     return cft_finish();
 }

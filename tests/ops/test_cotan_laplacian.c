@@ -160,7 +160,7 @@ static void test_refill(void)
     if (!m) return;
     int32_t nv = cf_mesh_vertex_count(m);
     int64_t n = cfi_cotan_laplacian_triplet_count(m);
-    CHECK(n == 9 * (int64_t)cf_mesh_face_count(m));
+    CHECK(n == nv + 2 * (int64_t)cf_mesh_edge_count(m));
     int64_t *slots = malloc(sizeof(int64_t) * n);
     cf_sparse *l = NULL, *fresh = NULL;
     CHECK_OK(ctx, cfi_cotan_laplacian_pattern(ctx, m, cf_mesh_positions(m), &l, slots));
@@ -180,6 +180,49 @@ static void test_refill(void)
     free(slots);
     free(y);
     cf_mesh_destroy(&m);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+/* Relabelling the vertices permutes L: L'[p(i), p(j)] = L[i, j]. */
+static void test_relabelling(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *m = NULL, *m2 = NULL;
+    CHECK_OK(ctx, cf_generate_bumpy_sphere(ctx, 2, 0.3, 8u, &m));
+    if (!m) return;
+    int32_t nv = cf_mesh_vertex_count(m), nf = cf_mesh_face_count(m);
+    int32_t *p = malloc(sizeof(int32_t) * nv), *tri = malloc(sizeof(int32_t) * 3 * nf);
+    double *x = malloc(sizeof(double) * 3 * nv);
+    for (int32_t i = 0; i < nv; ++i) p[i] = i;
+    for (int32_t i = nv - 1; i > 0; --i) { /* Fisher-Yates with the test LCG */
+        int32_t j = (int32_t)((urand() * 0.5 + 0.5) * (i + 1));
+        if (j > i) j = i;
+        int32_t t = p[i];
+        p[i] = p[j];
+        p[j] = t;
+    }
+    for (int32_t i = 0; i < nv; ++i)
+        for (int c = 0; c < 3; ++c) x[3 * p[i] + c] = cf_mesh_positions(m)[3 * i + c];
+    for (int32_t i = 0; i < 3 * nf; ++i) tri[i] = p[cf_mesh_triangles(m)[i]];
+    cf_mesh_desc d = {nv, x, nf, tri, 0, NULL, NULL};
+    CHECK_OK(ctx, cf_mesh_create(ctx, &d, &m2));
+    cf_sparse *l = NULL, *l2 = NULL;
+    CHECK_OK(ctx, cf_cotan_laplacian(ctx, m, cf_mesh_positions(m), &l));
+    if (m2) CHECK_OK(ctx, cf_cotan_laplacian(ctx, m2, x, &l2));
+    if (l && l2) {
+        CHECK(cf_sparse_nnz(l) == cf_sparse_nnz(l2));
+        for (int32_t j = 0; j < nv; ++j)
+            for (int32_t k = l->colptr[j]; k < l->colptr[j + 1]; ++k)
+                CHECK_NEAR(entry(l2, p[l->rowind[k]], p[j]), l->values[k], 0, 1e-14);
+    }
+    cf_sparse_destroy(&l);
+    cf_sparse_destroy(&l2);
+    cf_mesh_destroy(&m2);
+    cf_mesh_destroy(&m);
+    free(p);
+    free(tri);
+    free(x);
     CHECK(cf_context_bytes_in_use(ctx) == 0);
     cf_context_destroy(&ctx);
 }
@@ -224,6 +267,7 @@ int main(void)
     CFT_RUN(test_flat_grid_linear_precision);
     CFT_RUN(test_grid_weights);
     CFT_RUN(test_refill);
+    CFT_RUN(test_relabelling);
     CFT_RUN(test_failures);
     return cft_finish();
 }

@@ -20,10 +20,6 @@
 
 #define CFI_PI 3.14159265358979323846
 
-/* TEMPORARY (until linalg lands them): weak references so the library links. */
-#pragma weak cf_orthonormalize
-#pragma weak cf_project_out
-#pragma weak cf_dot
 
 struct cf_curve_flow {
     cf_context *ctx;

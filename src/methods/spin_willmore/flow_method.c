@@ -26,11 +26,6 @@
 
 #define CFI_PI 3.14159265358979323846
 
-/* TEMPORARY (until ops/linalg land these): weak references so that the
- * library links while they are still missing. Removed once implemented. */
-#pragma weak cf_orthonormalize
-#pragma weak cf_project_out
-#pragma weak cf_dot
 
 /* Sign of an inversion's curvature change relative to App. D's
  * rhodot = -2 <a, N> in our orientation of X (checked by the Moebius test). */
@@ -72,7 +67,7 @@ void cf_spin_willmore_options_default(cf_spin_willmore_options *o)
 {
     if (!o) return;
     memset(o, 0, sizeof *o);
-    o->time_step = 0.45;
+    o->time_step = 0.5;
     o->total_curvature = 1;
     o->inversion = 1;
     o->exactness = 1;
@@ -331,7 +326,9 @@ static cf_status spin_create(cf_flow *flow, const void *options)
     st = cfi_poisson_create(ctx, mesh, flow->positions, &s->poisson);
     if (st == CF_OK) st = update_geometry(flow, s, flow->positions);
     if (st != CF_OK) goto fail;
-    memcpy(s->rest_area, s->area, (size_t)nv * sizeof(double));
+    /* desired vertex areas of Moebius balancing: the mesh's rest shape */
+    st = cf_vertex_areas(ctx, mesh, mesh->positions, CF_DUAL_AREA_BARYCENTRIC, s->rest_area);
+    if (st != CF_OK) goto fail;
     s->eps = CFI_SPIN_SHIFT * 4.0 * CFI_PI / flow->initial_area;
 
     st = cfi_dirac_create(ctx, mesh, &s->dirac);
@@ -444,17 +441,17 @@ static double mobius_term(const cf_flow *flow, spin_state *s, const double *x)
     double ubar = 0.0, cen[3] = {0, 0, 0};
     for (int32_t i = 0; i < nv; ++i) {
         u[i] = 0.5 * log(s->area[i] / (s->rest_area[i] * atot / rtot));
-        ubar += s->area[i] * u[i];
-        for (int c = 0; c < 3; ++c) cen[c] += s->area[i] * x[3 * i + c];
+        ubar += s->rest_area[i] * u[i];
+        for (int c = 0; c < 3; ++c) cen[c] += s->rest_area[i] * x[3 * i + c];
     }
-    ubar /= atot;
-    for (int c = 0; c < 3; ++c) cen[c] /= atot;
+    ubar /= rtot;
+    for (int c = 0; c < 3; ++c) cen[c] /= rtot;
     double v[3] = {0, 0, 0}, b[9] = {0};
     for (int32_t i = 0; i < nv; ++i) {
         u[i] -= ubar;
         const double *n = s->normal + 3 * i;
         for (int c = 0; c < 3; ++c) {
-            v[c] += s->area[i] * (x[3 * i + c] - cen[c]) * u[i];
+            v[c] += s->rest_area[i] * (x[3 * i + c] - cen[c]) * u[i];
             for (int d = 0; d < 3; ++d) b[3 * c + d] += 4.0 * s->area[i] * n[c] * n[d];
         }
     }
@@ -471,8 +468,8 @@ static double mobius_term(const cf_flow *flow, spin_state *s, const double *x)
     for (int32_t i = 0; i < nv; ++i) {
         double g = 0.0;
         for (int c = 0; c < 3; ++c) g += a[c] * (x[3 * i + c] - cen[c]);
-        gu += s->area[i] * g * u[i];
-        gg += s->area[i] * g * g;
+        gu += s->rest_area[i] * g * u[i];
+        gg += s->rest_area[i] * g * g;
     }
     if (!(gg > 0.0)) return 0.0;
     double alpha = gu / (2.0 * gg);

@@ -348,7 +348,7 @@ static cf_status sbe_create(cf_flow *flow, const void *options)
     /* The starting state has its handles at their targets; iteration 0
      * reports its energy with optimal rotations. */
     snap_handles(s, flow->positions);
-    st = cfi_sbe_local_step(&s->model, flow->positions, &s->energy);
+    st = cfi_sbe_local_step(&s->model, flow->positions, 1, &s->energy);
     if (st != CF_OK) return st;
     fill_terms(s, &flow->info);
     flow->info.factorize_seconds = s->factorize_seconds;
@@ -459,7 +459,7 @@ static cf_status sbe_step(cf_flow *flow, cf_flow_info *info)
     double t2 = cfi_now_seconds();
 
     double previous = s->energy;
-    st = cfi_sbe_local_step(m, x, &s->energy);
+    st = cfi_sbe_local_step(m, x, 0, &s->energy);
     if (st != CF_OK) return st;
     double t3 = cfi_now_seconds();
     /* Stopping rule: relative energy decrease below the tolerance. */
@@ -485,7 +485,7 @@ static cf_status sbe_reset(cf_flow *flow)
     sbe_state *s = flow->impl;
     if (!s) return CF_OK;
     snap_handles(s, flow->positions);
-    cf_status st = cfi_sbe_local_step(&s->model, flow->positions, &s->energy);
+    cf_status st = cfi_sbe_local_step(&s->model, flow->positions, 1, &s->energy);
     if (st == CF_OK) fill_terms(s, &flow->info);
     return st;
 }
@@ -573,7 +573,7 @@ cf_status cf_stretch_bend_energy(cf_context *ctx, const cf_mesh *mesh, const dou
         st = cfi_sbe_model_init(&m, ctx, mesh, x0, &h);
         if (st != CF_OK) return st;
     }
-    st = cfi_sbe_local_step(&m, deformed, NULL);
+    st = cfi_sbe_local_step(&m, deformed, 1, NULL);
     double term = m.term_energy, bd = m.bend_energy;
     cfi_sbe_model_free(&m);
     if (st != CF_OK) return st;

@@ -27,6 +27,9 @@ void cfi_sbe_model_free(cfi_sbe_model *m)
     CFI_FREE(ctx, m->rest_sq, (size_t)m->rot_count);
     CFI_FREE(ctx, m->rotations, 9 * (size_t)m->rot_count);
     CFI_FREE(ctx, m->covariance, 9 * (size_t)m->rot_count);
+    CFI_FREE(ctx, m->quats, 4 * (size_t)m->rot_count);
+    CFI_FREE(ctx, m->frames, 9 * (size_t)m->mesh->nf);
+    CFI_FREE(ctx, m->term_a, 2 * (size_t)m->term_count);
     cf_sparse_destroy(&m->k);
     CFI_FREE(ctx, m->mass, (size_t)nv);
     CFI_FREE(ctx, m->hm, (size_t)nv);
@@ -51,10 +54,30 @@ static void build_stretch_terms(cfi_sbe_model *m, const double *rest, const doub
     const cf_mesh *mesh = m->mesh;
     for (int32_t f = 0; f < mesh->nf; ++f) {
         m->rot_offsets[f] = 3 * f;
+        /* Orthonormal rest frame (b1 along the first edge, n the normal,
+         * b2 = n x b1): the rest edges are 2D in it, so C_t = P B^T with
+         * P = sum w e' a^T (3 x 2) and B = [b1 b2]. */
+        const int32_t *t = mesh->triangles + 3 * f;
+        const double *p0 = rest + 3 * t[0], *p1 = rest + 3 * t[1], *p2 = rest + 3 * t[2];
+        double u[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+        double v[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+        double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+        double lu = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]), ln = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        double *b = m->frames + 9 * f;
+        for (int d = 0; d < 3; ++d) {
+            b[d] = lu > 0.0 ? u[d] / lu : (d == 0);
+            b[6 + d] = ln > 0.0 ? n[d] / ln : (d == 2);
+        }
+        b[3] = b[7] * b[2] - b[8] * b[1];
+        b[4] = b[8] * b[0] - b[6] * b[2];
+        b[5] = b[6] * b[1] - b[7] * b[0];
         for (int k = 0; k < 3; ++k) {
             int32_t h = 3 * f + k;
-            int32_t v = mesh->triangles[h], w = mesh->triangles[cfi_he_next(h)];
-            set_term(m, h, v, w, cot[cfi_he_prev(h)], rest);
+            int32_t vi = mesh->triangles[h], wi = mesh->triangles[cfi_he_next(h)];
+            set_term(m, h, vi, wi, cot[cfi_he_prev(h)], rest);
+            const double *e = m->term_e + 3 * h;
+            m->term_a[2 * h] = e[0] * b[0] + e[1] * b[1] + e[2] * b[2];
+            m->term_a[2 * h + 1] = e[0] * b[3] + e[1] * b[4] + e[2] * b[5];
         }
     }
     m->rot_offsets[mesh->nf] = 3 * mesh->nf;
@@ -162,6 +185,7 @@ cf_status cfi_sbe_model_init(cfi_sbe_model *m, cf_context *ctx, const cf_mesh *m
     } else if (m->alpha > 0.0) {
         m->rot_count = nf;
         m->term_count = 3 * nf;
+        m->per_face = 1;
     }
     m->rot_offsets = CFI_ALLOC(ctx, int32_t, (size_t)m->rot_count + 1);
     m->term_ij = CFI_ALLOC(ctx, int32_t, 2 * (size_t)m->term_count);
@@ -172,6 +196,20 @@ cf_status cfi_sbe_model_init(cfi_sbe_model *m, cf_context *ctx, const cf_mesh *m
     m->covariance = CFI_ALLOC(ctx, double, 9 * (size_t)m->rot_count);
     m->xcol = CFI_ALLOC(ctx, double, 3 * (size_t)nv);
     m->kx = CFI_ALLOC(ctx, double, 3 * (size_t)nv);
+    if (m->per_face) {
+        m->frames = CFI_ALLOC(ctx, double, 9 * (size_t)nf);
+        m->term_a = CFI_ALLOC(ctx, double, 2 * (size_t)m->term_count);
+        if (!m->frames || !m->term_a) {
+            st = CF_ERR_NOMEM;
+            goto done;
+        }
+    } else if (m->rot_count > 0) {
+        m->quats = CFI_ALLOC(ctx, double, 4 * (size_t)m->rot_count);
+        if (!m->quats) {
+            st = CF_ERR_NOMEM;
+            goto done;
+        }
+    }
     if (!m->rot_offsets || (m->term_count && (!m->term_ij || !m->term_w || !m->term_e || !m->rest_sq ||
                                               !m->rotations || !m->covariance)) ||
         !m->xcol || !m->kx) {
@@ -194,6 +232,10 @@ cf_status cfi_sbe_model_init(cfi_sbe_model *m, cf_context *ctx, const cf_mesh *m
         double *rot = m->rotations + 9 * r;
         memset(rot, 0, 9 * sizeof(double));
         rot[0] = rot[4] = rot[8] = 1.0;
+        if (m->quats) {
+            m->quats[4 * r] = 1.0;
+            m->quats[4 * r + 1] = m->quats[4 * r + 2] = m->quats[4 * r + 3] = 0.0;
+        }
     }
 
     if (m->beta > 0.0) {
@@ -238,7 +280,111 @@ done:
     return st;
 }
 
-cf_status cfi_sbe_local_step(cfi_sbe_model *m, const double *x, double *total)
+/* Unit quaternion (w, x, y, z) to a row-major rotation matrix. */
+static void quat_to_matrix(const double q[4], double r[9])
+{
+    double w = q[0], x = q[1], y = q[2], z = q[3];
+    r[0] = 1 - 2 * (y * y + z * z); r[1] = 2 * (x * y - w * z);     r[2] = 2 * (x * z + w * y);
+    r[3] = 2 * (x * y + w * z);     r[4] = 1 - 2 * (x * x + z * z); r[5] = 2 * (y * z - w * x);
+    r[6] = 2 * (x * z - w * y);     r[7] = 2 * (y * z + w * x);     r[8] = 1 - 2 * (x * x + y * y);
+}
+
+/* Rotation matrix to a unit quaternion (largest-component branch). */
+static void matrix_to_quat(const double r[9], double q[4])
+{
+    double tr = r[0] + r[4] + r[8];
+    if (tr > 0.0) {
+        double s = 2.0 * sqrt(tr + 1.0);
+        q[0] = 0.25 * s; q[1] = (r[7] - r[5]) / s; q[2] = (r[2] - r[6]) / s; q[3] = (r[3] - r[1]) / s;
+    } else if (r[0] > r[4] && r[0] > r[8]) {
+        double s = 2.0 * sqrt(1.0 + r[0] - r[4] - r[8]);
+        q[0] = (r[7] - r[5]) / s; q[1] = 0.25 * s; q[2] = (r[1] + r[3]) / s; q[3] = (r[2] + r[6]) / s;
+    } else if (r[4] > r[8]) {
+        double s = 2.0 * sqrt(1.0 + r[4] - r[0] - r[8]);
+        q[0] = (r[2] - r[6]) / s; q[1] = (r[1] + r[3]) / s; q[2] = 0.25 * s; q[3] = (r[5] + r[7]) / s;
+    } else {
+        double s = 2.0 * sqrt(1.0 + r[8] - r[0] - r[4]);
+        q[0] = (r[3] - r[1]) / s; q[1] = (r[2] + r[6]) / s; q[2] = (r[5] + r[7]) / s; q[3] = 0.25 * s;
+    }
+    double n = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    for (int k = 0; k < 4; ++k) q[k] /= n;
+}
+
+static double trace_rt_c(const double r[9], const double c[9])
+{
+    double t = 0.0;
+    for (int k = 0; k < 9; ++k) t += r[k] * c[k];
+    return t;
+}
+
+/* Maximises tr(R^T C) over rotations by rotating R about
+ * w = sum_i r_i x c_i (the gradient direction for columns r_i, c_i) by the
+ * angle |w| / |sum_i r_i . c_i| (a Newton-like step), from the warm start q.
+ * Returns 1 when the update angle fell below 1e-12, 0 if not converged. */
+static int polar_iterate(const double c[9], double q[4], double r[9])
+{
+    for (int it = 0; it < 12; ++it) {
+        quat_to_matrix(q, r);
+        /* Columns: r_i = (r[i], r[3+i], r[6+i]). */
+        double w[3] = {0, 0, 0}, dot = 0.0;
+        for (int i = 0; i < 3; ++i) {
+            double a0 = r[i], a1 = r[3 + i], a2 = r[6 + i], b0 = c[i], b1 = c[3 + i], b2 = c[6 + i];
+            w[0] += a1 * b2 - a2 * b1;
+            w[1] += a2 * b0 - a0 * b2;
+            w[2] += a0 * b1 - a1 * b0;
+            dot += a0 * b0 + a1 * b1 + a2 * b2;
+        }
+        double wn = sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+        double denom = fabs(dot) + 1e-300;
+        double angle = wn / denom;
+        if (!(angle > 1e-12)) return angle == angle; /* converged (and not NaN) */
+        if (angle > 1.0) angle = 1.0; /* damp far from the optimum */
+        double s = sin(0.5 * angle) / wn, cw = cos(0.5 * angle);
+        double dq[4] = {cw, s * w[0], s * w[1], s * w[2]};
+        double nq[4] = {dq[0] * q[0] - dq[1] * q[1] - dq[2] * q[2] - dq[3] * q[3],
+                        dq[0] * q[1] + dq[1] * q[0] + dq[2] * q[3] - dq[3] * q[2],
+                        dq[0] * q[2] - dq[1] * q[3] + dq[2] * q[0] + dq[3] * q[1],
+                        dq[0] * q[3] + dq[1] * q[2] - dq[2] * q[1] + dq[3] * q[0]};
+        double n = sqrt(nq[0] * nq[0] + nq[1] * nq[1] + nq[2] * nq[2] + nq[3] * nq[3]);
+        for (int k = 0; k < 4; ++k) q[k] = nq[k] / n;
+    }
+    quat_to_matrix(q, r);
+    return 0;
+}
+
+/* Rank-2 Procrustes for a triangle (Eq. 24): with C_t = P B^T the optimal
+ * rotation maps the rest frame (b1, b2, n) to (q1, q2, q1 x q2) where
+ * [q1 q2] = P (P^T P)^(-1/2) is the polar factor of the 3 x 2 matrix P
+ * (closed form of the 2 x 2 inverse square root). This is the SVD solution
+ * with the determinant correction, since the third singular value of C_t
+ * is zero. Returns 0 when P is (nearly) rank deficient. */
+static int triangle_rotation(const double p[6], const double b[9], double r[9], double *trace)
+{
+    /* p: rows of the 3 x 2 matrix, p[2 i + j]. */
+    double s11 = p[0] * p[0] + p[2] * p[2] + p[4] * p[4];
+    double s22 = p[1] * p[1] + p[3] * p[3] + p[5] * p[5];
+    double s12 = p[0] * p[1] + p[2] * p[3] + p[4] * p[5];
+    double det = s11 * s22 - s12 * s12;
+    double tr = s11 + s22;
+    if (!(det > 1e-20 * tr * tr)) return 0;
+    double sq = sqrt(det), t = sqrt(tr + 2.0 * sq);
+    /* (P^T P)^(-1/2) = (sqrt(S))^-1, sqrt(S) = (S + sq I) / t, det sqrt(S) = sq. */
+    double i11 = (s22 + sq) / (t * sq), i22 = (s11 + sq) / (t * sq), i12 = -s12 / (t * sq);
+    double q1[3], q2[3];
+    for (int i = 0; i < 3; ++i) {
+        q1[i] = p[2 * i] * i11 + p[2 * i + 1] * i12;
+        q2[i] = p[2 * i] * i12 + p[2 * i + 1] * i22;
+    }
+    double q3[3] = {q1[1] * q2[2] - q1[2] * q2[1], q1[2] * q2[0] - q1[0] * q2[2], q1[0] * q2[1] - q1[1] * q2[0]};
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) r[3 * i + j] = q1[i] * b[j] + q2[i] * b[3 + j] + q3[i] * b[6 + j];
+    /* tr(R^T C) = tr(Q^T P). */
+    *trace = 0.0;
+    for (int i = 0; i < 3; ++i) *trace += q1[i] * p[2 * i] + q2[i] * p[2 * i + 1];
+    return 1;
+}
+
+cf_status cfi_sbe_local_step(cfi_sbe_model *m, const double *x, int exact, double *total)
 {
     cf_context *ctx = m->ctx;
     int32_t nv = m->nv;
@@ -248,7 +394,30 @@ cf_status cfi_sbe_local_step(cfi_sbe_model *m, const double *x, double *total)
      * sum w |e' - R e|^2 = sum w |e'|^2 - 2 tr(R^T C_r) + sum w |e|^2. */
     for (int32_t r = 0; r < m->rot_count; ++r) {
         double c[9] = {0};
-        double def_sq = 0.0;
+        double def_sq = 0.0, tr = 0.0;
+        double *rot = m->rotations + 9 * r;
+        if (m->per_face && !exact) {
+            double p[6] = {0};
+            for (int32_t t = m->rot_offsets[r]; t < m->rot_offsets[r + 1]; ++t) {
+                int32_t i = m->term_ij[2 * t], j = m->term_ij[2 * t + 1];
+                double w = m->term_w[t];
+                const double *a = m->term_a + 2 * t;
+                double q0 = x[3 * i] - x[3 * j], q1 = x[3 * i + 1] - x[3 * j + 1], q2 = x[3 * i + 2] - x[3 * j + 2];
+                def_sq += w * (q0 * q0 + q1 * q1 + q2 * q2);
+                double wa0 = w * a[0], wa1 = w * a[1];
+                p[0] += q0 * wa0; p[1] += q0 * wa1;
+                p[2] += q1 * wa0; p[3] += q1 * wa1;
+                p[4] += q2 * wa0; p[5] += q2 * wa1;
+            }
+            const double *b = m->frames + 9 * r;
+            if (triangle_rotation(p, b, rot, &tr)) {
+                term_energy += def_sq - 2.0 * tr + m->rest_sq[r];
+                continue;
+            }
+            /* Degenerate deformed triangle: the general path below. */
+            def_sq = 0.0;
+            ++m->svd_fallbacks;
+        }
         for (int32_t t = m->rot_offsets[r]; t < m->rot_offsets[r + 1]; ++t) {
             int32_t i = m->term_ij[2 * t], j = m->term_ij[2 * t + 1];
             double w = m->term_w[t];
@@ -260,13 +429,31 @@ cf_status cfi_sbe_local_step(cfi_sbe_model *m, const double *x, double *total)
             c[3] += wq1 * e[0]; c[4] += wq1 * e[1]; c[5] += wq1 * e[2];
             c[6] += wq2 * e[0]; c[7] += wq2 * e[1]; c[8] += wq2 * e[2];
         }
-        double *rot = m->rotations + 9 * r;
-        cf_status st = cf_rotation_from_covariance(c, rot);
-        if (st != CF_OK)
-            return cfi_error(ctx, CF_ERR_NUMERICAL, "%s %d: cross-covariance is not finite",
-                             m->rot_count == m->mesh->nf && m->rot_count != nv ? "face" : "rotation", r);
-        double tr = 0.0;
-        for (int k = 0; k < 9; ++k) tr += rot[k] * c[k];
+        int done = 0;
+        if (!exact && m->quats) {
+            double q[4], cand[9];
+            memcpy(q, m->quats + 4 * r, sizeof q);
+            double old_tr = trace_rt_c(rot, c);
+            if (polar_iterate(c, q, cand)) {
+                double new_tr = trace_rt_c(cand, c);
+                /* Never accept a worse rotation: keeps the local step a
+                 * descent step whatever the iteration did. */
+                if (new_tr >= old_tr - 1e-12 * fabs(old_tr)) {
+                    memcpy(rot, cand, sizeof cand);
+                    memcpy(m->quats + 4 * r, q, sizeof q);
+                    done = 1;
+                }
+            }
+            if (!done) ++m->svd_fallbacks;
+        }
+        if (!done) {
+            cf_status st = cf_rotation_from_covariance(c, rot);
+            if (st != CF_OK)
+                return cfi_error(ctx, CF_ERR_NUMERICAL, "%s %d: cross-covariance is not finite",
+                                 m->per_face ? "face" : "vertex", r);
+            if (m->quats) matrix_to_quat(rot, m->quats + 4 * r);
+        }
+        tr = trace_rt_c(rot, c);
         term_energy += def_sq - 2.0 * tr + m->rest_sq[r];
     }
     double bend_energy = 0.0;

@@ -30,6 +30,11 @@ typedef struct cfi_sbe_model {
     double *term_e;          /* 3 term_count, rest x_i - x_j */
     double *rest_sq;         /* rot_count: sum w |e|^2 */
     double *rotations;       /* 9 rot_count, row-major */
+    double *quats;           /* 4 rot_count (w, x, y, z) warm start, per-vertex rotations (ARAP) */
+    double *frames;          /* 9 nf rest frames b1, b2, n (stretch: rotation per face) */
+    double *term_a;          /* 2 term_count: rest edge in its face's frame (stretch) */
+    int32_t per_face;        /* rotations are per face (stretch) rather than per vertex */
+    int64_t svd_fallbacks;   /* local steps that needed the full SVD (statistics) */
     double *covariance;      /* 9 rot_count, scratch */
     cf_sparse *k;            /* K = 2 L (rest), only when beta > 0 */
     double *mass;            /* nv rest dual areas M_v (beta > 0) */
@@ -47,8 +52,13 @@ cf_status cfi_sbe_model_init(cfi_sbe_model *m, cf_context *ctx, const cf_mesh *m
 void cfi_sbe_model_free(cfi_sbe_model *m);
 
 /* Local step at `x` (3 nv interleaved): optimal rotations and u', and the
- * energies E(x) with them (term_energy, bend_energy); returns the total. */
-cf_status cfi_sbe_local_step(cfi_sbe_model *m, const double *x, double *total);
+ * energies E(x) with them (term_energy, bend_energy); returns the total.
+ * exact != 0: every rotation from the robust SVD (cf_rotation_from_covariance);
+ * otherwise per-face rotations use the closed-form rank-2 polar factor
+ * (exact as well) and per-vertex rotations a polar iteration warm-started
+ * at the previous rotation, never accepted if it lowers tr(R^T C) below the
+ * previous rotation's, with the SVD as fallback when it does not converge. */
+cf_status cfi_sbe_local_step(cfi_sbe_model *m, const double *x, int exact, double *total);
 
 /* For tests, on a CF_FLOW_STRETCH_BEND_EDIT flow: the global phase alone
  * into x (3 nv) with the flow's current rotations and u'; the gradient

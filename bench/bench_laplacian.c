@@ -1,0 +1,171 @@
+/*
+ * Benchmark of the sparse layer on the cotan Laplacian: assembly (full
+ * one-pass build, and refill of values into the fixed pattern), CHOLMOD
+ * symbolic analysis, numeric factorisation of L + eps I (L is singular) and
+ * one solve, on generated icospheres and Loop-subdivided tori of 10k-650k
+ * vertices. Also the analysis of L lifted to 3x3 blocks (L kron I3) with the
+ * ordering computed on the vertex graph (block 3) versus on the whole
+ * matrix (block 1). Prints TSV; asserts nothing. Times are the minimum over
+ * repetitions, in milliseconds.
+ *
+ * usage: bench_laplacian [--max-vertices N] [--no-thread-fix] [--repeat R]
+ */
+#include "curvflow/generate.h"
+#include "curvflow/linalg.h"
+#include "curvflow/mesh.h"
+#include "curvflow/ops.h"
+#include "ops/cotan_laplacian.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+static double now_ms(void)
+{
+    struct timespec ts;
+    timespec_get(&ts, TIME_UTC);
+    return 1e3 * (double)ts.tv_sec + 1e-6 * (double)ts.tv_nsec;
+}
+
+static int fail(cf_context *ctx, const char *what, cf_status st)
+{
+    fprintf(stderr, "bench_laplacian: %s failed: %s: %s\n", what, cf_status_name(st), cf_context_message(ctx));
+    return 1;
+}
+
+static int run(cf_context *ctx, const char *name, const cf_mesh *mesh, int repeat)
+{
+    const double *pos = cf_mesh_positions(mesh);
+    int32_t nv = cf_mesh_vertex_count(mesh), nf = cf_mesh_face_count(mesh);
+    cf_status st;
+    double assemble = INFINITY, refill = INFINITY, analyze = INFINITY, factorize = INFINITY, solve = INFINITY;
+    double analyze3_block = INFINITY, analyze3_plain = INFINITY, factorize3 = INFINITY;
+    cf_sparse *l = NULL;
+    for (int r = 0; r < repeat; ++r) {
+        cf_sparse_destroy(&l);
+        double t0 = now_ms();
+        if ((st = cf_cotan_laplacian(ctx, mesh, pos, &l)) != CF_OK) return fail(ctx, "cotan laplacian", st);
+        assemble = fmin(assemble, now_ms() - t0);
+    }
+    /* refill path used by flows that move the vertices every step */
+    int64_t ntrip = cfi_cotan_laplacian_triplet_count(mesh);
+    int64_t *slots = malloc((size_t)ntrip * sizeof *slots);
+    cf_sparse *lr = NULL;
+    if ((st = cfi_cotan_laplacian_pattern(ctx, mesh, pos, &lr, slots)) != CF_OK) return fail(ctx, "pattern", st);
+    for (int r = 0; r < repeat; ++r) {
+        double t0 = now_ms();
+        if ((st = cfi_cotan_laplacian_refill(lr, mesh, pos, slots)) != CF_OK) return fail(ctx, "refill", st);
+        refill = fmin(refill, now_ms() - t0);
+    }
+    double mean_diag = 0.0;
+    for (int32_t j = 0; j < nv; ++j) {
+        int64_t p = cf_sparse_find(l, j, j);
+        if (p >= 0) mean_diag += l->values[p] / nv;
+    }
+    const double eps = 1e-8 * mean_diag;
+    double *b = malloc((size_t)nv * 3 * sizeof *b), *x = malloc((size_t)nv * 3 * sizeof *x);
+    for (int32_t i = 0; i < 3 * nv; ++i) b[i] = sin(0.1 * i);
+    cf_cholesky *chol = NULL;
+    cf_solver_timings tm;
+    for (int r = 0; r < repeat; ++r) {
+        cf_cholesky_destroy(&chol);
+        if ((st = cf_cholesky_create(ctx, l, NULL, &chol)) != CF_OK) return fail(ctx, "analyse", st);
+        cf_cholesky_timings(chol, &tm);
+        analyze = fmin(analyze, 1e3 * tm.analyze_seconds);
+    }
+    for (int r = 0; r < repeat; ++r) {
+        if ((st = cf_cholesky_factorize_shifted(chol, l, eps)) != CF_OK) return fail(ctx, "factorise", st);
+        cf_cholesky_timings(chol, &tm);
+        factorize = fmin(factorize, 1e3 * tm.factorize_seconds);
+        if ((st = cf_cholesky_solve(chol, 1, b, x)) != CF_OK) return fail(ctx, "solve", st);
+        cf_cholesky_timings(chol, &tm);
+        solve = fmin(solve, 1e3 * tm.solve_seconds);
+    }
+    /* residual of the last solve, relative */
+    double *ax = malloc((size_t)nv * sizeof *ax), rn = 0.0, bn = 0.0;
+    cf_sparse_multiply(l, x, ax);
+    for (int32_t i = 0; i < nv; ++i) {
+        double ri = ax[i] + eps * x[i] - b[i];
+        rn += ri * ri;
+        bn += b[i] * b[i];
+    }
+    cf_cholesky_destroy(&chol);
+    /* L kron I3: ordering on the vertex graph vs on the 3nv matrix */
+    cf_sparse *l3 = NULL;
+    if ((st = cf_sparse_kron_identity(ctx, l, 3, &l3)) != CF_OK) return fail(ctx, "kron", st);
+    for (int blocks = 3; blocks >= 1; blocks -= 2) {
+        cf_cholesky_options o;
+        cf_cholesky_options_default(&o);
+        o.block_size = blocks;
+        int reps = nv > 200000 ? 1 : repeat;
+        for (int r = 0; r < reps; ++r) {
+            if ((st = cf_cholesky_create(ctx, l3, &o, &chol)) != CF_OK) return fail(ctx, "analyse kron", st);
+            cf_cholesky_timings(chol, &tm);
+            if (blocks == 3) analyze3_block = fmin(analyze3_block, 1e3 * tm.analyze_seconds);
+            else analyze3_plain = fmin(analyze3_plain, 1e3 * tm.analyze_seconds);
+            if (blocks == 3 && r == 0) {
+                if ((st = cf_cholesky_factorize_shifted(chol, l3, eps)) != CF_OK) return fail(ctx, "factorise kron", st);
+                cf_cholesky_timings(chol, &tm);
+                factorize3 = 1e3 * tm.factorize_seconds;
+            }
+            cf_cholesky_destroy(&chol);
+        }
+    }
+    printf("%s\t%d\t%d\t%.2f\t%.2f\t%.2f\t%.2f\t%.2f\t%.2f\t%.2e\t%.2f\t%.2f\t%.2f\n", name, nv, nf, assemble, refill,
+           analyze, factorize, solve, assemble + factorize, sqrt(rn / bn), analyze3_block, analyze3_plain, factorize3);
+    fflush(stdout);
+    cf_sparse_destroy(&l3);
+    cf_sparse_destroy(&l);
+    cf_sparse_destroy(&lr);
+    free(slots); free(b); free(x); free(ax);
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    int32_t max_vertices = 700000;
+    int repeat = 3;
+    for (int i = 1; i < argc; ++i) {
+        if (!strcmp(argv[i], "--max-vertices") && i + 1 < argc) max_vertices = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--repeat") && i + 1 < argc) repeat = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--no-thread-fix")) cf_linalg_set_thread_fix(0);
+        else {
+            fprintf(stderr, "usage: %s [--max-vertices N] [--no-thread-fix] [--repeat R]\n", argv[0]);
+            return 1;
+        }
+    }
+    if (repeat < 1) repeat = 1;
+    cf_context *ctx = NULL;
+    if (cf_context_create(&ctx) != CF_OK) return 1;
+    printf("mesh\tV\tF\tassemble_ms\trefill_ms\tanalyze_ms\tfactorize_ms\tsolve_ms\tassemble+factorize_ms\t"
+           "residual\tanalyze_kron3_block3_ms\tanalyze_kron3_block1_ms\tfactorize_kron3_ms\n");
+    int rc = 0;
+    for (int32_t s = 5; s <= 8 && rc == 0; ++s) {
+        if (10 * (1 << (2 * s)) + 2 > max_vertices) break;
+        cf_mesh *m = NULL;
+        cf_status st = cf_generate_icosphere(ctx, s, 1.0, &m);
+        if (st != CF_OK) { rc = fail(ctx, "icosphere", st); break; }
+        char name[64];
+        snprintf(name, sizeof name, "icosphere%d", s);
+        rc = run(ctx, name, m, repeat);
+        cf_mesh_destroy(&m);
+    }
+    /* torus 64 x 32 (2048 vertices) refined by Loop subdivision */
+    cf_mesh *base = NULL;
+    if (rc == 0 && cf_generate_torus(ctx, 1.0, 0.4, 64, 32, &base) != CF_OK) rc = fail(ctx, "torus", cf_context_status(ctx));
+    for (int32_t levels = 2; levels <= 4 && rc == 0; ++levels) {
+        if (2048 * (1 << (2 * levels)) > max_vertices) break;
+        cf_mesh *m = NULL;
+        cf_status st = cf_loop_subdivide(ctx, base, cf_mesh_positions(base), levels, &m);
+        if (st != CF_OK) { rc = fail(ctx, "loop subdivide", st); break; }
+        char name[64];
+        snprintf(name, sizeof name, "torus64x32_loop%d", levels);
+        rc = run(ctx, name, m, repeat);
+        cf_mesh_destroy(&m);
+    }
+    cf_mesh_destroy(&base);
+    cf_context_destroy(&ctx);
+    return rc;
+}

@@ -1,0 +1,144 @@
+/*
+ * curvflow render IN -o OUT.png [--uv-checker] [--field face:NAME] [--view x,y,z]:
+ * a picture of a mesh with the software renderer (include/curvflow/render.h).
+ */
+#define _GNU_SOURCE
+#include "common.h"
+#include "curvflow/io.h"
+#include "curvflow/render.h"
+
+#include <getopt.h>
+#include <stdlib.h>
+#include <string.h>
+
+static void usage(FILE *out)
+{
+    fprintf(out,
+            "Usage: curvflow render IN -o OUT.png [OPTIONS]\n"
+            "Renders the mesh IN to a PNG image (z-buffer, Lambert shading with a headlight).\n\n"
+            "  -o, --output OUT.png     output image (required)\n"
+            "      --uv-checker         checkerboard from the texture coordinates (shows texture\n"
+            "                           preservation; the mesh must have uv)\n"
+            "      --checker-count N    squares per unit of uv [16]\n"
+            "      --field face:NAME    colour faces by a per-face property of IN (e.g. face:Q from\n"
+            "                           'curvflow compare --ply'), blue (low) - white - red (high)\n"
+            "      --range MIN,MAX      colour range of the field [data range]\n"
+            "      --view X,Y,Z         direction from the object towards the camera [0.4,0.5,1]\n"
+            "      --up X,Y,Z           screen up direction [0,1,0]\n"
+            "      --size WxH           image size in pixels [800x800]\n"
+            "      --perspective        perspective instead of orthographic projection\n"
+            "  -h, --help               show this help\n");
+}
+
+static bool parse_vec3(const char *text, double v[3])
+{
+    char *end = NULL;
+    const char *s = text;
+    for (int k = 0; k < 3; ++k) {
+        v[k] = strtod(s, &end);
+        if (end == s) return false;
+        if (k < 2) {
+            if (*end != ',') return false;
+            s = end + 1;
+        }
+    }
+    return *end == '\0';
+}
+
+int cli_render(int argc, char **argv)
+{
+    enum { OPT_CHECKER = 256, OPT_COUNT, OPT_FIELD, OPT_RANGE, OPT_VIEW, OPT_UP, OPT_SIZE, OPT_PERSP };
+    static const struct option longopts[] = {
+        {"output", required_argument, NULL, 'o'},     {"uv-checker", no_argument, NULL, OPT_CHECKER},
+        {"checker-count", required_argument, NULL, OPT_COUNT}, {"field", required_argument, NULL, OPT_FIELD},
+        {"range", required_argument, NULL, OPT_RANGE}, {"view", required_argument, NULL, OPT_VIEW},
+        {"up", required_argument, NULL, OPT_UP},       {"size", required_argument, NULL, OPT_SIZE},
+        {"perspective", no_argument, NULL, OPT_PERSP}, {"help", no_argument, NULL, 'h'},
+        {NULL, 0, NULL, 0}};
+    const char *cmd = "render", *output = NULL, *field = NULL;
+    cf_render_options ro;
+    cf_render_options_default(&ro);
+    int c;
+    while ((c = getopt_long(argc, argv, "o:h", longopts, NULL)) != -1) {
+        switch (c) {
+        case 'o': output = optarg; break;
+        case OPT_CHECKER: ro.uv_checker = 1; break;
+        case OPT_COUNT:
+            if (!cli_parse_double(cmd, "--checker-count", optarg, &ro.checker_count)) return CLI_EXIT_USAGE;
+            break;
+        case OPT_FIELD: field = optarg; break;
+        case OPT_RANGE: {
+            char *end = NULL;
+            ro.field_min = strtod(optarg, &end);
+            if (end == optarg || *end != ',') return cli_usage_error(cmd, "--range: expected MIN,MAX, got '%s'", optarg);
+            const char *s = end + 1;
+            ro.field_max = strtod(s, &end);
+            if (end == s || *end != '\0' || !(ro.field_min < ro.field_max))
+                return cli_usage_error(cmd, "--range: expected MIN,MAX with MIN < MAX, got '%s'", optarg);
+            break;
+        }
+        case OPT_VIEW:
+            if (!parse_vec3(optarg, ro.view)) return cli_usage_error(cmd, "--view: expected X,Y,Z, got '%s'", optarg);
+            break;
+        case OPT_UP:
+            if (!parse_vec3(optarg, ro.up)) return cli_usage_error(cmd, "--up: expected X,Y,Z, got '%s'", optarg);
+            break;
+        case OPT_SIZE: {
+            int w = 0, h = 0;
+            char tail = 0;
+            if (sscanf(optarg, "%dx%d%c", &w, &h, &tail) != 2 || w < 1 || h < 1 || w > 16384 || h > 16384)
+                return cli_usage_error(cmd, "--size: expected WxH in 1..16384, got '%s'", optarg);
+            ro.width = w;
+            ro.height = h;
+            break;
+        }
+        case OPT_PERSP: ro.perspective = 1; break;
+        case 'h': usage(stdout); return CLI_EXIT_OK;
+        default: return cli_usage_error(cmd, "invalid option");
+        }
+    }
+    if (optind + 1 != argc) return cli_usage_error(cmd, "expected one input mesh");
+    if (!output) return cli_usage_error(cmd, "missing -o OUT.png");
+    if (field && strncmp(field, "face:", 5) != 0)
+        return cli_usage_error(cmd, "--field: expected face:NAME, got '%s'", field);
+    const char *input = argv[optind];
+
+    cf_context *ctx = cli_context(false);
+    if (!ctx) return CLI_EXIT_NUMERICAL;
+    int code = CLI_EXIT_OK;
+    cf_mesh_data *data = NULL;
+    cf_mesh *mesh = NULL;
+    cf_mesh_desc desc;
+    cf_status st = cf_read_mesh_file(ctx, input, &data);
+    if (st == CF_OK) st = cf_mesh_data_desc(data, &desc);
+    if (st == CF_OK) st = cf_mesh_create(ctx, &desc, &mesh);
+    if (st != CF_OK) {
+        code = cli_fail(ctx, input, st);
+        if (code == CLI_EXIT_USAGE) code = CLI_EXIT_INPUT;
+        goto done;
+    }
+    if (ro.uv_checker && cf_mesh_uv_count(mesh) == 0) {
+        fprintf(stderr, "curvflow: %s: --uv-checker needs texture coordinates, the mesh has none\n", input);
+        code = CLI_EXIT_INPUT;
+        goto done;
+    }
+    if (field) {
+        const cf_mesh_property *p = cf_mesh_data_face_property(data, field + 5);
+        if (!p) {
+            fprintf(stderr, "curvflow: %s: no per-face property '%s'\n", input, field + 5);
+            code = CLI_EXIT_INPUT;
+            goto done;
+        }
+        ro.face_field = p->values;
+    }
+    st = cf_render_png(ctx, output, mesh, NULL, &ro);
+    if (st != CF_OK) {
+        code = cli_fail(ctx, output, st);
+        if (st == CF_ERR_IO || st == CF_ERR_NONFINITE) code = CLI_EXIT_INPUT;
+    }
+done:
+    cf_mesh_destroy(&mesh);
+    cf_mesh_data_destroy(&data);
+    cf_context_destroy(&ctx);
+    return code;
+}

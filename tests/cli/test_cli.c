@@ -1,0 +1,423 @@
+/*
+ * The curvflow tool end to end: runs the built binary (CF_TEST_CLI) on
+ * generated meshes and checks exit codes (0 ok, 1 usage, 2 invalid input,
+ * 3 numerical failure), messages, that outputs exist and parse, and that no
+ * temporary files are left behind (atomic writes).
+ */
+#define _POSIX_C_SOURCE 200809L
+#include "curvflow/io.h"
+#include "curvflow/mesh.h"
+#include "test.h"
+
+#include <dirent.h>
+#include <jansson.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+static char dir[1024];
+static char out_text[1 << 16];
+static char err_text[1 << 16];
+
+static void read_file(const char *path, char *buf, size_t size)
+{
+    buf[0] = '\0';
+    FILE *f = fopen(path, "rb");
+    if (!f) return;
+    size_t n = fread(buf, 1, size - 1, f);
+    buf[n] = '\0';
+    fclose(f);
+}
+
+/* Runs "curvflow ARGS" in the test folder; returns the exit status and
+ * leaves stdout / stderr in out_text / err_text. */
+static int run(const char *args)
+{
+    char cmd[4096];
+    snprintf(cmd, sizeof cmd, "cd '%s' && '%s' %s > stdout.txt 2> stderr.txt", dir, CF_TEST_CLI, args);
+    int st = system(cmd);
+    char path[1200];
+    snprintf(path, sizeof path, "%s/stdout.txt", dir);
+    read_file(path, out_text, sizeof out_text);
+    snprintf(path, sizeof path, "%s/stderr.txt", dir);
+    read_file(path, err_text, sizeof err_text);
+    if (st == -1 || !WIFEXITED(st)) return -1;
+    return WEXITSTATUS(st);
+}
+
+static const char *in_dir(const char *name)
+{
+    static char path[2048];
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    return path;
+}
+
+static int exists(const char *name)
+{
+    struct stat sb;
+    return stat(in_dir(name), &sb) == 0;
+}
+
+#define CHECK_RUN(args, expected)                                                                        \
+    do {                                                                                                 \
+        int rc_ = run(args);                                                                             \
+        ++cft_checks;                                                                                    \
+        if (rc_ != (expected))                                                                           \
+            cft_fail(__FILE__, __LINE__, "curvflow %s: exit %d, expected %d\nstdout: %s\nstderr: %s", args, \
+                     rc_, (expected), out_text, err_text);                                               \
+    } while (0)
+
+static void test_help_and_usage(void)
+{
+    CHECK_RUN("--help", 0);
+    CHECK(strstr(out_text, "Usage: curvflow COMMAND") != NULL);
+    CHECK_RUN("--version", 0);
+    CHECK(strncmp(out_text, "curvflow ", 9) == 0);
+    CHECK(strstr(out_text, cf_version_string()) != NULL);
+    CHECK_RUN("", 1);
+    CHECK_RUN("frobnicate", 1);
+    CHECK(strstr(err_text, "unknown command 'frobnicate'") != NULL);
+    const char *cmds[] = {"info", "generate", "flow", "compare", "demo", "render"};
+    for (int i = 0; i < 6; ++i) {
+        char args[64];
+        snprintf(args, sizeof args, "%s --help", cmds[i]);
+        CHECK_RUN(args, 0);
+        CHECK(strstr(out_text, "Usage: curvflow") != NULL);
+        snprintf(args, sizeof args, "%s --no-such-option", cmds[i]);
+        CHECK_RUN(args, 1);
+        CHECK(strstr(err_text, "--help") != NULL);
+    }
+}
+
+static void test_generate(void)
+{
+    CHECK_RUN("generate icosphere --subdivisions 3 -o ico.obj", 0);
+    CHECK_RUN("generate bumpy-sphere --subdivisions 2 --seed 4 -o bumpy.obj", 0);
+    CHECK_RUN("generate torus --n-major 24 --n-minor 12 -o torus.ply", 0);
+    CHECK_RUN("generate grid --nx 4 --ny 3 -o grid.off", 0);
+    const char *kinds[] = {"cylinder", "bar", "sheet", "bumpy-plane", "double-torus"};
+    for (int i = 0; i < 5; ++i) {
+        char args[128];
+        snprintf(args, sizeof args, "generate %s -o kind%d.ply", kinds[i], i);
+        CHECK_RUN(args, 0);
+        CHECK(exists(args + strlen(args) - 9));
+    }
+    cf_context *ctx = cft_context();
+    cf_mesh *mesh = NULL;
+    CHECK_OK(ctx, cf_load_mesh(ctx, in_dir("ico.obj"), &mesh));
+    if (mesh) CHECK(cf_mesh_vertex_count(mesh) == 642 && cf_mesh_face_count(mesh) == 1280);
+    cf_mesh_destroy(&mesh);
+    CHECK_OK(ctx, cf_load_mesh(ctx, in_dir("torus.ply"), &mesh));
+    if (mesh) CHECK(cf_mesh_vertex_count(mesh) == 24 * 12 && cf_mesh_genus(mesh) == 1);
+    cf_mesh_destroy(&mesh);
+    CHECK_OK(ctx, cf_load_mesh(ctx, in_dir("grid.off"), &mesh));
+    if (mesh) CHECK(cf_mesh_vertex_count(mesh) == 5 * 4 && cf_mesh_boundary_loop_count(mesh) == 1);
+    cf_mesh_destroy(&mesh);
+    CHECK_OK(ctx, cf_load_mesh(ctx, in_dir("bumpy.obj"), &mesh));
+    if (mesh) CHECK(cf_mesh_uv_count(mesh) > 0); /* the bumpy sphere carries its uv through the file */
+    cf_mesh_destroy(&mesh);
+    cf_context_destroy(&ctx);
+
+    CHECK_RUN("generate teapot -o x.obj", 1);
+    CHECK(strstr(err_text, "teapot") != NULL);
+    CHECK_RUN("generate icosphere", 1);
+    CHECK_RUN("generate icosphere --subdivisions 12 -o x.obj", 1);
+    CHECK(strstr(err_text, "--subdivisions") != NULL);
+    CHECK_RUN("generate icosphere --radius abc -o x.obj", 1);
+    CHECK_RUN("generate icosphere -o x.xyz", 2);
+    CHECK_RUN("generate icosphere -o no_such_dir/x.obj", 2);
+    CHECK(!exists("x.obj"));
+}
+
+static void test_info(void)
+{
+    CHECK_RUN("info ico.obj", 0);
+    CHECK(strstr(out_text, "genus:         0") != NULL);
+    CHECK(strstr(out_text, "validation:    ok") != NULL);
+    CHECK_RUN("info ico.obj --json", 0);
+    json_error_t jerr;
+    json_t *root = json_loads(out_text, 0, &jerr);
+    CHECK(root != NULL);
+    if (root) {
+        CHECK(json_integer_value(json_object_get(root, "vertices")) == 642);
+        CHECK(json_integer_value(json_object_get(root, "euler_characteristic")) == 2);
+        CHECK(json_integer_value(json_object_get(root, "genus")) == 0);
+        CHECK(json_integer_value(json_object_get(root, "boundary_loops")) == 0);
+        CHECK(json_is_true(json_object_get(json_object_get(root, "validation"), "valid")));
+        /* W/4pi of a fine icosphere is close to 1 (the round sphere's value) */
+        CHECK_NEAR(json_real_value(json_object_get(root, "willmore_over_4pi")), 1.0, 0.05, 0.0);
+        /* icosphere faces: area 4 pi R^2 (slightly less), angles near 60 degrees */
+        json_t *areas = json_object_get(root, "face_areas");
+        CHECK_NEAR(json_real_value(json_object_get(areas, "total")), 4.0 * acos(-1.0), 0.02, 0.0);
+        json_t *ang = json_object_get(root, "angles");
+        CHECK_NEAR(json_real_value(json_object_get(ang, "median_degrees")), 60.0, 0.1, 0.0);
+        CHECK(json_real_value(json_object_get(ang, "fraction_below_10_degrees")) == 0.0);
+    }
+    json_decref(root);
+    CHECK_RUN("info grid.off --json", 0);
+    root = json_loads(out_text, 0, &jerr);
+    CHECK(root != NULL);
+    if (root) {
+        CHECK(json_integer_value(json_object_get(root, "boundary_loops")) == 1);
+        CHECK(json_is_null(json_object_get(root, "willmore_over_4pi")));
+    }
+    json_decref(root);
+
+    /* a broken file: exit 2, the message names the file */
+    FILE *f = fopen(in_dir("broken.obj"), "w");
+    if (f) {
+        fputs("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2\n", f);
+        fclose(f);
+    }
+    CHECK_RUN("info broken.obj", 2);
+    CHECK(strstr(err_text, "curvflow: broken.obj:") != NULL);
+    CHECK_RUN("info missing.obj", 2);
+    CHECK(strstr(err_text, "missing.obj") != NULL);
+    /* a non-manifold edge: the file reads, validation reports it, exit 2 */
+    f = fopen(in_dir("fin.obj"), "w");
+    if (f) {
+        fputs("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nf 1 2 3\nf 2 1 4\nf 1 2 5\n", f);
+        fclose(f);
+    }
+    CHECK_RUN("info fin.obj --json", 2);
+    root = json_loads(out_text, 0, &jerr);
+    CHECK(root != NULL);
+    if (root) {
+        json_t *val = json_object_get(root, "validation");
+        CHECK(json_is_false(json_object_get(val, "valid")));
+        CHECK(json_integer_value(json_object_get(val, "nonmanifold_edges")) >= 1);
+    }
+    json_decref(root);
+    CHECK(strstr(err_text, "fin.obj") != NULL);
+    CHECK_RUN("info", 1);
+    CHECK_RUN("info a.obj b.obj", 1);
+
+    /* every file of ../shared/meshes/bad is rejected with exit 2 and its own message */
+    const char *bad[] = {"bad/flipped_face_spot.obj", "bad/nan_coordinate_bunny.obj",
+                         "bad/nonmanifold_edges_beetle.obj", "bad/truncated_spot.obj"};
+    for (int i = 0; i < 4; ++i) {
+        const char *path = cft_shared_mesh_path(bad[i]);
+        if (!path) {
+            fprintf(stderr, "SKIP: ../shared/meshes absent, bad-file checks skipped\n");
+            break;
+        }
+        char args[4200];
+        snprintf(args, sizeof args, "info '%s'", path);
+        CHECK_RUN(args, 2);
+        CHECK(strstr(err_text, bad[i] + 4) != NULL);
+    }
+}
+
+static int count_lines(const char *text)
+{
+    int n = 0;
+    for (const char *c = text; *c; ++c) n += *c == '\n';
+    return n;
+}
+
+static void test_flow(void)
+{
+    CHECK_RUN("flow --list-methods", 0);
+    CHECK(strstr(out_text, "implicit-mcf") != NULL && strstr(out_text, "spin-willmore") != NULL);
+    CHECK(count_lines(out_text) == 7);
+    CHECK_RUN("flow --method implicit-mcf --list-params", 0);
+    CHECK(strstr(out_text, "time_step") != NULL && strstr(out_text, "[0.001]") != NULL);
+
+    CHECK_RUN("flow bumpy.obj -o smooth.obj --method implicit-mcf --steps 3 --log run.jsonl", 0);
+    CHECK(count_lines(err_text) >= 3); /* one status line per step */
+    CHECK(strstr(err_text, "step 3/3") != NULL);
+    cf_context *ctx = cft_context();
+    cf_mesh *in = NULL, *out = NULL;
+    CHECK_OK(ctx, cf_load_mesh(ctx, in_dir("bumpy.obj"), &in));
+    CHECK_OK(ctx, cf_load_mesh(ctx, in_dir("smooth.obj"), &out));
+    if (in && out) {
+        CHECK(cf_mesh_vertex_count(in) == cf_mesh_vertex_count(out));
+        CHECK(cf_mesh_uv_count(in) == cf_mesh_uv_count(out)); /* texture coordinates pass through */
+        CHECK(memcmp(cf_mesh_uv(in), cf_mesh_uv(out), 2 * (size_t)cf_mesh_uv_count(in) * sizeof(double)) == 0);
+    }
+    cf_mesh_destroy(&in);
+    cf_mesh_destroy(&out);
+    cf_context_destroy(&ctx);
+
+    /* the log: one object per step plus the start, energies decreasing */
+    static char log[1 << 16];
+    read_file(in_dir("run.jsonl"), log, sizeof log);
+    CHECK(count_lines(log) == 4);
+    char *save = NULL;
+    double prev = INFINITY;
+    int64_t expect = 0;
+    for (char *line = strtok_r(log, "\n", &save); line; line = strtok_r(NULL, "\n", &save)) {
+        json_error_t jerr;
+        json_t *o = json_loads(line, 0, &jerr);
+        CHECK(o != NULL);
+        if (!o) break;
+        CHECK(json_integer_value(json_object_get(o, "iteration")) == expect++);
+        double e = json_real_value(json_object_get(o, "energy"));
+        CHECK(e < prev);
+        prev = e;
+        CHECK(json_is_object(json_object_get(o, "terms")) && json_object_get(json_object_get(o, "terms"), "area"));
+        CHECK(json_is_real(json_object_get(o, "area_drift")) && json_is_real(json_object_get(o, "volume")));
+        CHECK(json_is_object(json_object_get(o, "seconds")));
+        if (expect > 1) CHECK(json_real_value(json_object_get(json_object_get(o, "residuals"), "solve")) < 1e-10);
+        json_decref(o);
+    }
+
+    CHECK_RUN("flow bumpy.obj -o p.ply -m conformal-mcf -n 2 -p rescale=true -p mass=voronoi -q", 0);
+    CHECK(err_text[0] == '\0');
+    CHECK(exists("p.ply"));
+    CHECK_RUN("flow bumpy.obj -o x.obj --method no-such", 1);
+    CHECK_RUN("flow bumpy.obj -o x.obj", 1);
+    CHECK_RUN("flow bumpy.obj --method implicit-mcf", 1);
+    CHECK_RUN("flow bumpy.obj -o x.obj --method implicit-mcf --param colour=red", 1);
+    CHECK(strstr(err_text, "colour") != NULL);
+    CHECK_RUN("flow bumpy.obj -o x.obj --method implicit-mcf --time-step -2", 1);
+    CHECK(strstr(err_text, "time_step") != NULL);
+    CHECK_RUN("flow bumpy.obj -o x.obj --method implicit-mcf --param rescale", 1);
+    CHECK_RUN("flow missing.obj -o x.obj --method implicit-mcf", 2);
+    CHECK_RUN("flow broken.obj -o x.obj --method implicit-mcf", 2);
+    CHECK(!exists("x.obj"));
+
+    /* numerical failure: exit 3, message names the iteration, last good state written */
+    CHECK_RUN("flow bumpy.obj -o blown.obj --method explicit-mcf --time-step 10 --steps 20", 3);
+    CHECK(strstr(err_text, "iteration") != NULL);
+    CHECK(strstr(err_text, "stability limit") != NULL);
+    CHECK(exists("blown.obj"));
+}
+
+static void test_compare(void)
+{
+    CHECK_RUN("compare bumpy.obj smooth.obj", 0);
+    CHECK(strstr(out_text, "quasi-conformal Q") != NULL);
+    CHECK_RUN("compare bumpy.obj bumpy.obj --json --ply same.ply", 0);
+    json_error_t jerr;
+    json_t *root = json_loads(out_text, 0, &jerr);
+    CHECK(root != NULL);
+    if (root) {
+        /* a mesh against itself: Q = 1 and no area distortion, to rounding */
+        json_t *q = json_object_get(root, "quasi_conformal_error");
+        CHECK_NEAR(json_real_value(json_object_get(q, "max")), 1.0, 0.0, 1e-9);
+        CHECK_NEAR(json_real_value(json_object_get(json_object_get(root, "log_area_distortion"), "max")), 0.0, 0.0, 1e-9);
+    }
+    json_decref(root);
+    /* the PLY carries the per-face fields */
+    cf_context *ctx = cft_context();
+    cf_mesh_data *data = NULL;
+    CHECK_OK(ctx, cf_read_mesh_file(ctx, in_dir("same.ply"), &data));
+    if (data) {
+        const cf_mesh_property *q = cf_mesh_data_face_property(data, "Q");
+        CHECK(q != NULL && cf_mesh_data_face_property(data, "log_area_distortion") != NULL);
+        if (q) CHECK_NEAR(q->values[0], 1.0, 0.0, 1e-9);
+    }
+    cf_mesh_data_destroy(&data);
+    cf_context_destroy(&ctx);
+    CHECK_RUN("compare bumpy.obj ico.obj", 2);
+    CHECK(strstr(err_text, "connectivity") != NULL);
+    CHECK_RUN("compare bumpy.obj missing.obj", 2);
+    CHECK_RUN("compare bumpy.obj", 1);
+}
+
+static void test_demo(void)
+{
+    CHECK_RUN("demo --output-dir demo --steps 3 --quiet", 0);
+    CHECK(strstr(out_text, "W/4pi") != NULL && strstr(out_text, "quasi-conformal Q") != NULL);
+    CHECK(strstr(out_text, "demo/output.obj") != NULL);
+    const char *files[] = {"demo/input.obj", "demo/output.obj", "demo/output.ply", "demo/log.jsonl",
+                           "demo/before.png", "demo/after.png", "demo/q.png"};
+    for (int i = 0; i < 7; ++i) CHECK(exists(files[i]));
+    cf_context *ctx = cft_context();
+    cf_mesh *mesh = NULL;
+    CHECK_OK(ctx, cf_load_mesh(ctx, in_dir("demo/output.obj"), &mesh));
+    if (mesh) CHECK(cf_mesh_uv_count(mesh) > 0 && cf_mesh_uv_triangles(mesh) != NULL);
+    cf_mesh_destroy(&mesh);
+    cf_context_destroy(&ctx);
+    static char log[1 << 16];
+    read_file(in_dir("demo/log.jsonl"), log, sizeof log);
+    CHECK(count_lines(log) == 4);
+    CHECK_RUN("demo --output-dir ico.obj", 2); /* a file, not a folder */
+    CHECK_RUN("demo extra", 1);
+}
+
+static int png_size(const char *name, int *w, int *h)
+{
+    unsigned char b[24];
+    FILE *f = fopen(in_dir(name), "rb");
+    if (!f) return 0;
+    size_t n = fread(b, 1, sizeof b, f);
+    fclose(f);
+    if (n != sizeof b || memcmp(b, "\x89PNG\r\n\x1a\n", 8) != 0) return 0;
+    *w = (b[16] << 24) | (b[17] << 16) | (b[18] << 8) | b[19];
+    *h = (b[20] << 24) | (b[21] << 16) | (b[22] << 8) | b[23];
+    return 1;
+}
+
+static void test_render(void)
+{
+    int w = 0, h = 0;
+    CHECK_RUN("render bumpy.obj -o b.png --uv-checker --size 120x80 --view 1,0,0 --perspective", 0);
+    CHECK(png_size("b.png", &w, &h) && w == 120 && h == 80);
+    CHECK_RUN("render same.ply -o q.png --field face:Q --range 1,2", 0);
+    CHECK(png_size("q.png", &w, &h) && w == 800 && h == 800);
+    CHECK_RUN("render same.ply -o x.png --field face:nothing", 2);
+    CHECK(strstr(err_text, "nothing") != NULL);
+    CHECK_RUN("render ico.obj -o x.png --uv-checker", 2); /* no uv */
+    CHECK_RUN("render ico.obj -o x.png --view 1,2", 1);
+    CHECK_RUN("render ico.obj -o x.png --size 0x10", 1);
+    CHECK_RUN("render ico.obj", 1);
+    CHECK(!exists("x.png"));
+}
+
+/* Atomic writes: only the files the commands named exist in the folder. */
+static void test_no_temp_files(void)
+{
+    DIR *d = opendir(dir);
+    CHECK(d != NULL);
+    if (!d) return;
+    const char *expected[] = {".", "..", "stdout.txt", "stderr.txt", "ico.obj", "bumpy.obj", "torus.ply", "grid.off",
+                              "kind0.ply", "kind1.ply", "kind2.ply", "kind3.ply", "kind4.ply", "broken.obj", "fin.obj",
+                              "smooth.obj", "run.jsonl", "p.ply", "blown.obj", "same.ply", "demo", "b.png", "q.png"};
+    struct dirent *e;
+    while ((e = readdir(d)) != NULL) {
+        int known = 0;
+        for (size_t i = 0; i < sizeof expected / sizeof expected[0]; ++i) known |= strcmp(e->d_name, expected[i]) == 0;
+        if (!known) cft_fail(__FILE__, __LINE__, "unexpected file left in %s: %s", dir, e->d_name);
+        ++cft_checks;
+    }
+    closedir(d);
+}
+
+static void remove_dir(const char *path)
+{
+    DIR *d = opendir(path);
+    if (!d) return;
+    struct dirent *e;
+    while ((e = readdir(d)) != NULL) {
+        if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0) continue;
+        char sub[4096];
+        snprintf(sub, sizeof sub, "%s/%s", path, e->d_name);
+        if (unlink(sub) != 0) remove_dir(sub);
+    }
+    closedir(d);
+    rmdir(path);
+}
+
+int main(void)
+{
+    snprintf(dir, sizeof dir, "%s/cli_%ld", CF_TEST_BINARY_DIR, (long)getpid());
+    if (mkdir(dir, 0777) != 0) {
+        fprintf(stderr, "cannot create %s\n", dir);
+        return 1;
+    }
+    CFT_RUN(test_help_and_usage);
+    CFT_RUN(test_generate);
+    CFT_RUN(test_info);
+    CFT_RUN(test_flow);
+    CFT_RUN(test_compare);
+    CFT_RUN(test_demo);
+    CFT_RUN(test_render);
+    CFT_RUN(test_no_temp_files);
+    int rc = cft_finish();
+    if (rc == 0) remove_dir(dir);
+    return rc;
+}

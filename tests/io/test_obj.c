@@ -1,0 +1,251 @@
+/* OBJ reader and writer: every face syntax, relative indices, polygons,
+ * ignored keywords, line endings, every error path, bit-exact round trips
+ * with texture coordinates, side CSV fields, allocation failures. */
+#define _POSIX_C_SOURCE 200809L
+#include "io_test_util.h"
+
+static const char *const square_v = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n";
+
+static cf_mesh_data *read_text(cf_context *ctx, const char *text)
+{
+    cf_mesh_data *d = NULL;
+    CHECK_OK(ctx, cf_read_mesh_memory(ctx, text, strlen(text), CF_FORMAT_OBJ, "t.obj", &d));
+    return d;
+}
+
+static void test_face_syntaxes(void)
+{
+    cf_context *ctx = cft_context();
+    static const char *const faces[] = {
+        "f 1 2 3\nf 1 3 4\n",
+        "f 1/1 2/2 3/3\nf 1/1 3/3 4/4\n",
+        "f 1/1/1 2/2/1 3/3/1\nf 1/1/1 3/3/1 4/4/1\n",
+        "f 1//1 2//1 3//1\nf 1//1 3//1 4//1\n",
+        "f -4 -3 -2\nf -4 -2 -1\n",               /* relative to the 4 vertices so far */
+        "f -4/-4 -3/-3 -2/-2\nf 1/-4 3/-2 4/-1\n", /* relative texture indices too */
+    };
+    static const int32_t expect[6] = {0, 1, 2, 0, 2, 3};
+    for (size_t i = 0; i < sizeof faces / sizeof faces[0]; ++i) {
+        char text[512];
+        snprintf(text, sizeof text, "%svt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 1\n%s", square_v, faces[i]);
+        cf_mesh_data *d = read_text(ctx, text);
+        if (!d) continue;
+        CHECK(d->vertex_count == 4);
+        CHECK(d->face_count == 2);
+        CHECK(memcmp(d->triangles, expect, sizeof expect) == 0);
+        bool with_vt = strchr(faces[i], '/') && !strstr(faces[i], "//");
+        CHECK(d->uv_count == (with_vt ? 4 : 0));
+        CHECK((d->uv_triangles != NULL) == with_vt);
+        if (with_vt && d->uv_triangles) {
+            CHECK(memcmp(d->uv_triangles, expect, sizeof expect) == 0);
+            CHECK(d->uv[2 * 2] == 1.0 && d->uv[2 * 2 + 1] == 1.0);
+        }
+        cf_mesh_data_destroy(&d);
+    }
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+static void test_polygons_and_ignored_lines(void)
+{
+    cf_context *ctx = cft_context();
+    iot_log log = {0, ""};
+    cf_context_set_log(ctx, iot_log_fn, &log, CF_LOG_WARNING);
+    /* \r\n endings, comments, o/g/s/usemtl/mtllib, two unknown keywords
+     * (one warning), a quad and a pentagon, no newline at the end. */
+    const char *text = "# comment\r\nmtllib a.mtl\r\no thing\r\ng group\r\ns off\r\nusemtl red\r\n"
+                       "v 0 0 0\r\nv 1 0 0\r\nv 1 1 0\r\nv 0 1 0\r\nv -1 0.5 0\r\n  \r\n"
+                       "curv 1 2\r\nl 1 2\r\n"
+                       "f 1 2 3 4\r\nf 1 4 5 2 3\r\nf 2 3 4";
+    cf_mesh_data *d = read_text(ctx, text);
+    if (d) {
+        CHECK(d->vertex_count == 5);
+        CHECK(d->face_count == 2 + 3 + 1);
+        CHECK(d->polygon_count == 2);
+        /* fan (v0, v_i, v_i+1) */
+        static const int32_t expect[18] = {0, 1, 2, 0, 2, 3, 0, 3, 4, 0, 4, 1, 0, 1, 2, 1, 2, 3};
+        CHECK(memcmp(d->triangles, expect, sizeof expect) == 0);
+    }
+    /* one warning for the unknown keywords, one for the polygons */
+    CHECK(log.warnings == 2);
+    CHECK(strstr(log.last, "2 polygons") != NULL);
+    cf_mesh_data_destroy(&d);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+static void test_partial_texture_is_dropped(void)
+{
+    cf_context *ctx = cft_context();
+    iot_log log = {0, ""};
+    cf_context_set_log(ctx, iot_log_fn, &log, CF_LOG_WARNING);
+    cf_mesh_data *d = read_text(ctx, "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nf 1/1 2/1 3/1\nf 1 3 4\n");
+    if (d) {
+        CHECK(d->face_count == 2);
+        CHECK(d->uv_count == 0 && d->uv == NULL && d->uv_triangles == NULL);
+    }
+    CHECK(log.warnings == 1);
+    cf_mesh_data_destroy(&d);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+static void test_errors(void)
+{
+    cf_context *ctx = cft_context();
+    cf_context_set_log(ctx, NULL, NULL, CF_LOG_ERROR);
+    char text[512];
+#define SQ(rest) (snprintf(text, sizeof text, "%s%s", square_v, rest), text)
+    IOT_EXPECT(ctx, CF_FORMAT_OBJ, SQ("f 1 2 0\n"), CF_ERR_INDEX_RANGE, "t: line 5: vertex index 0");
+    IOT_EXPECT(ctx, CF_FORMAT_OBJ, SQ("f 1 2 5\n"), CF_ERR_INDEX_RANGE, "line 5: vertex index 5 out of range");
+    IOT_EXPECT(ctx, CF_FORMAT_OBJ, SQ("f 1 2 -5\n"), CF_ERR_INDEX_RANGE, "line 5");
+    IOT_EXPECT(ctx, CF_FORMAT_OBJ, "f 1 2 3\nv 0 0 0\nv 1 0 0\nv 0 1 0\n", CF_ERR_INDEX_RANGE, "line 1");
+    IOT_EXPECT(ctx, CF_FORMAT_OBJ, SQ("vt 0 0\nf 1/1 2/2 3/1\n"), CF_ERR_INDEX_RANGE, "line 6: texture index 2");
+    IOT_EXPECT(ctx, CF_FORMAT_OBJ, SQ("f 1 2\nf 1 2 3\n"), CF_ERR_PARSE, "line 5: face has 2 vertices");
+    IOT_EXPECT(ctx, CF_FORMAT_OBJ, SQ("f 1 2 3\nf 1 2"), CF_ERR_TRUNCATED,
+               "line 6: face has 2 vertices (file ends inside a face line: truncated?)");
+    IOT_EXPECT(ctx, CF_FORMAT_OBJ, SQ("f 1 2\n"), CF_ERR_PARSE, "face has 2 vertices"); /* newline: not truncated */
+    IOT_EXPECT(ctx, CF_FORMAT_OBJ, "v 0 0 0\nv 1 0", CF_ERR_TRUNCATED, "line 2: vertex 1 has 2 coordinates");
+    IOT_EXPECT(ctx, CF_FORMAT_OBJ, "v 0 0 0\nv 1 0\nv 1 1 1\n", CF_ERR_PARSE, "line 2: vertex 1 has 2 coordinates");
+    IOT_EXPECT(ctx, CF_FORMAT_OBJ, "v 0 0 0\nv 1 0x 0\n", CF_ERR_PARSE, "line 2: vertex 1: bad number '0x'");
+    IOT_EXPECT(ctx, CF_FORMAT_OBJ, "v 0 0 0\nv 1 1e999 0\n", CF_ERR_NONFINITE, "line 2: vertex 1 has a non-finite");
+    IOT_EXPECT(ctx, CF_FORMAT_OBJ, "v 0 0 0\nv inf 1 0\n", CF_ERR_NONFINITE, "vertex 1 has a non-finite coordinate");
+    IOT_EXPECT(ctx, CF_FORMAT_OBJ, "vt nan 0\n", CF_ERR_NONFINITE, "line 1: texture coordinate 0");
+    IOT_EXPECT(ctx, CF_FORMAT_OBJ, "vt\n", CF_ERR_PARSE, "texture coordinate 0 has no values");
+    IOT_EXPECT(ctx, CF_FORMAT_OBJ, SQ("f 1/ 2/ 3/\n"), CF_ERR_PARSE, "bad face index '1/'");
+    IOT_EXPECT(ctx, CF_FORMAT_OBJ, SQ("f 1/1/ 2 3\n"), CF_ERR_PARSE, "bad face index");
+    IOT_EXPECT(ctx, CF_FORMAT_OBJ, SQ("f a 2 3\n"), CF_ERR_PARSE, "bad face index 'a'");
+    IOT_EXPECT(ctx, CF_FORMAT_OBJ, SQ("vt 0 0\nf 1/1 2 3\n"), CF_ERR_PARSE, "mixes corners");
+    /* a huge index saturates and is reported as out of range, not wrapped */
+    IOT_EXPECT(ctx, CF_FORMAT_OBJ, SQ("f 1 2 99999999999999999999999\n"), CF_ERR_INDEX_RANGE, "line 5");
+#undef SQ
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+static void test_empty_input(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh_data *d = NULL;
+    CHECK_OK(ctx, cf_read_mesh_memory(ctx, "", 0, CF_FORMAT_OBJ, NULL, &d));
+    if (d) CHECK(d->vertex_count == 0 && d->face_count == 0 && d->positions == NULL);
+    cf_mesh_data_destroy(&d);
+    CHECK_STATUS(cf_read_mesh_memory(ctx, "v 0 0 0\n", 8, CF_FORMAT_AUTO, NULL, &d), CF_ERR_INVALID_ARG);
+    CHECK_STATUS(cf_read_mesh_memory(ctx, NULL, 3, CF_FORMAT_OBJ, NULL, &d), CF_ERR_INVALID_ARG);
+    CHECK_STATUS(cf_read_mesh_file(ctx, "x.stl", &d), CF_ERR_UNSUPPORTED);
+    CHECK_STATUS(cf_read_mesh_file(ctx, "/nonexistent_dir/mesh.obj", &d), CF_ERR_IO);
+    CHECK(strcmp(cf_context_message(ctx), "/nonexistent_dir/mesh.obj: cannot open: No such file or directory") == 0);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+static void test_round_trip_with_uv_and_csv(void)
+{
+    cf_context *ctx = cft_context();
+    for (int uv_mode = 0; uv_mode < 3; ++uv_mode) {
+        cf_mesh *m = iot_octahedron_mesh(ctx, uv_mode);
+        double moved[3 * IOT_NV], vf[IOT_NV], ff[IOT_NF];
+        for (int i = 0; i < 3 * IOT_NV; ++i) moved[i] = cf_mesh_positions(m)[i] * 1.7 + 1e-17 * i;
+        for (int i = 0; i < IOT_NV; ++i) vf[i] = 1.0 / (i + 3.0);
+        for (int i = 0; i < IOT_NF; ++i) ff[i] = -0.1 * i;
+        cf_field fields[3] = {{"curv", CF_FIELD_VERTEX, vf}, {"q", CF_FIELD_FACE, ff}, {"w", CF_FIELD_VERTEX, vf}};
+        const char *path = cft_temp_path(".OBJ"); /* extension case does not matter */
+        char stem[4096];
+        snprintf(stem, sizeof stem, "%.*s", (int)(strlen(path) - 4), path);
+        CHECK_OK(ctx, cf_write_mesh_file(ctx, path, m, moved, fields, 3));
+        cf_mesh_data *d = NULL;
+        CHECK_OK(ctx, cf_read_mesh_file(ctx, path, &d));
+        if (d) {
+            CHECK(d->vertex_count == IOT_NV && d->face_count == IOT_NF);
+            CHECK(memcmp(d->positions, moved, sizeof moved) == 0); /* bit-exact */
+            CHECK(memcmp(d->triangles, cf_mesh_triangles(m), sizeof(int32_t) * 3 * IOT_NF) == 0);
+            CHECK(d->uv_count == cf_mesh_uv_count(m));
+            if (uv_mode && d->uv && d->uv_triangles) {
+                CHECK(memcmp(d->uv, cf_mesh_uv(m), sizeof(double) * 2 * (size_t)d->uv_count) == 0);
+                CHECK(memcmp(d->uv_triangles, cf_mesh_uv_triangles(m), sizeof(int32_t) * 3 * IOT_NF) == 0);
+            }
+            cf_mesh_data_destroy(&d);
+        }
+        /* side CSV: "<stem>.vertex.csv" with both vertex fields, "<stem>.face.csv" */
+        char csv_path[4200];
+        snprintf(csv_path, sizeof csv_path, "%s.vertex.csv", stem);
+        char *csv = iot_read(csv_path, NULL);
+        CHECK(csv != NULL);
+        if (csv) {
+            CHECK(strncmp(csv, "index,curv,w\n0,0.33333333333333331,0.33333333333333331\n1,0.25,0.25\n", 66) == 0);
+            double back = 0.0;
+            CHECK(sscanf(strstr(csv, "\n2,") + 3, "%lf", &back) == 1 && back == vf[2]);
+            free(csv);
+        }
+        remove(csv_path);
+        snprintf(csv_path, sizeof csv_path, "%s.face.csv", stem);
+        csv = iot_read(csv_path, NULL);
+        CHECK(csv != NULL && strncmp(csv, "index,q\n0,-0\n1,-0.10000000000000001\n", 36) == 0);
+        free(csv);
+        remove(csv_path);
+        remove(path);
+        cf_mesh_destroy(&m);
+    }
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+static void test_load_mesh(void)
+{
+    cf_context *ctx = cft_context();
+    const char *path = cft_temp_path(".obj");
+    iot_write_text(path, "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n");
+    cf_mesh *m = NULL;
+    CHECK_OK(ctx, cf_load_mesh(ctx, path, &m));
+    if (m) CHECK(cf_mesh_vertex_count(m) == 4 && cf_mesh_face_count(m) == 4 && cf_mesh_genus(m) == 0);
+    cf_mesh_destroy(&m);
+    /* a validation failure keeps the mesh core's status, prefixed by the path */
+    iot_write_text(path, "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 1\n");
+    CHECK_STATUS(cf_load_mesh(ctx, path, &m), CF_ERR_REPEATED_INDEX);
+    CHECK(strncmp(cf_context_message(ctx), path, strlen(path)) == 0);
+    CHECK(m == NULL);
+    remove(path);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+static void test_allocation_failures(void)
+{
+    cf_context *ctx = cft_context();
+    cf_context_set_log(ctx, NULL, NULL, CF_LOG_ERROR);
+    const char *text = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\n"
+                       "f 1/1 2/2 3/3 4/1\nf 1/1 3/3 4/2\n";
+    int failures = iot_nomem_sweep(ctx, text, strlen(text), CF_FORMAT_OBJ);
+    CHECK(failures >= 5); /* copy, positions, uv, triangles, uv triangles, result... */
+    /* the file path too: reading the file, parsing, building the mesh */
+    const char *path = cft_temp_path(".obj");
+    iot_write_text(path, "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n");
+    int64_t n = 1;
+    for (; n < 10000; ++n) {
+        cf_mesh *m = NULL;
+        cf_context_fail_allocation(ctx, n, 0);
+        cf_status st = cf_load_mesh(ctx, path, &m);
+        cf_context_fail_allocation(ctx, 0, 0);
+        cf_mesh_destroy(&m);
+        CHECK(cf_context_bytes_in_use(ctx) == 0);
+        if (st == CF_OK) break;
+        CHECK_STATUS(st, CF_ERR_NOMEM);
+        if (st != CF_ERR_NOMEM) break;
+    }
+    CHECK(n > 5 && n < 10000);
+    remove(path);
+    cf_context_destroy(&ctx);
+}
+
+int main(void)
+{
+    CFT_RUN(test_face_syntaxes);
+    CFT_RUN(test_polygons_and_ignored_lines);
+    CFT_RUN(test_partial_texture_is_dropped);
+    CFT_RUN(test_errors);
+    CFT_RUN(test_empty_input);
+    CFT_RUN(test_round_trip_with_uv_and_csv);
+    CFT_RUN(test_load_mesh);
+    CFT_RUN(test_allocation_failures);
+    return cft_finish();
+}

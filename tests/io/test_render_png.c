@@ -1,0 +1,197 @@
+/*
+ * Software renderer (src/io/render_png.c): silhouette size of a sphere
+ * under orthographic projection, headlight shading, depth test, uv
+ * checkerboard placement, PNG round trip (decoded with stb_image) and
+ * error paths.
+ */
+#include "curvflow/generate.h"
+#include "curvflow/ops.h"
+#include "curvflow/render.h"
+#include "test.h"
+
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#if defined(__GNUC__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wsign-compare"
+#pragma GCC diagnostic ignored "-Wunused-parameter"
+#pragma GCC diagnostic ignored "-Wunused-function"
+#pragma GCC diagnostic ignored "-Wshadow"
+#pragma GCC diagnostic ignored "-Wpedantic"
+#pragma GCC diagnostic ignored "-Wmissing-prototypes"
+#pragma GCC diagnostic ignored "-Wimplicit-fallthrough"
+#pragma GCC diagnostic ignored "-Wmissing-field-initializers"
+#pragma GCC diagnostic ignored "-Wstrict-prototypes"
+#pragma GCC diagnostic ignored "-Wtype-limits"
+#endif
+#define STB_IMAGE_IMPLEMENTATION
+#define STB_IMAGE_STATIC
+#define STBI_ONLY_PNG
+#include <stb/stb_image.h>
+#if defined(__GNUC__)
+#pragma GCC diagnostic pop
+#pragma GCC diagnostic ignored "-Wunused-function"
+#endif
+
+enum { W = 101, H = 101 };
+
+static int is_background(const uint8_t *p) { return p[0] == 255 && p[1] == 255 && p[2] == 255; }
+
+static void test_sphere_silhouette_and_shading(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *mesh = NULL;
+    CHECK_OK(ctx, cf_generate_icosphere(ctx, 4, 1.0, &mesh));
+    if (!mesh) { cf_context_destroy(&ctx); return; }
+    cf_render_options o;
+    cf_render_options_default(&o);
+    o.width = W;
+    o.height = H;
+    o.view[0] = 0.0;
+    o.view[1] = 0.0;
+    o.view[2] = 1.0;
+    uint8_t *rgb = malloc(3 * W * H);
+    CHECK_OK(ctx, cf_render_rgb(ctx, mesh, NULL, &o, rgb));
+    int covered = 0;
+    for (int p = 0; p < W * H; ++p) covered += !is_background(rgb + 3 * p);
+    /* The unit sphere fills `fill` (0.9) of the image width: a disc of radius
+     * 0.45 W, area fraction pi 0.45^2 = 0.636. Pixel-centre sampling of the
+     * boundary gives O(1/W) relative error (~2 % at W = 101). */
+    CHECK_NEAR((double)covered / (W * H), acos(-1.0) * 0.45 * 0.45, 0.03, 0.0);
+    /* Headlight: the centre faces the camera, so it shows the full colour. */
+    const uint8_t *c = rgb + 3 * (H / 2 * W + W / 2);
+    CHECK(abs((int)c[0] - (int)(0.72 * 255 + 0.5)) <= 2);
+    CHECK(abs((int)c[2] - (int)(0.84 * 255 + 0.5)) <= 2);
+    /* Near the rim the normal is almost perpendicular to the view: darker. */
+    const uint8_t *rim = rgb + 3 * (H / 2 * W + W / 2 + 44);
+    CHECK(!is_background(rim));
+    CHECK(rim[0] < c[0] / 2 + 10);
+
+    /* Depth test: colour faces by the sign of their normal's z; the visible
+     * side is the front (z > 0), shown red (top of the range). */
+    int32_t nf = cf_mesh_face_count(mesh);
+    double *normals = malloc(3 * (size_t)nf * sizeof *normals);
+    double *field = malloc((size_t)nf * sizeof *field);
+    CHECK_OK(ctx, cf_face_normals(ctx, mesh, cf_mesh_positions(mesh), normals));
+    for (int32_t f = 0; f < nf; ++f) field[f] = normals[3 * f + 2] > 0 ? 1.0 : -1.0;
+    o.face_field = field;
+    o.field_min = -1.0;
+    o.field_max = 1.0;
+    CHECK_OK(ctx, cf_render_rgb(ctx, mesh, NULL, &o, rgb));
+    CHECK(c[0] > 150 && c[2] < 60); /* red, not blue */
+    o.perspective = 1;
+    CHECK_OK(ctx, cf_render_rgb(ctx, mesh, NULL, &o, rgb));
+    CHECK(c[0] > 150 && c[2] < 60);
+    free(normals);
+    free(field);
+    free(rgb);
+    cf_mesh_destroy(&mesh);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+/* The checkerboard follows uv: on the unit grid seen from +z, uv = (x, y). */
+static void test_uv_checker(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *mesh = NULL;
+    CHECK_OK(ctx, cf_generate_grid(ctx, 8, 8, 1.0, 1.0, &mesh));
+    if (!mesh) { cf_context_destroy(&ctx); return; }
+    cf_render_options o;
+    cf_render_options_default(&o);
+    o.width = W;
+    o.height = H;
+    o.view[0] = 0.0;
+    o.view[1] = 0.0;
+    o.view[2] = 1.0;
+    o.ambient = 1.0; /* flat: only the checker changes the colour */
+    o.uv_checker = 1;
+    o.checker_count = 4.0;
+    uint8_t *rgb = malloc(3 * W * H);
+    CHECK_OK(ctx, cf_render_rgb(ctx, mesh, NULL, &o, rgb));
+    double scale = 0.9 * W / (2.0 * sqrt(0.5)); /* bounding radius of the unit square */
+    int light = 0, dark = 0, wrong = 0;
+    for (double u = 0.05; u < 1.0; u += 0.1) {
+        for (double v = 0.05; v < 1.0; v += 0.1) {
+            int px = (int)(W / 2.0 + (u - 0.5) * scale), py = (int)(H / 2.0 - (v - 0.5) * scale);
+            /* skip samples within a pixel of a checker line */
+            double fu = u * 4 - floor(u * 4), fv = v * 4 - floor(v * 4);
+            if (fu < 0.1 || fu > 0.9 || fv < 0.1 || fv > 0.9) continue;
+            const uint8_t *p = rgb + 3 * (py * W + px);
+            int expect_dark = ((int)floor(u * 4) + (int)floor(v * 4)) & 1;
+            int is_dark = p[0] < 0.72 * 255 * 0.8;
+            wrong += expect_dark != is_dark;
+            light += !is_dark;
+            dark += is_dark;
+        }
+    }
+    CHECK(wrong == 0);
+    CHECK(light > 10 && dark > 10);
+    free(rgb);
+
+    /* errors */
+    cf_mesh *ico = NULL;
+    CHECK_OK(ctx, cf_generate_icosphere(ctx, 1, 1.0, &ico));
+    uint8_t tiny[3 * 4 * 4];
+    o.width = o.height = 4;
+    CHECK_STATUS(cf_render_rgb(ctx, ico, NULL, &o, tiny), CF_ERR_INVALID_ARG); /* no uv */
+    CHECK(strstr(cf_context_message(ctx), "uv") != NULL);
+    o.uv_checker = 0;
+    o.up[0] = 0.0;
+    o.up[1] = 0.0;
+    o.up[2] = 2.0;
+    CHECK_STATUS(cf_render_rgb(ctx, ico, NULL, &o, tiny), CF_ERR_INVALID_ARG);
+    o.up[2] = 0.0;
+    o.up[1] = 1.0;
+    o.width = 0;
+    CHECK_STATUS(cf_render_rgb(ctx, ico, NULL, &o, tiny), CF_ERR_INVALID_ARG);
+    o.width = 4;
+    CHECK_OK(ctx, cf_render_rgb(ctx, ico, NULL, &o, tiny));
+    CHECK_STATUS(cf_render_png(ctx, "/nonexistent-dir/x.png", ico, NULL, &o), CF_ERR_IO);
+    cf_mesh_destroy(&ico);
+    cf_mesh_destroy(&mesh);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+/* PNG is lossless: decoding the file gives back the rendered bytes. */
+static void test_png_round_trip(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *mesh = NULL;
+    CHECK_OK(ctx, cf_generate_bumpy_sphere(ctx, 2, 0.2, 3u, &mesh));
+    if (!mesh) { cf_context_destroy(&ctx); return; }
+    cf_render_options o;
+    cf_render_options_default(&o);
+    o.width = 64;
+    o.height = 48;
+    o.uv_checker = 1;
+    uint8_t *rgb = malloc(3 * 64 * 48);
+    CHECK_OK(ctx, cf_render_rgb(ctx, mesh, NULL, &o, rgb));
+    char path[4096];
+    snprintf(path, sizeof path, "%s", cft_temp_path(".png"));
+    CHECK_OK(ctx, cf_render_png(ctx, path, mesh, NULL, &o));
+    int w = 0, h = 0, n = 0;
+    unsigned char *img = stbi_load(path, &w, &h, &n, 3);
+    CHECK(img != NULL);
+    if (img) {
+        CHECK(w == 64 && h == 48);
+        CHECK(memcmp(img, rgb, 3 * 64 * 48) == 0);
+        stbi_image_free(img);
+    }
+    unlink(path);
+    free(rgb);
+    cf_mesh_destroy(&mesh);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+int main(void)
+{
+    CFT_RUN(test_sphere_silhouette_and_shading);
+    CFT_RUN(test_uv_checker);
+    CFT_RUN(test_png_round_trip);
+    return cft_finish();
+}

@@ -1,0 +1,216 @@
+/*
+ * Isometric curve flow (Crane, Pinkall, Schroeder 2013, Sec. 5, Fig. 9-11):
+ * a noisy closed polyline flows to a circle while keeping its edge lengths
+ * and turning number; the closure gap before the Poisson projection is
+ * second order in the time step.
+ */
+#include "test.h"
+
+#include "curvflow/curve_flow.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#define PI 3.14159265358979323846
+
+/* n points on a blob r = 1 + 0.25 sin 3t with deterministic radial noise
+ * and uneven angular spacing. */
+static void noisy_circle(int32_t n, double noise, double *p)
+{
+    uint32_t s = 12345u;
+    for (int32_t i = 0; i < n; ++i) {
+        s = s * 1664525u + 1013904223u;
+        double t0 = 2.0 * PI * i / n;
+        double r = 1.0 + 0.25 * sin(3.0 * t0) + noise * ((double)(s >> 8) / 16777216.0 - 0.5);
+        double t = 2.0 * PI * (i + 0.3 * sin(3.0 * i)) / n;
+        p[2 * i] = r * cos(t);
+        p[2 * i + 1] = r * sin(t);
+    }
+}
+
+/* Radial deviation from the best centroid circle, relative. */
+static double circle_deviation(int32_t n, const double *p)
+{
+    double c[2] = {0, 0}, rm = 0.0, dev = 0.0;
+    for (int32_t i = 0; i < n; ++i) {
+        c[0] += p[2 * i] / n;
+        c[1] += p[2 * i + 1] / n;
+    }
+    for (int32_t i = 0; i < n; ++i) rm += hypot(p[2 * i] - c[0], p[2 * i + 1] - c[1]) / n;
+    for (int32_t i = 0; i < n; ++i) dev = fmax(dev, fabs(hypot(p[2 * i] - c[0], p[2 * i + 1] - c[1]) - rm) / rm);
+    return dev;
+}
+
+/* Fig. 9: flows to a round circle, lengths kept to 1e-3 per step at tau = 0.5,
+ * turning number kept, constraints <kappadot, {1, x, y}> = 0 to round-off. */
+static void test_noisy_polyline_to_circle(void)
+{
+    cf_context *ctx = cft_context();
+    int32_t n = 200;
+    double *p = malloc(2 * (size_t)n * sizeof(double));
+    noisy_circle(n, 0.02, p);
+    double dev0 = circle_deviation(n, p);
+    cf_curve_flow_options o;
+    cf_curve_flow_options_default(&o);
+    CHECK_NEAR(o.time_step, 0.5, 0, 0);
+    cf_curve_flow *flow = NULL;
+    CHECK_OK(ctx, cf_curve_flow_create(ctx, n, p, &o, &flow));
+    double e0 = cf_curve_flow_energy(flow);
+    double eprev = e0;
+    double prev[400];
+    for (int step = 0; step < 10 && flow; ++step) {
+        memcpy(prev, cf_curve_flow_points(flow), sizeof prev);
+        cf_curve_flow_info info;
+        CHECK_OK(ctx, cf_curve_flow_step(flow, &info));
+        /* per-step length change relative to the previous step's lengths */
+        const double *q = cf_curve_flow_points(flow);
+        double worst = 0.0;
+        for (int32_t i = 0; i < n; ++i) {
+            int32_t j = (i + 1) % n;
+            double l0 = hypot(prev[2 * j] - prev[2 * i], prev[2 * j + 1] - prev[2 * i + 1]);
+            double l1 = hypot(q[2 * j] - q[2 * i], q[2 * j + 1] - q[2 * i + 1]);
+            worst = fmax(worst, fabs(l1 - l0) / l0);
+        }
+        if (step == 0) fprintf(stderr, "   step 1: max relative edge length change %.3g\n", worst);
+        CHECK_LE(worst, 1e-3);
+        CHECK(info.turning_number == 1);
+        CHECK_LE(info.constraint_residual, 1e-10);
+        CHECK_LE(info.energy, eprev * (1.0 + 1e-12));
+        eprev = info.energy;
+    }
+    double dev = circle_deviation(n, cf_curve_flow_points(flow));
+    fprintf(stderr, "   energy %.4f -> %.6f, circle deviation %.3g -> %.3g\n", e0, eprev, dev0, dev);
+    /* a circle of the same length L has E = (2 pi)^2 / L */
+    double length = 0.0;
+    for (int32_t i = 0; i < n; ++i) {
+        int32_t j = (i + 1) % n;
+        length += hypot(p[2 * j] - p[2 * i], p[2 * j + 1] - p[2 * i + 1]);
+    }
+    CHECK_NEAR(eprev, 4.0 * PI * PI / length, 2e-3, 0.0);
+    CHECK_LE(dev, 2e-3);
+    cf_curve_flow_destroy(&flow);
+    free(p);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+/* Fig. 11: the closure gap of one step converges quadratically in tau
+ * (the constraints remove the first-order part, App. A). */
+static void test_closure_gap_quadratic(void)
+{
+    cf_context *ctx = cft_context();
+    int32_t n = 200;
+    double *p = malloc(2 * (size_t)n * sizeof(double));
+    noisy_circle(n, 0.3, p);
+    double gaps[4];
+    double tau = 0.2;
+    for (int k = 0; k < 4; ++k, tau *= 0.5) {
+        cf_curve_flow_options o = {tau};
+        cf_curve_flow *flow = NULL;
+        CHECK_OK(ctx, cf_curve_flow_create(ctx, n, p, &o, &flow));
+        cf_curve_flow_info info;
+        CHECK_OK(ctx, cf_curve_flow_step(flow, &info));
+        gaps[k] = info.closure_gap;
+        cf_curve_flow_destroy(&flow);
+    }
+    for (int k = 0; k < 3; ++k) {
+        double rate = log2(gaps[k] / gaps[k + 1]);
+        fprintf(stderr, "   gap %.3g -> %.3g: order %.3f\n", gaps[k], gaps[k + 1], rate);
+        CHECK(rate > 1.7 && rate < 2.3);
+    }
+    free(p);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+/* A figure-eight keeps turning number 0; a doubly wound circle keeps 2. */
+static void test_turning_number_kept(void)
+{
+    cf_context *ctx = cft_context();
+    int32_t n = 120;
+    double p[240];
+    for (int32_t i = 0; i < n; ++i) {
+        double t = 2.0 * PI * i / n;
+        p[2 * i] = sin(t) * (1.0 + 0.05 * cos(5 * t));
+        p[2 * i + 1] = sin(t) * cos(t);
+    }
+    cf_curve_flow *flow = NULL;
+    CHECK_OK(ctx, cf_curve_flow_create(ctx, n, p, NULL, &flow));
+    cf_curve_flow_info info = {0};
+    for (int s = 0; s < 5; ++s) CHECK_OK(ctx, cf_curve_flow_step(flow, &info));
+    CHECK(info.turning_number == 0);
+    cf_curve_flow_destroy(&flow);
+    for (int32_t i = 0; i < n; ++i) {
+        double t = 4.0 * PI * i / n;
+        double r = 1.0 + 0.2 * (double)i / n;   /* a spiral closing on itself: two turns */
+        p[2 * i] = r * cos(t);
+        p[2 * i + 1] = r * sin(t);
+    }
+    CHECK_OK(ctx, cf_curve_flow_create(ctx, n, p, NULL, &flow));
+    for (int s = 0; s < 5; ++s) CHECK_OK(ctx, cf_curve_flow_step(flow, &info));
+    CHECK(info.turning_number == 2);
+    cf_curve_flow_destroy(&flow);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+static void test_invalid_input(void)
+{
+    cf_context *ctx = cft_context();
+    cf_curve_flow *flow = NULL;
+    double p[6] = {0, 0, 1, 0, 1, 0};
+    CHECK_STATUS(cf_curve_flow_create(ctx, 3, p, NULL, &flow), CF_ERR_DEGENERATE_FACE);
+    CHECK(strstr(cf_context_message(ctx), "edge 1") != NULL);
+    CHECK_STATUS(cf_curve_flow_create(ctx, 2, p, NULL, &flow), CF_ERR_INVALID_ARG);
+    p[0] = NAN;
+    CHECK_STATUS(cf_curve_flow_create(ctx, 3, p, NULL, &flow), CF_ERR_NONFINITE);
+    CHECK(flow == NULL);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+/* CSV and SVG round trips, and the SVG path subset (absolute + relative). */
+static void test_files(void)
+{
+    cf_context *ctx = cft_context();
+    double p[8] = {0, 0, 2, 0, 2, 1, 0, 1};
+    const char *csv = cft_temp_path(".csv");
+    CHECK_OK(ctx, cf_curve_write(ctx, csv, 4, p));
+    cf_curve *c = NULL;
+    CHECK_OK(ctx, cf_curve_read(ctx, csv, &c));
+    CHECK(c && c->count == 4);
+    for (int i = 0; c && i < 8; ++i) CHECK_NEAR(c->points[i], p[i], 0, 0);
+    cf_curve_destroy(&c);
+    const char *svg = cft_temp_path(".svg");
+    CHECK_OK(ctx, cf_curve_write(ctx, svg, 4, p));
+    CHECK_OK(ctx, cf_curve_read(ctx, svg, &c));
+    CHECK(c && c->count == 4);
+    for (int i = 0; c && i < 8; ++i) CHECK_NEAR(c->points[i], p[i], 0, 0);
+    cf_curve_destroy(&c);
+    const char *path = cft_temp_path(".svg");
+    FILE *fp = fopen(path, "w");
+    fprintf(fp, "<svg><path fill=\"none\" d=\"M 0,0 h 2 v 1 L 0 1 z\"/></svg>\n");
+    fclose(fp);
+    CHECK_OK(ctx, cf_curve_read(ctx, path, &c));
+    CHECK(c && c->count == 4);
+    for (int i = 0; c && i < 8; ++i) CHECK_NEAR(c->points[i], p[i], 0, 0);
+    cf_curve_destroy(&c);
+    fp = fopen(path, "w");
+    fprintf(fp, "<svg><path d=\"M0 0 C 1 1 2 2 3 3\"/></svg>\n");
+    fclose(fp);
+    CHECK_STATUS(cf_curve_read(ctx, path, &c), CF_ERR_PARSE);
+    CHECK(strstr(cf_context_message(ctx), "'C'") != NULL);
+    CHECK_STATUS(cf_curve_read(ctx, cft_temp_path(".csv"), &c), CF_ERR_IO);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+int main(void)
+{
+    CFT_RUN(test_noisy_polyline_to_circle);
+    CFT_RUN(test_closure_gap_quadratic);
+    CFT_RUN(test_turning_number_kept);
+    CFT_RUN(test_invalid_input);
+    CFT_RUN(test_files);
+    return cft_finish();
+}

@@ -1,0 +1,143 @@
+/* Quasi-conformal error (Sander 2001), log area distortion, angle change:
+ * Q = 1 for similarities to 1e-12, analytic Q for a shear, statistics. */
+#include "curvflow/generate.h"
+#include "curvflow/io.h"
+#include "curvflow/metrics.h"
+#include "test.h"
+
+#include <stdlib.h>
+
+/* y = s R x + t with R about axis (2, -1, 2)/3 by 1.1 rad */
+static void similarity(int32_t nv, const double *x, double s, double *y)
+{
+    double k[3] = {2.0 / 3.0, -1.0 / 3.0, 2.0 / 3.0}, c = cos(1.1), sn = sin(1.1);
+    for (int32_t v = 0; v < nv; ++v) {
+        const double *p = x + 3 * v;
+        double kp = k[0] * p[0] + k[1] * p[1] + k[2] * p[2];
+        double cr[3] = {k[1] * p[2] - k[2] * p[1], k[2] * p[0] - k[0] * p[2], k[0] * p[1] - k[1] * p[0]};
+        for (int i = 0; i < 3; ++i) y[3 * v + i] = s * (p[i] * c + cr[i] * sn + k[i] * kp * (1 - c)) + 0.3 * (i - 1);
+    }
+}
+
+static void check_similarity(cf_context *ctx, const cf_mesh *m)
+{
+    int32_t nv = cf_mesh_vertex_count(m), nf = cf_mesh_face_count(m);
+    const double *x = cf_mesh_positions(m);
+    double *y = malloc(sizeof(double) * 3 * nv), *q = malloc(sizeof(double) * nf), *la = malloc(sizeof(double) * nf);
+    double *da = malloc(sizeof(double) * nv);
+    similarity(nv, x, 3.7, y);
+    cf_stats st, sa, sg;
+    CHECK_OK(ctx, cf_quasi_conformal_error(ctx, m, x, y, q, &st));
+    CHECK_OK(ctx, cf_log_area_distortion(ctx, m, x, y, la, &sa));
+    CHECK_OK(ctx, cf_angle_change(ctx, m, x, y, da, &sg));
+    for (int32_t f = 0; f < nf; ++f) {
+        CHECK_NEAR(q[f], 1.0, 0, 1e-12);
+        CHECK_NEAR(la[f], 0.0, 0, 1e-12);
+    }
+    for (int32_t v = 0; v < nv; ++v) CHECK_NEAR(da[v], 0.0, 0, 1e-12);
+    CHECK_NEAR(st.max, 1.0, 0, 1e-12);
+    CHECK_NEAR(st.weighted_mean, 1.0, 0, 1e-12);
+    CHECK(st.count == nf);
+    fprintf(stderr, "  similarity: max Q - 1 = %.2e, max |log area| = %.2e, max angle change = %.2e\n", st.max - 1,
+            fmax(fabs(sa.min), fabs(sa.max)), sg.max);
+    free(y);
+    free(q);
+    free(la);
+    free(da);
+}
+
+static void test_similarity(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *m = NULL;
+    CHECK_OK(ctx, cf_generate_bumpy_sphere(ctx, 3, 0.3, 12u, &m));
+    if (m) check_similarity(ctx, m);
+    cf_mesh_destroy(&m);
+    const char *spot = cft_shared_mesh_path("spot_3k.obj");
+    if (spot) {
+        CHECK_OK(ctx, cf_load_mesh(ctx, spot, &m));
+        if (m) check_similarity(ctx, m);
+        cf_mesh_destroy(&m);
+    } else {
+        fprintf(stderr, "  (spot_3k.obj part skipped: ../shared absent)\n");
+    }
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+/* Shear (x, y) -> (x + k y, y): singular values (sqrt(k^2 + 4) +- k) / 2,
+ * Q = ((sqrt(k^2 + 4) + k) / 2)^2 on every face; area unchanged (det 1). */
+static void test_shear(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *m = NULL;
+    CHECK_OK(ctx, cf_generate_grid(ctx, 7, 5, 1.0, 1.0, &m));
+    if (!m) return;
+    int32_t nv = cf_mesh_vertex_count(m), nf = cf_mesh_face_count(m);
+    const double *x = cf_mesh_positions(m);
+    double *y = malloc(sizeof(double) * 3 * nv), *q = malloc(sizeof(double) * nf);
+    const double k = 0.5;
+    for (int32_t v = 0; v < nv; ++v) {
+        y[3 * v] = x[3 * v] + k * x[3 * v + 1];
+        y[3 * v + 1] = x[3 * v + 1];
+        y[3 * v + 2] = x[3 * v + 2];
+    }
+    double s1 = (sqrt(k * k + 4) + k) / 2, expect = s1 * s1;
+    cf_stats st, sa, sg;
+    CHECK_OK(ctx, cf_quasi_conformal_error(ctx, m, x, y, q, &st));
+    for (int32_t f = 0; f < nf; ++f) CHECK_NEAR(q[f], expect, 1e-13, 0);
+    CHECK_NEAR(st.p50, expect, 1e-13, 0);
+    CHECK_NEAR(st.p95, expect, 1e-13, 0);
+    CHECK_OK(ctx, cf_log_area_distortion(ctx, m, x, y, NULL, &sa));
+    CHECK_NEAR(sa.max, 0.0, 0, 1e-13);
+    CHECK_NEAR(sa.weighted_std, 0.0, 0, 1e-13);
+    CHECK_OK(ctx, cf_angle_change(ctx, m, x, y, NULL, &sg));
+    CHECK(sg.max > 0.1);
+    /* stretching the top half by 2 in y: log area change +-log(2)... after
+     * normalising the total, top faces get log 2 - log(1.5) and bottom
+     * faces -log(1.5) (grid y in [0, 1], 5 rows: use row-aligned cut at y = 0.4) */
+    for (int32_t v = 0; v < nv; ++v) {
+        y[3 * v] = x[3 * v];
+        y[3 * v + 1] = x[3 * v + 1] <= 0.4 + 1e-12 ? x[3 * v + 1] : 0.4 + 2.0 * (x[3 * v + 1] - 0.4);
+    }
+    double *la = malloc(sizeof(double) * nf);
+    CHECK_OK(ctx, cf_log_area_distortion(ctx, m, x, y, la, &sa));
+    double total = 0.4 + 2.0 * 0.6;
+    const int32_t *t = cf_mesh_triangles(m);
+    for (int32_t f = 0; f < nf; ++f) {
+        double cy = (x[3 * t[3 * f] + 1] + x[3 * t[3 * f + 1] + 1] + x[3 * t[3 * f + 2] + 1]) / 3;
+        CHECK_NEAR(la[f], (cy > 0.4 ? log(2.0) : 0.0) - log(total), 0, 1e-12);
+    }
+    /* area-weighted mean of log distortion is <= 0 (Jensen) */
+    CHECK(sa.weighted_mean < 0);
+    free(la);
+    free(y);
+    free(q);
+    cf_mesh_destroy(&m);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+static void test_stats(void)
+{
+    cf_context *ctx = cft_context();
+    const double v[5] = {5, 1, 4, 2, 3}, w[5] = {1, 1, 1, 1, 4};
+    cf_stats st;
+    CHECK_OK(ctx, cf_stats_compute(ctx, 5, v, w, &st));
+    CHECK(st.count == 5 && st.min == 1 && st.max == 5);
+    CHECK_NEAR(st.mean, 3.0, 1e-15, 0);
+    CHECK_NEAR(st.weighted_mean, (5 + 1 + 4 + 2 + 12) / 8.0, 1e-15, 0);
+    CHECK(st.p50 == 3 && st.p95 == 5);
+    double bad[2] = {1, NAN};
+    CHECK_STATUS(cf_stats_compute(ctx, 2, bad, NULL, &st), CF_ERR_NONFINITE);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+int main(void)
+{
+    CFT_RUN(test_similarity);
+    CFT_RUN(test_shear);
+    CFT_RUN(test_stats);
+    return cft_finish();
+}

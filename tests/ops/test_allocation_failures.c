@@ -1,0 +1,119 @@
+/* Failure injection (as CHOLMOD's t_memory): every allocation of each
+ * operator is made to fail in turn; the call must return CF_ERR_NOMEM,
+ * leave no output object and leak nothing. */
+#include "curvflow/generate.h"
+#include "curvflow/ops.h"
+#include "test.h"
+
+#include <stdlib.h>
+
+typedef cf_status (*op_fn)(cf_context *ctx, const cf_mesh *m, const double *x, void *scratch);
+
+static cf_status op_laplacian(cf_context *ctx, const cf_mesh *m, const double *x, void *scratch)
+{
+    cf_sparse *l = NULL;
+    cf_status s = cf_cotan_laplacian(ctx, m, x, &l);
+    if (s != CF_OK && l) s = CF_ERR_INVALID_ARG; /* output must stay NULL on failure */
+    cf_sparse_destroy(&l);
+    (void)scratch;
+    return s;
+}
+
+static cf_status op_mass(cf_context *ctx, const cf_mesh *m, const double *x, void *scratch)
+{
+    cf_status s = CF_OK;
+    for (int k = 0; k <= 2 && s == CF_OK; ++k) {
+        cf_sparse *mm = NULL;
+        s = cf_mass_matrix(ctx, m, x, (cf_mass_kind)k, &mm);
+        if (s != CF_OK && mm) s = CF_ERR_INVALID_ARG;
+        cf_sparse_destroy(&mm);
+    }
+    (void)scratch;
+    return s;
+}
+
+static cf_status op_dec(cf_context *ctx, const cf_mesh *m, const double *x, void *scratch)
+{
+    cf_sparse *a = NULL, *b = NULL;
+    cf_status s = cf_dec_d0(ctx, m, &a);
+    if (s == CF_OK) s = cf_dec_d1(ctx, m, &b);
+    if (s != CF_OK && b) s = CF_ERR_INVALID_ARG;
+    cf_sparse_destroy(&a);
+    cf_sparse_destroy(&b);
+    (void)x;
+    (void)scratch;
+    return s;
+}
+
+static cf_status op_curvature(cf_context *ctx, const cf_mesh *m, const double *x, void *scratch)
+{
+    double w;
+    cf_status s = cf_mean_curvature(ctx, m, x, scratch);
+    if (s == CF_OK) s = cf_willmore_energy(ctx, m, x, &w);
+    return s;
+}
+
+static cf_status op_harmonic(cf_context *ctx, const cf_mesh *m, const double *x, void *scratch)
+{
+    int32_t dim;
+    return cf_harmonic_basis(ctx, m, x, &dim, scratch);
+}
+
+/* may_recover: the call goes through CHOLMOD's analysis, which tries
+ * several orderings and keeps the best that succeeded, so a failed
+ * allocation inside one of them can legitimately end in CF_OK. */
+static void run(cf_context *ctx, const cf_mesh *m, op_fn fn, void *scratch, const char *name, int may_recover)
+{
+    const double *x = cf_mesh_positions(m);
+    size_t base = cf_context_bytes_in_use(ctx);
+    int64_t before = cf_context_allocation_count(ctx);
+    CHECK_OK(ctx, fn(ctx, m, x, scratch));
+    int64_t count = cf_context_allocation_count(ctx) - before;
+    CHECK(cf_context_bytes_in_use(ctx) == base);
+    int bad = 0;
+    for (int64_t k = 1; k <= count; ++k) {
+        cf_context_fail_allocation(ctx, k, 0);
+        cf_status s = fn(ctx, m, x, scratch);
+        cf_context_fail_allocation(ctx, 0, 0);
+        if ((s != CF_ERR_NOMEM && !(may_recover && s == CF_OK)) || cf_context_bytes_in_use(ctx) != base) {
+            ++bad;
+            fprintf(stderr, "  %s: failing allocation %lld gave %s, %zu bytes left\n", name, (long long)k,
+                    cf_status_name(s), cf_context_bytes_in_use(ctx) - base);
+        }
+    }
+    CHECK(bad == 0);
+    fprintf(stderr, "  %-12s %lld allocations, each failure handled\n", name, (long long)count);
+}
+
+static void quiet(void *user, cf_log_level level, const char *line)
+{
+    (void)user;
+    (void)level;
+    (void)line;
+}
+
+static void test_injection(void)
+{
+    cf_context *ctx = NULL;
+    CHECK_STATUS(cf_context_create(&ctx), CF_OK);
+    cf_context_set_log(ctx, quiet, NULL, CF_LOG_ERROR);
+    cf_mesh *m = NULL;
+    CHECK_OK(ctx, cf_generate_torus(ctx, 1.0, 0.4, 16, 8, &m));
+    if (!m) return;
+    double *scratch = malloc(sizeof(double) * 2 * (size_t)cf_mesh_edge_count(m));
+    run(ctx, m, op_laplacian, NULL, "laplacian", 0);
+    run(ctx, m, op_mass, NULL, "mass", 0);
+    run(ctx, m, op_dec, NULL, "dec", 0);
+    run(ctx, m, op_curvature, scratch, "curvature", 0);
+    run(ctx, m, op_harmonic, scratch, "harmonic", 1);
+    free(scratch);
+    cf_mesh_destroy(&m);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+int main(void)
+{
+    CFT_RUN(test_injection);
+    return cft_finish();
+}

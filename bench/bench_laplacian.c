@@ -8,7 +8,7 @@
  * matrix (block 1). Prints TSV; asserts nothing. Times are the minimum over
  * repetitions, in milliseconds.
  *
- * usage: bench_laplacian [--max-vertices N] [--no-thread-fix] [--repeat R]
+ * usage: bench_laplacian [--max-vertices N] [--no-thread-fix] [--repeat R] [--ordering auto|amd|metis]
  */
 #include "curvflow/generate.h"
 #include "curvflow/linalg.h"
@@ -34,6 +34,8 @@ static int fail(cf_context *ctx, const char *what, cf_status st)
     fprintf(stderr, "bench_laplacian: %s failed: %s: %s\n", what, cf_status_name(st), cf_context_message(ctx));
     return 1;
 }
+
+static cf_ordering bench_ordering = CF_ORDERING_AUTO;
 
 static int run(cf_context *ctx, const char *name, const cf_mesh *mesh, int repeat)
 {
@@ -71,7 +73,10 @@ static int run(cf_context *ctx, const char *name, const cf_mesh *mesh, int repea
     cf_solver_timings tm;
     for (int r = 0; r < repeat; ++r) {
         cf_cholesky_destroy(&chol);
-        if ((st = cf_cholesky_create(ctx, l, NULL, &chol)) != CF_OK) return fail(ctx, "analyse", st);
+        cf_cholesky_options o1;
+        cf_cholesky_options_default(&o1);
+        o1.ordering = bench_ordering;
+        if ((st = cf_cholesky_create(ctx, l, &o1, &chol)) != CF_OK) return fail(ctx, "analyse", st);
         cf_cholesky_timings(chol, &tm);
         analyze = fmin(analyze, 1e3 * tm.analyze_seconds);
     }
@@ -99,6 +104,7 @@ static int run(cf_context *ctx, const char *name, const cf_mesh *mesh, int repea
         cf_cholesky_options o;
         cf_cholesky_options_default(&o);
         o.block_size = blocks;
+        o.ordering = bench_ordering;
         int reps = nv > 200000 ? 1 : repeat;
         for (int r = 0; r < reps; ++r) {
             if ((st = cf_cholesky_create(ctx, l3, &o, &chol)) != CF_OK) return fail(ctx, "analyse kron", st);
@@ -131,8 +137,13 @@ int main(int argc, char **argv)
         if (!strcmp(argv[i], "--max-vertices") && i + 1 < argc) max_vertices = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--repeat") && i + 1 < argc) repeat = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--no-thread-fix")) cf_linalg_set_thread_fix(0);
+        else if (!strcmp(argv[i], "--ordering") && i + 1 < argc) {
+            ++i;
+            bench_ordering = !strcmp(argv[i], "amd") ? CF_ORDERING_AMD : !strcmp(argv[i], "metis") ? CF_ORDERING_METIS
+                           : CF_ORDERING_AUTO;
+        }
         else {
-            fprintf(stderr, "usage: %s [--max-vertices N] [--no-thread-fix] [--repeat R]\n", argv[0]);
+            fprintf(stderr, "usage: %s [--max-vertices N] [--no-thread-fix] [--repeat R] [--ordering auto|amd|metis]\n", argv[0]);
             return 1;
         }
     }

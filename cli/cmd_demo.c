@@ -32,7 +32,7 @@ static void usage(FILE *out)
             "  before.png, after.png   pictures with a uv checkerboard (texture preservation)\n"
             "  q.png                   the result coloured by Q (blue 1 .. red max)\n"
             "and prints W/4pi before and after and the Q statistics.\n\n"
-            "  -d, --output-dir DIR  output folder [curvflow-demo] (created if missing)\n"
+            "  -d, --output-dir DIR  output folder [demo-output] (created if missing)\n"
             "  -n, --steps N         number of steps [20 for spin-willmore, 10 for the fallback]\n"
             "  -q, --quiet           no per-step status lines\n"
             "  -h, --help            show this help\n");
@@ -53,7 +53,7 @@ int cli_demo(int argc, char **argv)
                                              {"quiet", no_argument, NULL, 'q'},
                                              {"help", no_argument, NULL, 'h'},
                                              {NULL, 0, NULL, 0}};
-    const char *dir = "curvflow-demo";
+    const char *dir = "demo-output";
     long long steps = -1;
     bool quiet = false;
     int c;

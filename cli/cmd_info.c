@@ -19,7 +19,8 @@ static void usage(FILE *out)
     fprintf(out,
             "Usage: curvflow info IN [--json]\n"
             "Prints counts, connected components, boundary loops, genus, Euler characteristic,\n"
-            "the validation report, corner angle statistics (min / median / fraction below 10 deg),\n"
+            "the validation report, corner angle statistics (min / median / fraction below 10 deg,\n"
+            "and per face: median smallest angle, fraction of faces whose smallest angle is below 10 deg),\n"
             "face area statistics and, for closed meshes, the Willmore energy W/4pi.\n\n"
             "  --json       print one JSON object instead of text\n"
             "  -h, --help   show this help\n\n"
@@ -32,8 +33,9 @@ static int cmp_double(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-/* Median of a sorted array. */
-static double median(const double *v, size_t n) { return n == 0 ? NAN : (n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2])); }
+/* Median of a sorted array: the element at n / 2 (the upper median for
+ * even n, as ../shared/meshes/CHECKS.tsv computes it). */
+static double median(const double *v, size_t n) { return n == 0 ? NAN : v[n / 2]; }
 
 static json_t *num(double v) { return isfinite(v) ? json_real(v) : json_null(); }
 
@@ -118,15 +120,29 @@ int cli_info(int argc, char **argv)
             code = cli_fail(ctx, path, st);
             goto done;
         }
-        size_t na = 3 * (size_t)nf, below = 0;
+        size_t na = 3 * (size_t)nf, below = 0, faces_below = 0;
         const double deg = 180.0 / acos(-1.0);
         for (size_t i = 0; i < na; ++i) below += angles[i] * deg < 10.0;
+        /* per-face smallest angle (the usual mesh-quality figure), kept in areas[] temporarily */
+        for (int32_t f = 0; f < nf; ++f) {
+            double m = fmin(angles[3 * f], fmin(angles[3 * f + 1], angles[3 * f + 2]));
+            areas[f] = m;
+            faces_below += m * deg < 10.0;
+        }
+        qsort(areas, (size_t)nf, sizeof *areas, cmp_double);
+        double median_min = median(areas, (size_t)nf) * deg;
+        if ((st = cf_face_areas(ctx, mesh, x, areas)) != CF_OK) {
+            code = cli_fail(ctx, path, st);
+            goto done;
+        }
         qsort(angles, na, sizeof *angles, cmp_double);
         json_t *ang = json_object();
         json_object_set_new(ang, "min_degrees", num(angles[0] * deg));
         json_object_set_new(ang, "median_degrees", num(median(angles, na) * deg));
         json_object_set_new(ang, "max_degrees", num(angles[na - 1] * deg));
         json_object_set_new(ang, "fraction_below_10_degrees", num((double)below / (double)na));
+        json_object_set_new(ang, "median_face_min_degrees", num(median_min));
+        json_object_set_new(ang, "fraction_faces_min_below_10_degrees", num((double)faces_below / (double)nf));
         json_object_set_new(root, "angles", ang);
         double total = 0.0;
         for (int32_t f = 0; f < nf; ++f) total += areas[f];
@@ -177,6 +193,9 @@ int cli_info(int argc, char **argv)
                    json_real_value(json_object_get(ang, "median_degrees")),
                    json_real_value(json_object_get(ang, "max_degrees")),
                    100.0 * json_real_value(json_object_get(ang, "fraction_below_10_degrees")));
+            printf("face min angle: median %.4g deg, faces with min angle below 10 deg: %.2f %%\n",
+                   json_real_value(json_object_get(ang, "median_face_min_degrees")),
+                   100.0 * json_real_value(json_object_get(ang, "fraction_faces_min_below_10_degrees")));
             printf("face areas:    total %.6g  min %.4g  median %.4g  max %.4g  (max/min %.3g)\n",
                    json_real_value(json_object_get(ar, "total")), json_real_value(json_object_get(ar, "min")),
                    json_real_value(json_object_get(ar, "median")), json_real_value(json_object_get(ar, "max")),

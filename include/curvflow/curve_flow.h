@@ -33,7 +33,7 @@ typedef struct cf_curve_flow_info {
     double energy;             /* sum kappa_i^2 l_i* after the step */
     double closure_gap;        /* |sum_i T~_i| / total length before the Poisson projection */
     double max_length_error;   /* max_i | |f_i+1 - f_i| - l_i | / l_i after the step */
-    double constraint_residual;/* max |<kappadot, c>| / (|kappadot| |c|) after projection */
+    double constraint_residual;/* max |<kappadot, c^>| / |kappadot before projection|, c^ orthonormal */
     int32_t turning_number;    /* round(sum phi_i / 2 pi) after the step */
 } cf_curve_flow_info;
 

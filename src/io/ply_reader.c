@@ -202,6 +202,13 @@ static cf_status parse_header(ply_reader *r)
     return CF_OK;
 }
 
+/* The properties of an element (NULL when it has none: never offset a
+ * NULL table). */
+static ply_prop *elem_props(ply_reader *r, const ply_elem *el)
+{
+    return el->prop_count ? (ply_prop *)r->props.data + el->first_prop : NULL;
+}
+
 /* Assigns roles, checks counts against the data size, creates properties. */
 static cf_status plan(ply_reader *r)
 {
@@ -241,7 +248,7 @@ static cf_status plan(ply_reader *r)
     for (size_t i = 0; i < r->elems.count; ++i) {
         ply_elem *el = &els[i];
         if (el->kind == E_OTHER) continue;
-        ply_prop *ep = props + el->first_prop;
+        ply_prop *ep = elem_props(r, el);
         if (el->kind == E_VERTEX) {
             r->nv = el->count;
             static const char *const uv_names[3][2] = {{"u", "v"}, {"s", "t"}, {"texture_u", "texture_v"}};
@@ -396,7 +403,7 @@ static cf_status skip_prop(ply_reader *r, const ply_prop *pr, const char *what, 
 static cf_status read_vertices(ply_reader *r, const ply_elem *el)
 {
     cf_context *ctx = r->ctx;
-    const ply_prop *ep = (const ply_prop *)r->props.data + el->first_prop;
+    const ply_prop *ep = elem_props(r, el);
     cfi_mesh_builder *b = &r->b;
     bool has_uv = false;
     for (size_t k = 0; k < el->prop_count; ++k) has_uv |= ep[k].role == R_U;
@@ -441,7 +448,7 @@ static cf_status read_vertices(ply_reader *r, const ply_elem *el)
 static cf_status read_faces(ply_reader *r, const ply_elem *el)
 {
     cf_context *ctx = r->ctx;
-    const ply_prop *ep = (const ply_prop *)r->props.data + el->first_prop;
+    const ply_prop *ep = elem_props(r, el);
     cfi_mesh_builder *b = &r->b;
     bool corner_uv = false;
     for (size_t k = 0; k < el->prop_count; ++k) corner_uv |= ep[k].role == R_TEXCOORD;
@@ -519,7 +526,7 @@ static cf_status read_faces(ply_reader *r, const ply_elem *el)
 
 static cf_status read_other(ply_reader *r, const ply_elem *el)
 {
-    const ply_prop *ep = (const ply_prop *)r->props.data + el->first_prop;
+    const ply_prop *ep = elem_props(r, el);
     char what[48];
     snprintf(what, sizeof what, "'%.*s' element", clip(el->name_len), el->name);
     for (int64_t i = 0; i < el->count; ++i)

@@ -132,6 +132,9 @@ cf_status cf_flow_options_set(cf_context *ctx, cf_flow_options *options, const c
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter '%s': unknown for method %s (known: %s)", name, m->name,
                          known[0] ? known : "none");
     }
+    size_t field_bytes = p->type == CF_PARAM_DOUBLE ? sizeof(double) : sizeof(int32_t);
+    if (CF_NEVER(p->offset + field_bytes > m->options_size))
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter '%s': table entry outside the options struct", name);
     unsigned char *base = options->storage.bytes;
     switch (p->type) {
     case CF_PARAM_DOUBLE: {

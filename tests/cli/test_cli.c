@@ -208,6 +208,34 @@ static void test_info(void)
         CHECK_RUN(args, 2);
         CHECK(strstr(err_text, bad[i] + 4) != NULL);
     }
+
+    /* info against ../shared/meshes/CHECKS.tsv (independently computed):
+     * counts and topology exactly; min angle, median per-face min angle and
+     * fraction of faces below 10 deg to the 4-5 digits the table prints. */
+    const struct { const char *name; int v, genus, loops; double min_deg, median_min_deg, frac; } rows[] = {
+        {"spot_3k.obj", 2930, 0, 0, 10.2103, 38.969, 0.0},
+        {"double_torus_315.obj", 315, 2, 0, 5.029, 28.382, 0.0252},
+        {"blade_slivers_8k.obj", 8231, 0, 2, 0.4737, 5.72, 1.0},
+        {"hand_1k.obj", 1197, 0, 0, 0.691, 33.411, 0.0209},
+    };
+    for (int i = 0; i < 4; ++i) {
+        const char *path = cft_shared_mesh_path(rows[i].name);
+        if (!path) break;
+        char args[4200];
+        snprintf(args, sizeof args, "info '%s' --json", path);
+        CHECK_RUN(args, 0);
+        root = json_loads(out_text, 0, &jerr);
+        CHECK(root != NULL);
+        if (!root) continue;
+        CHECK(json_integer_value(json_object_get(root, "vertices")) == rows[i].v);
+        CHECK(json_integer_value(json_object_get(root, "genus")) == rows[i].genus);
+        CHECK(json_integer_value(json_object_get(root, "boundary_loops")) == rows[i].loops);
+        json_t *ang = json_object_get(root, "angles");
+        CHECK_NEAR(json_real_value(json_object_get(ang, "min_degrees")), rows[i].min_deg, 0.0, 1e-4);
+        CHECK_NEAR(json_real_value(json_object_get(ang, "median_face_min_degrees")), rows[i].median_min_deg, 0.0, 1e-3);
+        CHECK_NEAR(json_real_value(json_object_get(ang, "fraction_faces_min_below_10_degrees")), rows[i].frac, 0.0, 1e-4);
+        json_decref(root);
+    }
 }
 
 static int count_lines(const char *text)
@@ -277,6 +305,10 @@ static void test_flow(void)
     CHECK_RUN("flow bumpy.obj -o x.obj --method implicit-mcf --param rescale", 1);
     CHECK_RUN("flow missing.obj -o x.obj --method implicit-mcf", 2);
     CHECK_RUN("flow broken.obj -o x.obj --method implicit-mcf", 2);
+    CHECK_RUN("flow bumpy.obj -o no_such_dir/x.obj --method implicit-mcf -n 1 -q", 2);
+    CHECK(strstr(err_text, "no_such_dir/x.obj") != NULL);
+    CHECK_RUN("flow bumpy.obj -o x.obj --method implicit-mcf -n 1 --log no_such_dir/l.jsonl", 2);
+    CHECK_RUN("flow bumpy.obj -o x.obj --method implicit-mcf --steps -3", 1);
     CHECK(!exists("x.obj"));
 
     /* numerical failure: exit 3, message names the iteration, last good state written */

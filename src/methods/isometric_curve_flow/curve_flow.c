@@ -184,13 +184,13 @@ cf_status cf_curve_flow_step(cf_curve_flow *f, cf_curve_flow_info *info)
         f->basis[n + i] = p[2 * i];
         f->basis[2 * n + i] = p[2 * i + 1];
     }
+    double k0 = sqrt(cf_dot(n, f->kdot, f->kdot, f->dual));
     int32_t rank = 0;
     cf_orthonormalize(n, 3, f->basis, f->dual, 1e-12, &rank);
     cf_project_out(n, rank, f->basis, f->dual, f->kdot);
-    double kn = sqrt(cf_dot(n, f->kdot, f->kdot, f->dual));
     double resid = 0.0;
     for (int32_t j = 0; j < rank; ++j) {
-        double r = kn > 0.0 ? fabs(cf_dot(n, f->kdot, f->basis + (int64_t)j * n, f->dual)) / kn : 0.0;
+        double r = k0 > 0.0 ? fabs(cf_dot(n, f->kdot, f->basis + (int64_t)j * n, f->dual)) / k0 : 0.0;
         if (r > resid) resid = r;
     }
     /* Eq. (3) / Sec. 5.2: cumulative angles of the new curvature, and of the

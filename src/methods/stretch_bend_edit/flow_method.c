@@ -342,7 +342,11 @@ static cf_status sbe_create(cf_flow *flow, const void *options)
         s->rest[i] = rest[i];
     }
     cf_status st = cfi_sbe_model_init(&s->model, ctx, mesh, s->rest, o);
-    if (st == CF_OK) st = build_full_matrix(s, ctx);
+    if (st == CF_OK) {
+        s->model.rhs = s->rhs;
+        s->model.hu = s->hu;
+        st = build_full_matrix(s, ctx);
+    }
     if (st == CF_OK) st = setup_system(s, ctx, mesh, o->handles);
     if (st != CF_OK) return st;
     /* The starting state has its handles at their targets; iteration 0
@@ -392,7 +396,8 @@ static cf_status global_solve(sbe_state *s, double *x, double *assemble_seconds,
 {
     int32_t nv = s->model.nv, nfree = s->nfree;
     double t0 = cfi_now_seconds();
-    assemble_rhs(s);
+    /* The local step has assembled the right-hand side (model.rhs). */
+    if (!s->model.rhs) assemble_rhs(s);
     const double *rhs = s->rhs;
     for (int32_t v = 0; v < nv; ++v) {
         int32_t f = s->free_index[v];

@@ -35,6 +35,9 @@ typedef struct cfi_sbe_model {
     double *term_a;          /* 2 term_count: rest edge in its face's frame (stretch) */
     int32_t per_face;        /* rotations are per face (stretch) rather than per vertex */
     int64_t svd_fallbacks;   /* local steps that needed the full SVD (statistics) */
+    double *rhs;             /* 3 nv column-major, not owned: when set, the local step also
+                                assembles the next global step's right-hand side into it */
+    double *hu;              /* 3 nv column-major scratch for |H| u', not owned (with rhs) */
     double *covariance;      /* 9 rot_count, scratch */
     cf_sparse *k;            /* K = 2 L (rest), only when beta > 0 */
     double *mass;            /* nv rest dual areas M_v (beta > 0) */

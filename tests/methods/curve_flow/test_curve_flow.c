@@ -48,7 +48,7 @@ static void test_noisy_polyline_to_circle(void)
     cf_context *ctx = cft_context();
     int32_t n = 200;
     double *p = malloc(2 * (size_t)n * sizeof(double));
-    noisy_circle(n, 0.02, p);
+    noisy_circle(n, 0.005, p);
     double dev0 = circle_deviation(n, p);
     cf_curve_flow_options o;
     cf_curve_flow_options_default(&o);

@@ -8,7 +8,13 @@
  * matrix (block 1). Prints TSV; asserts nothing. Times are the minimum over
  * repetitions, in milliseconds.
  *
+ * With --saddle S it instead times the saddle-point solver on icosphere S:
+ * A = L kron I3 + eps I (3 nv unknowns), B = Jacobian of the nf face areas
+ * with respect to the positions (9 entries per row), C = c I, through the
+ * Schur complement and through UMFPACK LU (C = 0).
+ *
  * usage: bench_laplacian [--max-vertices N] [--no-thread-fix] [--repeat R] [--ordering auto|amd|metis]
+ *                        [--saddle SUBDIVISIONS]
  */
 #include "curvflow/generate.h"
 #include "curvflow/linalg.h"
@@ -129,27 +135,96 @@ static int run(cf_context *ctx, const char *name, const cf_mesh *mesh, int repea
     return 0;
 }
 
+/* Jacobian of face areas: d area_f / d p_v = 0.5 n_f x (p_next - p_prev) for corner v. */
+static int run_saddle(cf_context *ctx, int32_t subdivisions)
+{
+    cf_mesh *mesh = NULL;
+    cf_status st = cf_generate_icosphere(ctx, subdivisions, 1.0, &mesh);
+    if (st != CF_OK) return fail(ctx, "icosphere", st);
+    const double *pos = cf_mesh_positions(mesh);
+    const int32_t *tri = cf_mesh_triangles(mesh);
+    int32_t nv = cf_mesh_vertex_count(mesh), nf = cf_mesh_face_count(mesh), n = 3 * nv;
+    cf_sparse *l = NULL, *l3 = NULL, *a = NULL, *eye = NULL, *b = NULL;
+    if ((st = cf_cotan_laplacian(ctx, mesh, pos, &l)) != CF_OK) return fail(ctx, "laplacian", st);
+    if ((st = cf_sparse_kron_identity(ctx, l, 3, &l3)) != CF_OK) return fail(ctx, "kron", st);
+    int32_t *ri = malloc((size_t)9 * nf * sizeof *ri), *ci = malloc((size_t)9 * nf * sizeof *ci);
+    double *vi = malloc((size_t)9 * nf * sizeof *vi);
+    for (int32_t i = 0; i < n; ++i) { ri[i] = i; vi[i] = 1e-3; }
+    if ((st = cf_sparse_from_triplets(ctx, n, n, n, ri, ri, vi, 1, &eye, NULL)) != CF_OK) return fail(ctx, "eye", st);
+    if ((st = cf_sparse_add(ctx, 1.0, l3, 1.0, eye, &a)) != CF_OK) return fail(ctx, "add", st);
+    int64_t k = 0;
+    for (int32_t f = 0; f < nf; ++f) {
+        const double *p0 = pos + 3 * tri[3 * f], *p1 = pos + 3 * tri[3 * f + 1], *p2 = pos + 3 * tri[3 * f + 2];
+        double e1[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]}, e2[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+        double nrm[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+        double len = sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
+        for (int c = 0; c < 3; ++c) nrm[c] /= len;
+        for (int corner = 0; corner < 3; ++corner) {
+            const double *pn = pos + 3 * tri[3 * f + (corner + 1) % 3], *pp = pos + 3 * tri[3 * f + (corner + 2) % 3];
+            double e[3] = {pn[0] - pp[0], pn[1] - pp[1], pn[2] - pp[2]};
+            double g[3] = {0.5 * (nrm[1] * e[2] - nrm[2] * e[1]), 0.5 * (nrm[2] * e[0] - nrm[0] * e[2]),
+                           0.5 * (nrm[0] * e[1] - nrm[1] * e[0])};
+            for (int c = 0; c < 3; ++c) { ri[k] = f; ci[k] = 3 * tri[3 * f + corner] + c; vi[k++] = g[c]; }
+        }
+    }
+    if ((st = cf_sparse_from_triplets(ctx, nf, n, k, ri, ci, vi, 0, &b, NULL)) != CF_OK) return fail(ctx, "B", st);
+    double *cdiag = malloc((size_t)nf * sizeof *cdiag), *f = malloc((size_t)n * sizeof *f), *g = malloc((size_t)nf * sizeof *g);
+    double *x = malloc((size_t)n * sizeof *x), *y = malloc((size_t)nf * sizeof *y);
+    for (int32_t r = 0; r < nf; ++r) { cdiag[r] = 1e-6; g[r] = cos(0.7 * r); }
+    for (int32_t i = 0; i < n; ++i) f[i] = sin(0.1 * i);
+    printf("mesh\tV\tF\tn\tm\tpath\tcreate_ms\tfactorize_ms\tsolve_ms\tresidual\n");
+    for (int lu = 0; lu < 2; ++lu) {
+        if (lu && nv > 50000) break; /* UMFPACK takes seconds beyond this */
+        cf_saddle_options o;
+        cf_saddle_options_default(&o);
+        o.block_size = 3;
+        cf_saddle *s = NULL;
+        double t0 = now_ms();
+        if ((st = cf_saddle_create(ctx, a, b, &o, &s)) != CF_OK) return fail(ctx, "saddle create", st);
+        double t1 = now_ms();
+        if ((st = cf_saddle_factorize(s, a, b, lu ? NULL : cdiag)) != CF_OK) return fail(ctx, "saddle factorise", st);
+        double t2 = now_ms();
+        if ((st = cf_saddle_solve(s, f, g, x, y)) != CF_OK) return fail(ctx, "saddle solve", st);
+        double t3 = now_ms();
+        printf("icosphere%d\t%d\t%d\t%d\t%d\t%s\t%.1f\t%.1f\t%.1f\t%.2e\n", subdivisions, nv, nf, n, nf,
+               cf_saddle_used_schur(s) ? "schur" : "lu", t1 - t0, t2 - t1, t3 - t2, cf_saddle_residual(s));
+        fflush(stdout);
+        cf_saddle_destroy(&s);
+    }
+    cf_sparse_destroy(&l); cf_sparse_destroy(&l3); cf_sparse_destroy(&a); cf_sparse_destroy(&eye); cf_sparse_destroy(&b);
+    free(ri); free(ci); free(vi); free(cdiag); free(f); free(g); free(x); free(y);
+    cf_mesh_destroy(&mesh);
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
+    int32_t saddle = -1;
     int32_t max_vertices = 700000;
     int repeat = 3;
     for (int i = 1; i < argc; ++i) {
         if (!strcmp(argv[i], "--max-vertices") && i + 1 < argc) max_vertices = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--repeat") && i + 1 < argc) repeat = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--no-thread-fix")) cf_linalg_set_thread_fix(0);
+        else if (!strcmp(argv[i], "--saddle") && i + 1 < argc) saddle = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--ordering") && i + 1 < argc) {
             ++i;
             bench_ordering = !strcmp(argv[i], "amd") ? CF_ORDERING_AMD : !strcmp(argv[i], "metis") ? CF_ORDERING_METIS
                            : CF_ORDERING_AUTO;
         }
         else {
-            fprintf(stderr, "usage: %s [--max-vertices N] [--no-thread-fix] [--repeat R] [--ordering auto|amd|metis]\n", argv[0]);
+            fprintf(stderr, "usage: %s [--max-vertices N] [--no-thread-fix] [--repeat R] [--ordering auto|amd|metis] [--saddle S]\n", argv[0]);
             return 1;
         }
     }
     if (repeat < 1) repeat = 1;
     cf_context *ctx = NULL;
     if (cf_context_create(&ctx) != CF_OK) return 1;
+    if (saddle >= 0) {
+        int r = run_saddle(ctx, saddle);
+        cf_context_destroy(&ctx);
+        return r;
+    }
     printf("mesh\tV\tF\tassemble_ms\trefill_ms\tanalyze_ms\tfactorize_ms\tsolve_ms\tassemble+factorize_ms\t"
            "residual\tanalyze_kron3_block3_ms\tanalyze_kron3_block1_ms\tfactorize_kron3_ms\n");
     int rc = 0;

@@ -36,13 +36,19 @@ typedef struct cf_sparse {
  * duplicates are summed. If slot_map is not NULL it receives the index into
  * A->values of every triplet (n entries, caller-allocated), so later value
  * sets can be poured into the same pattern by cf_sparse_refill. vals may be
- * NULL (pattern only, values zero). Statuses: CF_OK, CF_ERR_INVALID_ARG
- * (index out of range), CF_ERR_NOMEM. */
+ * NULL (pattern only, values zero). Two stable counting sorts (by row, then
+ * by column): O(n + nrows + ncols), rows sorted, duplicates summed in
+ * triplet order (a refill reproduces a rebuild bit for bit). `symmetric`
+ * only sets the flag: give both triangles (or set upper_only afterwards and
+ * give the upper one). Statuses: CF_OK, CF_ERR_INVALID_ARG (index out of
+ * range, symmetric but not square, more than INT32_MAX distinct entries),
+ * CF_ERR_NONFINITE (NaN/Inf value, message names the triplet), CF_ERR_NOMEM. */
 CF_API cf_status cf_sparse_from_triplets(cf_context *ctx, int32_t nrows, int32_t ncols, int64_t n,
                                          const int32_t *rows, const int32_t *cols, const double *vals,
                                          int32_t symmetric, cf_sparse **out, int64_t *slot_map);
 
-/* Zeroes A's values and adds vals[k] into A->values[slot_map[k]]. */
+/* Zeroes A's values and adds vals[k] into A->values[slot_map[k]]. No
+ * allocation; slots outside the matrix are ignored. */
 CF_API void cf_sparse_refill(cf_sparse *a, int64_t n, const int64_t *slot_map, const double *vals);
 
 CF_API void cf_sparse_destroy(cf_sparse **a);
@@ -100,16 +106,20 @@ typedef struct cf_cholesky cf_cholesky;
 CF_API cf_status cf_cholesky_create(cf_context *ctx, const cf_sparse *a, const cf_cholesky_options *options,
                                     cf_cholesky **out);
 
-/* Numeric factorisation of A (same pattern as at create). A matrix that is
- * not positive definite gives CF_ERR_NOT_POSDEF with the failing column in
- * the message. */
+/* Numeric factorisation of A (same pattern as at create, else
+ * CF_ERR_INVALID_ARG). Always LL'. A matrix that is not positive definite
+ * gives CF_ERR_NOT_POSDEF with the failing (original) column in the message
+ * ("... at column 23 (pivot 17 of 64)"); NaN/Inf values give
+ * CF_ERR_NUMERICAL naming the entry. After a failure solves are refused
+ * until a factorisation succeeds. */
 CF_API cf_status cf_cholesky_factorize(cf_cholesky *chol, const cf_sparse *a);
 
 /* Factorises A + shift I (same pattern; the diagonal must be in it). */
 CF_API cf_status cf_cholesky_factorize_shifted(cf_cholesky *chol, const cf_sparse *a, double shift);
 
 /* Solves A X = B for nrhs columns (column-major, leading dimension n). x
- * may equal b. Uses preallocated workspace after the first call. */
+ * may equal b. Uses preallocated workspace after the first call. NaN/Inf
+ * in b or in the solution: CF_ERR_NUMERICAL naming the column and row. */
 CF_API cf_status cf_cholesky_solve(cf_cholesky *chol, int32_t nrhs, const double *b, double *x);
 
 CF_API int32_t cf_cholesky_size(const cf_cholesky *chol);
@@ -141,8 +151,14 @@ CF_API void cf_linalg_set_thread_fix(int enabled);
  * S = A + B^T C^-1 B (symmetric positive definite, supernodal Cholesky, pattern
  * analysed once and refilled), y = C^-1 (B x - g), and the result is
  * refined iteratively against the full system. With C = 0 (hard equality
- * constraints) or when S is not positive definite it falls back to LU
- * (UMFPACK) on the full matrix. */
+ * constraints), any zero entry of C, or when S is not positive definite it
+ * falls back to LU (UMFPACK) on the full matrix (symbolic analysis on first
+ * use, numeric per factorisation). If the rows of B are so dense that S
+ * would have more than 64e6 pair contributions, LU is used throughout.
+ * A may store both triangles or be upper_only; B stores every entry. The
+ * object keeps copies of the values, so the caller's matrices may change
+ * between factorize and solve. Statuses as for cf_cholesky_*, plus
+ * CF_ERR_INVALID_ARG for C[r] < 0 or non-finite (message names r). */
 typedef struct cf_saddle cf_saddle;
 
 typedef struct cf_saddle_options {
@@ -170,6 +186,9 @@ CF_API void cf_saddle_destroy(cf_saddle **s);
 typedef struct cf_lu cf_lu;
 CF_API cf_status cf_lu_create(cf_context *ctx, const cf_sparse *a, cf_lu **out);   /* symbolic + numeric */
 CF_API cf_status cf_lu_factorize(cf_lu *lu, const cf_sparse *a);                   /* numeric, same pattern */
+/* x may equal b. A singular matrix makes create/factorize fail with
+ * CF_ERR_NUMERICAL ("UMFPACK status 1 (singular matrix)"). The LU keeps its
+ * own copy of the values (for UMFPACK's iterative refinement). */
 CF_API cf_status cf_lu_solve(cf_lu *lu, const double *b, double *x);
 CF_API void cf_lu_destroy(cf_lu **lu);
 

@@ -14,6 +14,9 @@
 #include <stdio.h>
 #include <string.h>
 
+/* CHOLMOD's int interface is used on our int32_t arrays without copies */
+_Static_assert(sizeof(int) == sizeof(int32_t), "CHOLMOD int must be 32-bit");
+
 typedef struct linalg_state {
     cholmod_common common; /* first member: cfi_cholmod_reset_parameters casts back */
     int started;

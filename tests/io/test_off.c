@@ -11,8 +11,8 @@ static void test_variants(void)
         /* comments, blank lines, counts on the header line, CRLF, no final newline */
         "# a square\r\nOFF 4 2 5\r\n\r\n0 0 0 # origin\r\n1 0 0\r\n1 1 0\r\n0 1 0\r\n3 0 1 2\r\n3 0 2 3",
         /* colours per vertex and per face are ignored */
-        "COFF\n4 2 0\n0 0 0 255 0 0 255\n1 0 0 0 255 0 255\n1 1 0 0 0 255 255\n0 1 0 1 1 1 1\n"
-        "3 0 1 2 1 0 0\n3 0 2 3 0.5 0.5 0.5 1\n",
+        ("COFF\n4 2 0\n0 0 0 255 0 0 255\n1 0 0 0 255 0 255\n1 1 0 0 0 255 255\n0 1 0 1 1 1 1\n"
+         "3 0 1 2 1 0 0\n3 0 2 3 0.5 0.5 0.5 1\n"),
         /* normals; keyword omitted entirely */
         "NOFF\n4 2 0\n0 0 0 0 0 1\n1 0 0 0 0 1\n1 1 0 0 0 1\n0 1 0 0 0 1\n3 0 1 2\n3 0 2 3\n",
         "4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n",

@@ -350,6 +350,40 @@ static void test_allocation_failures(void)
     cf_context_destroy(&ctx);
 }
 
+static void test_write_options(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh_format fmt = CF_FORMAT_AUTO;
+    CHECK_OK(ctx, cf_mesh_format_from_path(ctx, "dir.v2/A.PLY", &fmt));
+    CHECK(fmt == CF_FORMAT_PLY);
+    CHECK_STATUS(cf_mesh_format_from_path(ctx, "a.ply.gz", &fmt), CF_ERR_UNSUPPORTED);
+    CHECK_STATUS(cf_mesh_format_from_path(ctx, "dir.ply/noext", &fmt), CF_ERR_UNSUPPORTED);
+    /* the format can be forced for any name; uv can be left out */
+    cf_mesh *m = iot_octahedron_mesh(ctx, 1);
+    cf_write_options o;
+    cf_write_options_default(&o);
+    CHECK(o.format == CF_FORMAT_AUTO && o.ply_encoding == CF_PLY_BINARY_LITTLE_ENDIAN && o.write_uv == 1);
+    o.format = CF_FORMAT_PLY;
+    o.write_uv = 0;
+    char path[4096];
+    snprintf(path, sizeof path, "%s", cft_temp_path(".bin"));
+    CHECK_OK(ctx, cf_write_mesh_file_ex(ctx, path, m, NULL, NULL, 0, &o));
+    size_t size = 0;
+    char *content = iot_read(path, &size);
+    CHECK(content && strncmp(content, "ply\nformat binary_little_endian 1.0\n", 36) == 0);
+    cf_mesh_data *d = NULL;
+    if (content) CHECK_OK(ctx, cf_read_mesh_memory(ctx, content, size, CF_FORMAT_PLY, path, &d));
+    CHECK(d && d->vertex_count == IOT_NV && d->uv_count == 0 && d->uv == NULL);
+    cf_mesh_data_destroy(&d);
+    free(content);
+    remove(path);
+    o.ply_encoding = (cf_ply_encoding)7;
+    CHECK_STATUS(cf_write_mesh_file_ex(ctx, path, m, NULL, NULL, 0, &o), CF_ERR_INVALID_ARG);
+    cf_mesh_destroy(&m);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 int main(void)
 {
     CFT_RUN(test_round_trip_all_encodings);
@@ -358,5 +392,6 @@ int main(void)
     CFT_RUN(test_errors);
     CFT_RUN(test_huge_binary_list_count);
     CFT_RUN(test_allocation_failures);
+    CFT_RUN(test_write_options);
     return cft_finish();
 }

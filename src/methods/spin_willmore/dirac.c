@@ -204,3 +204,52 @@ double cfi_spin_integrability_error(const cf_mesh *mesh, const double *positions
     }
     return den > 0.0 ? sqrt(num / den) : 0.0;
 }
+
+void cfi_dirac_restrict_boundary(cfi_dirac *d, const cf_mesh *mesh, const double *frames)
+{
+    cf_sparse *x = d->x;
+    const uint8_t *onb = mesh->vertex_on_boundary;
+    for (int32_t j = 0; j < d->nv; ++j) {
+        int32_t c0 = 4 * j;
+        for (int32_t p = x->colptr[c0]; p < x->colptr[c0 + 1]; p += 4) {
+            int32_t i = x->rowind[p] / 4;
+            if (!onb[i] && !onb[j]) continue;
+            int32_t k = p - x->colptr[c0];
+            double b[16], t[16], o[16];
+            for (int c = 0; c < 4; ++c)
+                for (int r = 0; r < 4; ++r) b[4 * r + c] = x->values[x->colptr[c0 + c] + k + r];
+            /* t = b Q_j */
+            if (onb[j]) {
+                const double *q = frames + 16 * (int64_t)j;
+                for (int r = 0; r < 4; ++r)
+                    for (int c = 0; c < 4; ++c) {
+                        double s = 0.0;
+                        for (int m = 0; m < 4; ++m) s += b[4 * r + m] * q[4 * m + c];
+                        t[4 * r + c] = s;
+                    }
+            } else {
+                memcpy(t, b, sizeof t);
+            }
+            /* o = Q_i^T t */
+            if (onb[i]) {
+                const double *q = frames + 16 * (int64_t)i;
+                for (int r = 0; r < 4; ++r)
+                    for (int c = 0; c < 4; ++c) {
+                        double s = 0.0;
+                        for (int m = 0; m < 4; ++m) s += q[4 * m + r] * t[4 * m + c];
+                        o[4 * r + c] = s;
+                    }
+            } else {
+                memcpy(o, t, sizeof o);
+            }
+            /* components 2, 3 of boundary vertices are fixed to zero */
+            for (int r = 0; r < 4; ++r)
+                for (int c = 0; c < 4; ++c) {
+                    int zr = onb[i] && r >= 2, zc = onb[j] && c >= 2;
+                    double v = o[4 * r + c];
+                    if (zr || zc) v = (i == j && r == c) ? 1.0 : 0.0;
+                    x->values[x->colptr[c0 + c] + k + r] = v;
+                }
+        }
+    }
+}

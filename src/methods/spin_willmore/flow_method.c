@@ -41,9 +41,14 @@ typedef struct spin_state {
     cf_sparse *filter;       /* M + sigma' L (M^-1 L)^(k-1), built from the input */
     cf_cholesky *filter_chol;
     double filter_scale;     /* k = 0: sigma / (1 + sigma) */
+    double *filter_mass;     /* nv: M of the filter (input areas) */
     int32_t harmonic_dim;    /* 2g if the exactness constraint is active */
     int32_t fixed_boundary;
+    int32_t restricted_boundary;   /* PRESCRIBED or CMC */
     int32_t has_boundary;
+    double *frames;          /* 16 nv: Q_i of cfi_dirac_restrict_boundary (boundary vertices) */
+    double *target;          /* 3 nv: prescribed V~ (PRESCRIBED) */
+    double *binormal;        /* 3 nv: current boundary binormals */
     double eps;
     double *harmonic;        /* ne x 2g */
     double *area;            /* nv barycentric areas of the current surface */
@@ -76,6 +81,8 @@ void cf_spin_willmore_options_default(cf_spin_willmore_options *o)
     o->sigma = 0.0;
     o->filter_k = 2;
     o->boundary_mode = CF_SPIN_BOUNDARY_FREE;
+    o->boundary_angle = 0.0;
+    o->boundary_axis[0] = 1.0;
     o->power_iterations = 1;
     o->normalize = 1;
     o->tolerance = 1e-6;
@@ -83,7 +90,7 @@ void cf_spin_willmore_options_default(cf_spin_willmore_options *o)
 
 static void options_default(void *options) { cf_spin_willmore_options_default(options); }
 
-static const char *const boundary_choices[] = {"free", "fixed", NULL};
+static const char *const boundary_choices[] = {"free", "fixed", "prescribed", "cmc", NULL};
 
 #define OPT(f) offsetof(cf_spin_willmore_options, f)
 static const cf_param_desc spin_params[] = {
@@ -97,8 +104,13 @@ static const cf_param_desc spin_params[] = {
     {"sigma", CF_PARAM_DOUBLE, OPT(sigma), 0.0, 1e12, NULL,
      "spectral filter strength in units of R^2k, R = sqrt(area/4pi); 0 = off (Sec. 4)"},
     {"filter_k", CF_PARAM_INT, OPT(filter_k), 0, 3, NULL, "spectral filter power k (Fig. 8)"},
-    {"boundary", CF_PARAM_CHOICE, OPT(boundary_mode), 0, 1, boundary_choices,
-     "free (natural) or fixed boundary positions (Sec. 6.3.2)"},
+    {"boundary", CF_PARAM_CHOICE, OPT(boundary_mode), 0, 3, boundary_choices,
+     "free (natural), fixed positions (Sec. 6.3.2), prescribed binormals or cmc (Sec. 6.3.1)"},
+    {"boundary_angle", CF_PARAM_DOUBLE, OPT(boundary_angle), -6.3, 6.3, NULL,
+     "prescribed: rotation (radians) of the target binormals of boundary loops 1, 2, ..."},
+    {"boundary_axis_x", CF_PARAM_DOUBLE, OPT(boundary_axis[0]), -1e9, 1e9, NULL, "prescribed: rotation axis x"},
+    {"boundary_axis_y", CF_PARAM_DOUBLE, OPT(boundary_axis[1]), -1e9, 1e9, NULL, "prescribed: rotation axis y"},
+    {"boundary_axis_z", CF_PARAM_DOUBLE, OPT(boundary_axis[2]), -1e9, 1e9, NULL, "prescribed: rotation axis z"},
     {"power_iterations", CF_PARAM_INT, OPT(power_iterations), 1, 100, NULL, "inverse power iterations per step"},
     {"normalize", CF_PARAM_BOOL, OPT(normalize), 0, 1, NULL, "keep total area and centroid"},
     {"tolerance", CF_PARAM_DOUBLE, OPT(tolerance), 0.0, 1.0, NULL, "converged below this relative energy decrease"},
@@ -171,6 +183,10 @@ static void spin_destroy(cf_flow *flow)
     CFI_FREE(ctx, s->newpos, 3 * nv);
     CFI_FREE(ctx, s->vtmp, nv);
     CFI_FREE(ctx, s->vtmp2, nv);
+    CFI_FREE(ctx, s->filter_mass, nv);
+    CFI_FREE(ctx, s->frames, 16 * nv);
+    CFI_FREE(ctx, s->target, 3 * nv);
+    CFI_FREE(ctx, s->binormal, 3 * nv);
     CFI_FREE(ctx, s, 1);
     flow->impl = NULL;
 }
@@ -210,6 +226,9 @@ static cf_status build_filter(cf_flow *flow, spin_state *s)
         s->filter_scale = sigma / (1.0 + sigma);
         return CF_OK;
     }
+    s->filter_mass = CFI_ALLOC(ctx, double, s->nv);
+    if (!s->filter_mass) return CF_ERR_NOMEM;
+    memcpy(s->filter_mass, s->area, (size_t)s->nv * sizeof(double));
     double radius2 = flow->initial_area / (4.0 * CFI_PI);
     double sig = sigma * pow(radius2, (double)k);
     cf_sparse *l = NULL, *m = NULL, *lminv = NULL, *p = NULL, *p2 = NULL;
@@ -260,13 +279,18 @@ static cf_status spin_create(cf_flow *flow, const void *options)
     if (o->power_iterations < 1)
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: power_iterations must be >= 1, got %d",
                          o->power_iterations);
-    if (o->boundary_mode != CF_SPIN_BOUNDARY_FREE && o->boundary_mode != CF_SPIN_BOUNDARY_FIXED)
+    if (o->boundary_mode < CF_SPIN_BOUNDARY_FREE || o->boundary_mode > CF_SPIN_BOUNDARY_CMC)
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: unknown boundary mode %d", o->boundary_mode);
+    double axis_len = sqrt(o->boundary_axis[0] * o->boundary_axis[0] + o->boundary_axis[1] * o->boundary_axis[1] +
+                           o->boundary_axis[2] * o->boundary_axis[2]);
+    if (o->boundary_mode == CF_SPIN_BOUNDARY_PRESCRIBED && (!(axis_len > 0.0) || !isfinite(axis_len) || !isfinite(o->boundary_angle)))
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: boundary_axis must be a nonzero finite vector");
     if (!(o->mobius_weight >= 0.0) || !isfinite(o->mobius_weight))
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: mobius_weight must be >= 0");
     int32_t has_boundary = mesh->boundary_loop_count > 0;
-    if (o->boundary_mode == CF_SPIN_BOUNDARY_FIXED && !has_boundary)
-        return cfi_error(ctx, CF_ERR_BAD_MESH, "spin-willmore: boundary=fixed needs a mesh with boundary");
+    if (o->boundary_mode != CF_SPIN_BOUNDARY_FREE && !has_boundary)
+        return cfi_error(ctx, CF_ERR_BAD_MESH, "spin-willmore: boundary=%s needs a mesh with boundary",
+                         boundary_choices[o->boundary_mode]);
 
     spin_state *s = CFI_ALLOC(ctx, spin_state, 1);
     if (!s) return CF_ERR_NOMEM;
@@ -277,6 +301,7 @@ static cf_status spin_create(cf_flow *flow, const void *options)
     s->nf = mesh->nf;
     s->has_boundary = has_boundary;
     s->fixed_boundary = o->boundary_mode == CF_SPIN_BOUNDARY_FIXED;
+    s->restricted_boundary = o->boundary_mode == CF_SPIN_BOUNDARY_PRESCRIBED || o->boundary_mode == CF_SPIN_BOUNDARY_CMC;
     int64_t nv = s->nv;
     cf_status st = CF_OK;
 
@@ -308,6 +333,15 @@ static cf_status spin_create(cf_flow *flow, const void *options)
     s->newpos = CFI_ALLOC(ctx, double, 3 * nv);
     s->vtmp = CFI_ALLOC(ctx, double, nv);
     s->vtmp2 = CFI_ALLOC(ctx, double, nv);
+    if (s->restricted_boundary) {
+        s->frames = CFI_ALLOC(ctx, double, 16 * nv);
+        s->target = CFI_ALLOC(ctx, double, 3 * nv);
+        s->binormal = CFI_ALLOC(ctx, double, 3 * nv);
+        if (!s->frames || !s->target || !s->binormal) {
+            st = CF_ERR_NOMEM;
+            goto fail;
+        }
+    }
     if ((dim && (!s->harmonic || !s->zrhs || !s->zsol)) || !s->area || !s->normal || !s->lx || !s->h ||
         !s->rest_area || !s->rhodot || !s->rho || !s->lambda || !s->qrhs || !s->qwork || !s->basis || !s->edges ||
         !s->newpos || !s->vtmp || !s->vtmp2) {
@@ -330,6 +364,21 @@ static cf_status spin_create(cf_flow *flow, const void *options)
     st = cf_vertex_areas(ctx, mesh, mesh->positions, CF_DUAL_AREA_BARYCENTRIC, s->rest_area);
     if (st != CF_OK) goto fail;
     s->eps = CFI_SPIN_SHIFT * 4.0 * CFI_PI / flow->initial_area;
+    if (o->boundary_mode == CF_SPIN_BOUNDARY_PRESCRIBED) {
+        st = boundary_binormals(flow, s, flow->positions, s->target);
+        if (st != CF_OK) goto fail;
+        /* loops 1, 2, ... : rotate the binormals by the angle about the axis */
+        double ax[3] = {o->boundary_axis[0] / axis_len, o->boundary_axis[1] / axis_len, o->boundary_axis[2] / axis_len};
+        cf_quat q = cf_quat_from_axis_angle(ax, o->boundary_angle);
+        const int32_t *off = mesh->boundary_loop_offsets, *lv = mesh->boundary_loop_vertices;
+        for (int32_t b = 1; b < mesh->boundary_loop_count; ++b)
+            for (int32_t k = off[b]; k < off[b + 1]; ++k) {
+                double *t = s->target + 3 * lv[k], w[3];
+                /* q v conj(q) rotates by +angle: conj_sandwich with conj(q) */
+                cf_quat_conj_sandwich(cf_quat_conj(q), t, w);
+                memcpy(t, w, sizeof w);
+            }
+    }
 
     st = cfi_dirac_create(ctx, mesh, &s->dirac);
     if (st == CF_OK) st = cfi_dirac_fill(s->dirac, mesh, flow->positions, NULL, s->eps);
@@ -520,7 +569,7 @@ static cf_status spin_step(cf_flow *flow, cf_flow_info *info)
         if (s->opt.filter_k == 0) {
             for (int32_t i = 0; i < nv; ++i) s->rhodot[i] *= s->filter_scale;
         } else {
-            for (int32_t i = 0; i < nv; ++i) s->vtmp[i] = s->rest_area[i] * s->rhodot[i];
+            for (int32_t i = 0; i < nv; ++i) s->vtmp[i] = s->filter_mass[i] * s->rhodot[i];
             double ts = cfi_now_seconds();
             st = cf_cholesky_solve(s->filter_chol, 1, s->vtmp, s->vtmp2);
             t_sol += cfi_now_seconds() - ts;
@@ -529,7 +578,11 @@ static cf_status spin_step(cf_flow *flow, cf_flow_info *info)
         }
     }
 
-    /* III. constraints (Sec. 6.2) */
+    /* III. constraints (Sec. 6.2). Without Moebius balancing the whole basis
+     * {N, 1, Z} is orthonormalised at once, so every residual vanishes. With
+     * it, N is projected out first, the balancing term is added, and then
+     * only {1, Z} (App. E.1: "after the inversion constraint ... prior to
+     * any remaining constraints"). */
     int32_t ncols = 0, count = 0, rank = 0;
     if (s->opt.inversion) {
         for (int c = 0; c < 3; ++c) {
@@ -537,19 +590,20 @@ static cf_status spin_step(cf_flow *flow, cf_flow_info *info)
             for (int32_t i = 0; i < nv; ++i) b[i] = s->normal[3 * i + c];
             ++ncols;
         }
+    }
+    if (s->opt.mobius) {
         count += ncols;
         rank += project(s, ncols);
+        s->diag.mobius_norm = mobius_term(flow, s, x);
+        ncols = 0;
     }
-    if (s->opt.mobius) s->diag.mobius_norm = mobius_term(flow, s, x);
-    ncols = 0;
     if (s->opt.total_curvature) {
-        for (int32_t i = 0; i < nv; ++i) s->basis[i] = 1.0;
-        ncols = 1;
+        double *b = s->basis + (int64_t)ncols * nv;
+        for (int32_t i = 0; i < nv; ++i) b[i] = 1.0;
+        ++ncols;
     }
     if (s->harmonic_dim > 0) {
-        double ta = cfi_now_seconds();
         st = exactness_columns(flow, s, x, &ncols, &t_fac, &t_sol);
-        (void)ta;
         if (st != CF_OK) return st;
     }
     count += ncols;

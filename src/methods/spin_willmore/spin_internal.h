@@ -39,6 +39,13 @@ cf_status cfi_dirac_fill(cfi_dirac *d, const cf_mesh *mesh, const double *positi
  * columns of X become identity. */
 void cfi_dirac_fix_boundary(cfi_dirac *d, const cf_mesh *mesh, double *rhs);
 
+/* Prescribed boundary vectors (Crane 2013, Sec. 6.3.1): at boundary vertex
+ * i, lambda_i = Q_i mu_i with Q_i (frames + 16 i, row-major 4 x 4,
+ * orthonormal) whose first two columns r and r V~ span the admissible
+ * lambdas and mu_i's last two components zero. Rewrites X (after a fill) as
+ * Q^T X Q with those components pinned (identity rows and columns). */
+void cfi_dirac_restrict_boundary(cfi_dirac *d, const cf_mesh *mesh, const double *frames);
+
 /* Transformed edge vectors (Crane et al. 2011; NOTES.md):
  * e~_ij = 1/3 l_i' e l_i + 1/6 l_i' e l_j + 1/6 l_j' e l_i + 1/3 l_j' e l_j
  * (l' = conj(l)), e = f_j - f_i for every edge i < j. out: 3 ne. */

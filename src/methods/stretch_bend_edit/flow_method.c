@@ -187,6 +187,8 @@ static cf_status build_full_matrix(sbe_state *s, cf_context *ctx)
 
 /* Validates the handles against the mesh, reduces A to the free vertices,
  * factorises it and precomputes A_fc x_c (Sec. 4.1). */
+static cf_status build_system(sbe_state *s, cf_context *ctx, const cf_mesh *mesh, const cf_handle_set *h);
+
 static cf_status setup_system(sbe_state *s, cf_context *ctx, const cf_mesh *mesh, const cf_handle_set *h)
 {
     int32_t nv = mesh->nv;
@@ -211,12 +213,21 @@ static cf_status setup_system(sbe_state *s, cf_context *ctx, const cf_mesh *mesh
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "stretch-bend-edit: all %d vertices are handles; nothing to solve",
                          nv);
 
+    cf_status st = build_system(s, ctx, mesh, h);
+    /* A half-built system is released entirely (steps then report it). */
+    if (st != CF_OK) free_system(s, ctx);
+    return st;
+}
+
+static cf_status build_system(sbe_state *s, cf_context *ctx, const cf_mesh *mesh, const cf_handle_set *h)
+{
+    int32_t nv = mesh->nv;
     free_system(s, ctx);
     s->free_index = CFI_ALLOC(ctx, int32_t, (size_t)nv);
     s->handle_vertices = CFI_ALLOC(ctx, int32_t, (size_t)h->count);
     s->handle_targets = CFI_ALLOC(ctx, double, 3 * (size_t)h->count);
+    s->handle_count = h->count; /* the size free_system releases */
     if (!s->free_index || !s->handle_vertices || !s->handle_targets) return CF_ERR_NOMEM;
-    s->handle_count = h->count;
     memcpy(s->handle_vertices, h->vertices, (size_t)h->count * sizeof(int32_t));
     memcpy(s->handle_targets, h->targets, 3 * (size_t)h->count * sizeof(double));
 
@@ -458,6 +469,9 @@ static cf_status sbe_step(cf_flow *flow, cf_flow_info *info)
     sbe_state *s = flow->impl;
     cfi_sbe_model *m = &s->model;
     double *x = flow->positions;
+    if (!s->chol)
+        return cfi_error(flow->ctx, CF_ERR_INVALID_ARG,
+                         "stretch-bend-edit: no valid handle set (the last cf_stretch_bend_set_handles failed)");
     double assemble = 0.0, solve = 0.0;
     cf_status st = global_solve(s, x, &assemble, &solve);
     if (st != CF_OK) return st;
@@ -522,11 +536,7 @@ cf_status cf_stretch_bend_set_handles(cf_flow *flow, const cf_handle_set *handle
         return cfi_error(flow->ctx, CF_ERR_INVALID_ARG, "cf_stretch_bend_set_handles: not a stretch-bend-edit flow");
     sbe_state *s = flow->impl;
     cf_status st = setup_system(s, flow->ctx, flow->mesh, handles);
-    if (st != CF_OK) {
-        /* Keep the flow usable only with a valid system: restore the old
-         * handles is not possible after free_system, so report it. */
-        return st;
-    }
+    if (st != CF_OK) return st; /* invalid handles: the old system stays; failed build: steps report it */
     s->options.handles = handles;
     flow->converged = 0;
     return sbe_reset(flow);

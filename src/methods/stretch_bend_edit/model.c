@@ -323,7 +323,8 @@ static double trace_rt_c(const double r[9], const double c[9])
  * H = tr(M) I - sym(M), positive definite near the maximum; the step is
  * d = H^-1 w (a gradient step w / |tr M| where H is not positive
  * definite). Quadratic convergence from the previous iteration's rotation
- * takes 1-3 steps. Returns 1 when |d| fell below 1e-10, else 0. */
+ * takes 1-3 steps. Returns 1 when |d| fell below 1e-10 at a point where H
+ * is positive definite (a maximum), else 0. */
 static int polar_iterate(const double c[9], double q[4], double r[9])
 {
     for (int it = 0; it < 10; ++it) {
@@ -345,7 +346,8 @@ static int polar_iterate(const double c[9], double q[4], double r[9])
         double c00 = h11 * h22 - h12 * h12, c01 = h02 * h12 - h01 * h22, c02 = h01 * h12 - h02 * h11;
         double det = h00 * c00 + h01 * c01 + h02 * c02;
         double d[3];
-        if (h00 > 0.0 && h00 * h11 - h01 * h01 > 0.0 && det > 1e-14 * fabs(trm) * trm * trm) {
+        int definite = h00 > 0.0 && h00 * h11 - h01 * h01 > 0.0 && det > 1e-14 * fabs(trm) * trm * trm;
+        if (definite) {
             double c11 = h00 * h22 - h02 * h02, c12 = h01 * h02 - h00 * h12, c22 = h00 * h11 - h01 * h01;
             d[0] = (c00 * w[0] + c01 * w[1] + c02 * w[2]) / det;
             d[1] = (c01 * w[0] + c11 * w[1] + c12 * w[2]) / det;
@@ -358,7 +360,10 @@ static int polar_iterate(const double c[9], double q[4], double r[9])
         }
         double angle = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
         if (!(angle == angle)) return 0;
-        if (angle < 1e-10) return 1;
+        /* Converged only at a maximum: a vanishing gradient where H is not
+         * positive definite is a saddle of tr(R^T C) (e.g. a rotation by pi
+         * of a flat ring's optimum), left to the SVD. */
+        if (angle < 1e-10) return definite;
         double scale = angle > 1.0 ? 1.0 / angle : 1.0; /* damp far from the optimum */
         angle *= scale;
         double s = sin(0.5 * angle) / (angle / scale), cw = cos(0.5 * angle);

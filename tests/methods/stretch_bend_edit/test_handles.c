@@ -202,8 +202,57 @@ static void test_continue_and_restart(void)
     cf_context_destroy(&ctx);
 }
 
+/* Failure injection (as CHOLMOD's t_memory): the n-th allocation of
+ * parsing a handle file, creating an edit flow and stepping it fails, for
+ * every n until the whole sequence succeeds; every failure must be reported
+ * (no crash) and leave nothing allocated. */
+static void test_allocation_failures(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *mesh = NULL;
+    CHECK_OK(ctx, cf_generate_sheet(ctx, 5, 1.0, 0, &mesh));
+    if (!mesh) return;
+    size_t base = cf_context_bytes_in_use(ctx);
+    const char *json = "{\"sets\": [{\"name\": \"l\", \"relative_box\": {\"min\": [0,0,0], \"max\": [0,1,1]}, "
+                       "\"fixed\": true}, {\"name\": \"r\", \"vertices\": [5, 35], \"transform\": "
+                       "{\"translate\": [0,0,0.3]}}]}";
+    for (int e = 0; e < CF_EDIT_ENERGY_COUNT; ++e) {
+        int succeeded = 0, failures = 0;
+        for (int64_t n = 1; n < 2000 && !succeeded; ++n) {
+            cf_context_fail_allocation(ctx, n, 1);
+            cf_handle_set *h = NULL;
+            cf_flow *flow = NULL;
+            cf_status st = cf_handle_set_parse_json(ctx, mesh, NULL, json, "inject", &h);
+            if (st == CF_OK) {
+                cf_flow_options fo;
+                cf_flow_options_default(CF_FLOW_STRETCH_BEND_EDIT, &fo);
+                cf_stretch_bend_options *o = cf_flow_options_method(&fo);
+                o->handles = h;
+                o->energy = e;
+                st = cf_flow_create(ctx, mesh, NULL, &fo, &flow);
+                if (st == CF_OK) st = cf_flow_run(flow, 3, NULL);
+            }
+            cf_context_fail_allocation(ctx, 0, 0);
+            cf_flow_destroy(&flow);
+            cf_handle_set_destroy(&h);
+            if (st == CF_OK) succeeded = 1; else ++failures;
+            if (cf_context_bytes_in_use(ctx) != base) {
+                fprintf(stderr, "leak after failing allocation %lld (%s)\n", (long long)n, cf_status_name(st));
+                CHECK(cf_context_bytes_in_use(ctx) == base);
+                break;
+            }
+        }
+        CHECK(succeeded);
+        CHECK(failures > 10);
+    }
+    cf_mesh_destroy(&mesh);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 int main(void)
 {
+    CFT_RUN(test_allocation_failures);
     CFT_RUN(test_bad_files);
     CFT_RUN(test_good_file);
     CFT_RUN(test_continue_and_restart);

@@ -244,8 +244,96 @@ static void test_rigid_motion(void)
     cf_context_destroy(&ctx);
 }
 
+/* The fast local step (closed-form rank-2 polar factor per triangle,
+ * warm-started Newton iteration per vertex) must give the optimal rotations
+ * of the robust SVD: along 150 iterations of a twisted sheet (where ARAP
+ * rings are flat and a rotation by pi is a saddle the Newton iteration once
+ * stopped at), the energy after each fast local step equals the energy
+ * with SVD rotations at the same positions to 1e-10 relative. */
+static void test_fast_local_step_is_optimal(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *mesh = NULL;
+    CHECK_OK(ctx, cf_generate_sheet(ctx, 8, 1.0, 0, &mesh));
+    if (!mesh) return;
+    int32_t nv = cf_mesh_vertex_count(mesh);
+    const double *x = cf_mesh_positions(mesh);
+    int32_t *vs = malloc(sizeof(int32_t) * (size_t)nv);
+    double *ts = malloc(sizeof(double) * 3 * (size_t)nv);
+    int32_t n = 0;
+    for (int32_t v = 0; v < nv; ++v) {
+        const double *p = x + 3 * v;
+        if (p[0] < 1e-9 || p[0] > 1.0 - 1e-9) {
+            double qy = p[1] - 0.5, right = p[0] > 0.5;
+            ts[3 * n] = p[0] - 0.2 * right;
+            ts[3 * n + 1] = right ? 0.5 : p[1];
+            ts[3 * n + 2] = right ? qy : 0.0;
+            vs[n++] = v;
+        }
+    }
+    cf_handle_set *h = NULL;
+    CHECK_OK(ctx, cf_handle_set_create(ctx, n, vs, ts, &h));
+    for (int e = 0; e < CF_EDIT_ENERGY_COUNT; ++e) {
+        cf_flow *flow = make_flow(ctx, mesh, h, (cf_edit_energy)e);
+        if (!flow) continue;
+        cfi_sbe_model *m = cfi_sbe_flow_model(flow);
+        size_t rbytes = 9 * sizeof(double) * (size_t)m->rot_count, qbytes = 4 * sizeof(double) * (size_t)m->rot_count;
+        double *keep_r = malloc(rbytes + 1), *keep_q = malloc(qbytes + 1);
+        double worst = 0.0;
+        for (int k = 0; k < 150; ++k) {
+            cf_flow_info info;
+            CHECK_OK(ctx, cf_flow_step(flow, &info));
+            memcpy(keep_r, m->rotations, rbytes);
+            if (m->quats) memcpy(keep_q, m->quats, qbytes);
+            double exact = 0.0;
+            CHECK_OK(ctx, cfi_sbe_local_step(m, cf_flow_positions(flow), 1, &exact));
+            memcpy(m->rotations, keep_r, rbytes);
+            if (m->quats) memcpy(m->quats, keep_q, qbytes);
+            CHECK_OK(ctx, cfi_sbe_local_step(m, cf_flow_positions(flow), 0, NULL)); /* restore the step's rhs */
+            worst = fmax(worst, (info.energy - exact) / fabs(exact));
+        }
+        fprintf(stderr, "  %-9s worst relative excess of the fast local step: %.3g\n",
+                cf_edit_energy_name((cf_edit_energy)e), worst);
+        CHECK_LE(worst, 1e-10);
+        free(keep_r);
+        free(keep_q);
+        cf_flow_destroy(&flow);
+    }
+    free(vs);
+    free(ts);
+    cf_handle_set_destroy(&h);
+    cf_mesh_destroy(&mesh);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+/* Preallocation: after the first steps (the solver's workspace is made on
+ * the first solve), further iterations allocate nothing. */
+static void test_no_allocation_in_loop(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *mesh = NULL;
+    CHECK_OK(ctx, cf_generate_bar(ctx, 2, 2, 6, 1.0, 1.0, 3.0, 0, &mesh));
+    cf_handle_set *h = bar_handles(ctx, mesh, 0.5, 0.3);
+    for (int e = 0; e < CF_EDIT_ENERGY_COUNT; ++e) {
+        cf_flow *flow = make_flow(ctx, mesh, h, (cf_edit_energy)e);
+        if (!flow) continue;
+        CHECK_OK(ctx, cf_flow_run(flow, 2, NULL));
+        int64_t before = cf_context_allocation_count(ctx);
+        CHECK_OK(ctx, cf_flow_run(flow, 5, NULL));
+        CHECK(cf_context_allocation_count(ctx) == before);
+        cf_flow_destroy(&flow);
+    }
+    cf_handle_set_destroy(&h);
+    cf_mesh_destroy(&mesh);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 int main(void)
 {
+    CFT_RUN(test_no_allocation_in_loop);
+    CFT_RUN(test_fast_local_step_is_optimal);
     CFT_RUN(test_monotone_decrease);
     CFT_RUN(test_gradient_finite_difference);
     CFT_RUN(test_rigid_motion);

@@ -1,0 +1,121 @@
+/*
+ * Benchmark of the conformal Willmore flow (Crane, Pinkall, Schroeder 2013):
+ * per-step time split into assembly / factorisation / solves, against one
+ * implicit mean-curvature-flow step (Desbrun et al. 1999) on the same mesh in
+ * the same run (the paper reports 3.3-6.4x). TSV on stdout, nothing asserted.
+ *
+ *   bench_spin_willmore [MESH_DIR_OR_FILE ...]
+ * Without arguments the meshes come from $CURVFLOW_SHARED_DIR/meshes (or
+ * ../shared/meshes); missing files are skipped with a note on stderr.
+ */
+#include "curvflow/flow.h"
+#include "curvflow/io.h"
+#include "curvflow/metrics.h"
+#include "curvflow/spin_willmore.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define PI 3.14159265358979323846
+
+static const char *const default_meshes[] = {"spot_3k.obj", "bunny_2k.obj", "bob_5k.obj", "elephant_g3_3k.obj",
+                                             "armadillo_26k.obj"};
+
+static void bench_file(const char *path, int steps)
+{
+    cf_context *ctx = NULL;
+    if (cf_context_create(&ctx) != CF_OK) return;
+    cf_mesh *mesh = NULL;
+    if (cf_load_mesh(ctx, path, &mesh) != CF_OK) {
+        fprintf(stderr, "skip %s: %s\n", path, cf_context_message(ctx));
+        cf_context_destroy(&ctx);
+        return;
+    }
+    const char *name = strrchr(path, '/') ? strrchr(path, '/') + 1 : path;
+    cf_flow_options o;
+    cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o);
+    ((cf_spin_willmore_options *)cf_flow_options_method(&o))->tolerance = 0.0;
+    cf_flow *flow = NULL;
+    double t0 = 0.0;
+    double asm_s = 0, fac_s = 0, sol_s = 0, tot_s = 0, w0 = 0, w = 0;
+    int done = 0;
+    cf_status st = cf_flow_create(ctx, mesh, NULL, &o, &flow);
+    if (st == CF_OK) {
+        w0 = w = cf_flow_energy(flow);
+        for (int s = 0; s < steps; ++s) {
+            cf_flow_info info;
+            if (cf_flow_step(flow, &info) != CF_OK) {
+                fprintf(stderr, "%s: step %d failed: %s\n", name, s + 1, cf_context_message(ctx));
+                break;
+            }
+            asm_s += info.assemble_seconds;
+            fac_s += info.factorize_seconds;
+            sol_s += info.solve_seconds;
+            tot_s += info.total_seconds;
+            w = info.energy;
+            ++done;
+        }
+    } else {
+        fprintf(stderr, "%s: create failed: %s\n", name, cf_context_message(ctx));
+    }
+    double qmean = 0.0, qmax = 0.0;
+    if (flow && done > 0) {
+        cf_stats q;
+        if (cf_quasi_conformal_error(ctx, mesh, cf_mesh_positions(mesh), cf_flow_positions(flow), NULL, &q) == CF_OK) {
+            qmean = q.weighted_mean;
+            qmax = q.max;
+        }
+    }
+    cf_flow_destroy(&flow);
+    (void)t0;
+    /* implicit MCF: a few steps, per-step average (its own create cost excluded) */
+    cf_flow_options mo;
+    cf_flow_options_default(CF_FLOW_IMPLICIT_MCF, &mo);
+    double mcf = 0.0;
+    int mcf_steps = 0;
+    if (cf_flow_create(ctx, mesh, NULL, &mo, &flow) == CF_OK) {
+        for (int s = 0; s < 3; ++s) {
+            cf_flow_info info;
+            if (cf_flow_step(flow, &info) != CF_OK) break;
+            mcf += info.total_seconds;
+            ++mcf_steps;
+        }
+        cf_flow_destroy(&flow);
+    }
+    if (mcf_steps) mcf /= mcf_steps;
+    if (done) {
+        printf("spin-willmore\t%s\t%d\t%d\t%d\t%.2f\t%.2f\t%.2f\t%.2f\t%.2f\t%.2f\t%.4f\t%.4f\t%.4f\t%.3f\n", name,
+               cf_mesh_vertex_count(mesh), cf_mesh_face_count(mesh), done, 1e3 * asm_s / done, 1e3 * fac_s / done,
+               1e3 * sol_s / done, 1e3 * tot_s / done, 1e3 * mcf, mcf > 0 ? (tot_s / done) / mcf : 0.0,
+               w0 / (4 * PI), w / (4 * PI), qmean, qmax);
+        fflush(stdout);
+    }
+    cf_mesh_destroy(&mesh);
+    cf_context_destroy(&ctx);
+}
+
+int main(int argc, char **argv)
+{
+    int steps = 10;
+    printf("method\tmesh\tV\tF\tsteps\tassemble_ms\tfactorize_ms\tsolve_ms\tstep_ms\timplicit_mcf_ms\tratio\tW0/4pi\tW/4pi\tQ_mean\tQ_max\n");
+    if (argc > 1) {
+        for (int i = 1; i < argc; ++i) bench_file(argv[i], steps);
+        return 0;
+    }
+    const char *dir = getenv("CURVFLOW_SHARED_DIR");
+    char base[1024];
+    snprintf(base, sizeof base, "%s/meshes", dir ? dir : "../shared");
+    for (size_t i = 0; i < sizeof default_meshes / sizeof default_meshes[0]; ++i) {
+        char path[1200];
+        snprintf(path, sizeof path, "%s/%s", base, default_meshes[i]);
+        FILE *fp = fopen(path, "r");
+        if (!fp) {
+            fprintf(stderr, "skip %s: not found\n", path);
+            continue;
+        }
+        fclose(fp);
+        bench_file(path, steps);
+    }
+    return 0;
+}

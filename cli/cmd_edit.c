@@ -30,6 +30,8 @@ static void usage(FILE *out)
             "                        handle file is evaluated on it. Default: start from the rest pose\n"
             "      --mass KIND       dual area of the bending term: voronoi (default) or barycentric\n"
             "      --no-scale-free   do not divide the stretching energy by the rest area\n"
+            "  -a, --anderson M      Anderson acceleration with M past iterates (0..10) [0 = off]; a mixed\n"
+            "                        step is kept only if it lowers the energy. Try 5 for large edits\n"
             "  -o, --output OUT      output mesh (required)\n"
             "  -l, --log FILE        JSONL log, one object per iteration (energy terms stretch, bend)\n"
             "  -q, --quiet           no status lines\n"
@@ -44,6 +46,7 @@ static void usage(FILE *out)
 int cli_edit(int argc, char **argv)
 {
     enum { OPT_MASS = 256, OPT_NO_SCALE_FREE };
+    long long anderson = 0;
     static const struct option longopts[] = {
         {"handles", required_argument, NULL, 'H'},    {"energy", required_argument, NULL, 'e'},
         {"lambda", required_argument, NULL, 'L'},     {"iterations", required_argument, NULL, 'n'},
@@ -51,6 +54,7 @@ int cli_edit(int argc, char **argv)
         {"mass", required_argument, NULL, OPT_MASS},  {"no-scale-free", no_argument, NULL, OPT_NO_SCALE_FREE},
         {"output", required_argument, NULL, 'o'},     {"log", required_argument, NULL, 'l'},
         {"quiet", no_argument, NULL, 'q'},            {"help", no_argument, NULL, 'h'},
+        {"anderson", required_argument, NULL, 'a'},
         {NULL, 0, NULL, 0}};
     const char *cmd = "edit";
     const char *handles_path = NULL, *energy = "hybrid", *output = NULL, *log_path = NULL, *start_path = NULL;
@@ -60,7 +64,7 @@ int cli_edit(int argc, char **argv)
     bool quiet = false, scale_free = true;
     int c;
     optind = 1;
-    while ((c = getopt_long(argc, argv, "H:e:L:n:t:s:o:l:qh", longopts, NULL)) != -1) {
+    while ((c = getopt_long(argc, argv, "H:e:L:n:t:s:o:l:a:qh", longopts, NULL)) != -1) {
         switch (c) {
         case 'H': handles_path = optarg; break;
         case 'e': energy = optarg; break;
@@ -76,6 +80,9 @@ int cli_edit(int argc, char **argv)
             if (tol < 0.0) return cli_usage_error(cmd, "--tol must be >= 0, got %g", tol);
             break;
         case 's': start_path = optarg; break;
+        case 'a':
+            if (!cli_parse_int(cmd, "--anderson", optarg, 0, 10, &anderson)) return CLI_EXIT_USAGE;
+            break;
         case OPT_MASS: mass = optarg; break;
         case OPT_NO_SCALE_FREE: scale_free = false; break;
         case 'o': output = optarg; break;
@@ -110,6 +117,7 @@ int cli_edit(int argc, char **argv)
     o->relative_tolerance = tol;
     o->mass = strcmp(mass, "barycentric") == 0 ? CF_EDIT_MASS_BARYCENTRIC : CF_EDIT_MASS_VORONOI;
     o->scale_free = scale_free;
+    o->anderson = (int32_t)anderson;
 
     int code = CLI_EXIT_OK;
     cf_mesh *mesh = NULL, *start_mesh = NULL;

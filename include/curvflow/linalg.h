@@ -82,7 +82,7 @@ CF_API int64_t cf_sparse_find(const cf_sparse *a, int32_t i, int32_t j);
 /* ---- Cholesky (CHOLMOD, supernodal when it pays) ---------------------- */
 
 typedef enum cf_ordering {
-    CF_ORDERING_AUTO = 0,   /* AMD and METIS on the block graph; the one with less fill */
+    CF_ORDERING_AUTO = 0,   /* AMD; METIS too when AMD's factor is costly (CHOLMOD's rule), fewer flops wins */
     CF_ORDERING_AMD = 1,
     CF_ORDERING_METIS = 2,
     CF_ORDERING_NATURAL = 3

@@ -39,14 +39,16 @@ typedef enum cf_spin_boundary_mode {
      * positions fixed: boundary vertices do not move at all. */
     CF_SPIN_BOUNDARY_FIXED = 1,
     /* Sec. 6.3.1: prescribed boundary vectors. At each boundary vertex the
-     * binormal V = B = T x N (T: boundary tangent, N: vertex normal made
-     * orthogonal to T) must map to a target direction V~: lambda is restricted
-     * to r (a - b V~) with r the rotation V -> V~. Targets are fixed at
-     * creation: V~ = B on boundary loop 0 and B rotated by boundary_angle about
-     * boundary_axis on every other loop (Fig. 14: a cylinder bends). */
+     * vector V = cos(phi) B + sin(phi) N of the N-B plane (B = T x N, T:
+     * boundary tangent, N: vertex normal made orthogonal to T, phi =
+     * boundary_vector_angle) must map to a target direction V~: lambda is
+     * restricted to r (a - b V~) with r the rotation V -> V~. Targets are fixed
+     * at creation: V~ = V on boundary loop 0 and V rotated by boundary_angle
+     * about boundary_axis on every other loop (Fig. 14: a cylinder bends). */
     CF_SPIN_BOUNDARY_PRESCRIBED = 2,
-    /* Sec. 6.3.1 with V = V~ = B at every step: the binormals keep their
-     * direction, and minimising W gives constant-mean-curvature surfaces. */
+    /* Sec. 6.3.1 with V~ = V (= B by default) at every step: the boundary
+     * vectors keep their direction; with V = B minimising W gives
+     * constant-mean-curvature surfaces. */
     CF_SPIN_BOUNDARY_CMC = 3
 } cf_spin_boundary_mode;
 
@@ -63,7 +65,9 @@ typedef struct cf_spin_willmore_options {
     double sigma;              /* default 0 */
     int32_t filter_k;          /* 0..3, default 2 */
     int32_t boundary_mode;     /* cf_spin_boundary_mode, default FREE */
-    double boundary_angle;     /* PRESCRIBED: rotation of the target binormals, radians. Default 0 */
+    double boundary_angle;     /* PRESCRIBED: rotation of the target vectors, radians. Default 0 */
+    double boundary_vector_angle; /* PRESCRIBED/CMC: V = cos(phi) B + sin(phi) N, |phi| <= 1.5
+                                   * (V = +-N excluded, Sec. 6.3.1). Default 0 (V = B) */
     double boundary_axis[3];   /* PRESCRIBED: rotation axis. Default (1, 0, 0) */
     int32_t power_iterations;  /* inverse power iterations per step, default 1 (Sec. 6.4.2) */
     int32_t normalize;         /* keep total area and area-weighted centroid (Willmore energy is

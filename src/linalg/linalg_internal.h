@@ -35,6 +35,10 @@ void cfi_cholmod_clear_message(void);
  * 1 use the upper triangle. */
 void cfi_cholmod_view(const cf_sparse *a, int stype, cholmod_sparse *view);
 
+/* Iterative refinement steps UMFPACK takes inside each cf_lu_solve
+ * (UMFPACK's default 2); the saddle solver refines on its own and sets 0. */
+void cfi_lu_set_refinement_steps(cf_lu *lu, int32_t steps);
+
 /* The context a factorisation was created with. */
 cf_context *cfi_cholesky_context(const cf_cholesky *chol);
 

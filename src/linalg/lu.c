@@ -49,6 +49,11 @@ static cf_status check_umfpack(cf_context *ctx, int st, const char *what)
     return cfi_error(ctx, CF_ERR_NUMERICAL, "%s: UMFPACK status %d (%s)", what, st, umfpack_status_text(st));
 }
 
+void cfi_lu_set_refinement_steps(cf_lu *lu, int32_t steps)
+{
+    if (lu) lu->control[UMFPACK_IRSTEP] = steps < 0 ? 0 : steps;
+}
+
 void cf_lu_destroy(cf_lu **plu)
 {
     if (!plu || !*plu) return;

@@ -294,7 +294,12 @@ static cf_status factorize_lu(cf_saddle *s)
     cf_status st;
     if (!s->k && (st = build_full(s)) != CF_OK) return st;
     refill_full(s);
-    if (!s->lu) return cf_lu_create(s->ctx, s->k, &s->lu);
+    if (!s->lu) {
+        st = cf_lu_create(s->ctx, s->k, &s->lu);
+        /* refinement happens against the full system in cf_saddle_solve */
+        cfi_lu_set_refinement_steps(s->lu, 0);
+        return st;
+    }
     return cf_lu_factorize(s->lu, s->k);
 }
 

@@ -3,10 +3,12 @@
  * block ordering = plain ordering, every ordering, refactorisation with new
  * values, shifted factorisation of a singular Laplacian, NOT_POSDEF with the
  * failing column, non-finite input, allocation-failure injection. */
+#define _GNU_SOURCE 1 /* RTLD_DEFAULT */
 #include "test.h"
 
 #include "curvflow/linalg.h"
 
+#include <dlfcn.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -397,6 +399,28 @@ static void test_allocation_failures(void)
     cf_context_destroy(&ctx);
 }
 
+/* The in-library thread fix (docs/linalg.md): after the first CHOLMOD use
+ * the OpenMP max-active-levels ICV is 0, so CHOLMOD's parallel regions run
+ * on one thread without OMP_THREAD_LIMIT. */
+static void test_thread_fix_applied(void)
+{
+    cf_context *ctx = cft_context();
+    cf_sparse *a = grid_matrix(ctx, 4, 4, 1, 1.0, 0);
+    cf_cholesky *chol = NULL;
+    CHECK_OK(ctx, cf_cholesky_create(ctx, a, NULL, &chol));
+    void *sym = dlsym(RTLD_DEFAULT, "omp_get_max_active_levels");
+    CHECK(sym != NULL); /* libgomp comes with CHOLMOD */
+    if (sym) {
+        int (*get_levels)(void);
+        memcpy(&get_levels, &sym, sizeof get_levels);
+        CHECK(get_levels() == 0);
+    }
+    cf_cholesky_destroy(&chol);
+    cf_sparse_destroy(&a);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 int main(void)
 {
     CFT_RUN(test_solve_matches_dense);
@@ -406,5 +430,6 @@ int main(void)
     CFT_RUN(test_nonfinite_and_misuse);
     CFT_RUN(test_larger_grid);
     CFT_RUN(test_allocation_failures);
+    CFT_RUN(test_thread_fix_applied);
     return cft_finish();
 }

@@ -2,7 +2,8 @@
  * residual of the full system < 1e-10 (relative, 2-norm) through the Schur
  * complement (C > 0), through LU (C = 0, forced LU, Schur complement not
  * positive definite), solutions equal a dense reference; LU on unsymmetric
- * and singular matrices; allocation-failure injection. */
+ * and singular matrices; A stored as its upper triangle; allocation-failure
+ * injection. */
 #include "test.h"
 
 #include "curvflow/linalg.h"
@@ -65,6 +66,21 @@ static cf_sparse *random_rows(cf_context *ctx, int32_t m, int32_t n, int32_t per
     return b;
 }
 
+/* Upper triangle of a (both-triangle) symmetric matrix, flagged upper_only. */
+static cf_status upper_triangle_copy(cf_context *ctx, const cf_sparse *a, cf_sparse **out)
+{
+    int64_t nnz = cf_sparse_nnz(a), k = 0;
+    int32_t *r = malloc((size_t)nnz * 4), *c = malloc((size_t)nnz * 4);
+    double *v = malloc((size_t)nnz * 8);
+    for (int32_t j = 0; j < a->ncols; ++j)
+        for (int32_t q = a->colptr[j]; q < a->colptr[j + 1]; ++q)
+            if (a->rowind[q] <= j) { r[k] = a->rowind[q]; c[k] = j; v[k++] = a->values[q]; }
+    cf_status st = cf_sparse_from_triplets(ctx, a->nrows, a->ncols, k, r, c, v, 1, out, NULL);
+    if (st == CF_OK) (*out)->upper_only = 1;
+    free(r); free(c); free(v);
+    return st;
+}
+
 static void dense_solve(int32_t n, const double *a_in, const double *b, double *x)
 {
     double *a = malloc((size_t)n * n * sizeof *a);
@@ -98,7 +114,10 @@ static double *dense_kkt(const cf_sparse *a, const cf_sparse *b, const double *c
     int32_t n = a->ncols, m = b->nrows, N = n + m;
     double *k = calloc((size_t)N * N, sizeof *k);
     for (int32_t j = 0; j < n; ++j) {
-        for (int32_t p = a->colptr[j]; p < a->colptr[j + 1]; ++p) k[(size_t)j * N + a->rowind[p]] += a->values[p];
+        for (int32_t p = a->colptr[j]; p < a->colptr[j + 1]; ++p) {
+            k[(size_t)j * N + a->rowind[p]] += a->values[p];
+            if (a->upper_only && a->rowind[p] != j) k[(size_t)a->rowind[p] * N + j] += a->values[p];
+        }
         for (int32_t p = b->colptr[j]; p < b->colptr[j + 1]; ++p) {
             k[(size_t)j * N + n + b->rowind[p]] += b->values[p];
             k[(size_t)(n + b->rowind[p]) * N + j] += b->values[p];
@@ -314,6 +333,22 @@ static void test_lu_wrapper(void)
     CHECK_STATUS(cf_lu_solve(lu, b, x), CF_ERR_INVALID_ARG);
     cf_lu_destroy(&lu);
     CHECK(lu == NULL);
+    /* symmetric matrix given as its upper triangle: mirrored internally */
+    cf_sparse *g = grid_laplacian(ctx, 5, 4, 0.5), *gu = NULL;
+    CHECK_OK(ctx, upper_triangle_copy(ctx, g, &gu));
+    double gb[20], gx[20], gref[20];
+    for (int32_t i = 0; i < 20; ++i) gb[i] = rng_unit();
+    CHECK_OK(ctx, cf_lu_create(ctx, g, &lu));
+    CHECK_OK(ctx, cf_lu_solve(lu, gb, gref));
+    cf_lu_destroy(&lu);
+    CHECK_OK(ctx, cf_lu_create(ctx, gu, &lu));
+    CHECK_OK(ctx, cf_lu_solve(lu, gb, gx));
+    md = 0.0;
+    for (int32_t i = 0; i < 20; ++i) md = fmax(md, fabs(gx[i] - gref[i]));
+    CHECK_LE(md, 1e-13);
+    cf_lu_destroy(&lu);
+    cf_sparse_destroy(&g);
+    cf_sparse_destroy(&gu);
     free(dense);
     cf_sparse_destroy(&r); cf_sparse_destroy(&a); cf_sparse_destroy(&eye);
     CHECK(cf_context_bytes_in_use(ctx) == 0);
@@ -352,11 +387,31 @@ static void test_allocation_failures(void)
     cf_context_destroy(&ctx);
 }
 
+/* A stored as its upper triangle only: same results on both paths. */
+static void test_upper_only_a(void)
+{
+    cf_context *ctx = cft_context();
+    rng_seed(26);
+    problem p = make_problem(ctx, 7, 7, 10, 0.0, 1.0);
+    cf_sparse *upper = NULL;
+    CHECK_OK(ctx, upper_triangle_copy(ctx, p.a, &upper));
+    cf_sparse_destroy(&p.a);
+    p.a = upper;
+    cf_saddle_options o;
+    cf_saddle_options_default(&o);
+    solve_and_check(ctx, &p, p.c, &o, 1);
+    solve_and_check(ctx, &p, NULL, &o, 0);
+    free_problem(&p);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 int main(void)
 {
     CFT_RUN(test_schur_path);
     CFT_RUN(test_schur_refinement);
     CFT_RUN(test_lu_paths);
+    CFT_RUN(test_upper_only_a);
     CFT_RUN(test_lu_wrapper);
     CFT_RUN(test_allocation_failures);
     return cft_finish();

@@ -10,8 +10,10 @@
  *        (App. E.1), then total curvature 1 and exactness Z_i^x,y,z (App. C.1);
  *   IV.  rho = tau rhodot (so mu~ = (1 - 2 tau) mu, NOTES.md);
  *   V.   lambda = smallest eigenvector of X(rho) by one inverse power
- *        iteration from lambda = 1 (Sec. 6.4.2), or the Dirichlet solve of
- *        Sec. 6.3.2 for a fixed boundary;
+ *        iteration from lambda = 1 (Sec. 6.4.2), with lambda restricted to
+ *        r (a - b V~) on the boundary for prescribed binormals / CMC
+ *        (Sec. 6.3.1), or the Dirichlet solve of Sec. 6.3.2 for a fixed
+ *        boundary;
  *   VI.  transformed edges and the cotan Poisson problem (Eq. (6)).
  * The symbolic factorisations of X (block size 4) and L are computed once at
  * creation; each step only refills values and refactorises.
@@ -19,6 +21,7 @@
 #include "methods/flow_internal.h"
 #include "methods/spin_willmore/spin_internal.h"
 #include "curvflow/ops.h"
+#include "curvflow/quaternion.h"
 
 #include <math.h>
 #include <stddef.h>
@@ -26,9 +29,10 @@
 
 #define CFI_PI 3.14159265358979323846
 
-
 /* Sign of an inversion's curvature change relative to App. D's
- * rhodot = -2 <a, N> in our orientation of X (checked by the Moebius test). */
+ * rhodot = -2 <a, N> in our orientation of X: with +1 the balancing term
+ * takes an inverted icosphere back to uniform areas (log-area std 0.905 ->
+ * 0.003 in 10 steps) and lowers the spread on spot (test constraints). */
 #define CFI_MOBIUS_SIGN 1.0
 
 typedef struct spin_state {
@@ -108,6 +112,8 @@ static const cf_param_desc spin_params[] = {
      "free (natural), fixed positions (Sec. 6.3.2), prescribed binormals or cmc (Sec. 6.3.1)"},
     {"boundary_angle", CF_PARAM_DOUBLE, OPT(boundary_angle), -6.3, 6.3, NULL,
      "prescribed: rotation (radians) of the target binormals of boundary loops 1, 2, ..."},
+    {"boundary_vector_angle", CF_PARAM_DOUBLE, OPT(boundary_vector_angle), -1.5, 1.5, NULL,
+     "prescribed/cmc: V = cos(phi) B + sin(phi) N in the N-B plane (0: binormal; not +-N)"},
     {"boundary_axis_x", CF_PARAM_DOUBLE, OPT(boundary_axis[0]), -1e9, 1e9, NULL, "prescribed: rotation axis x"},
     {"boundary_axis_y", CF_PARAM_DOUBLE, OPT(boundary_axis[1]), -1e9, 1e9, NULL, "prescribed: rotation axis y"},
     {"boundary_axis_z", CF_PARAM_DOUBLE, OPT(boundary_axis[2]), -1e9, 1e9, NULL, "prescribed: rotation axis z"},
@@ -149,6 +155,90 @@ static cf_status update_geometry(cf_flow *flow, spin_state *s, const double *x)
     }
     s->energy = w;
     return CF_OK;
+}
+
+
+/* ---- boundary frames (Sec. 6.3.1) -------------------------------------- */
+
+/* Boundary vectors V = cos(phi) B + sin(phi) N of the N-B plane at boundary
+ * vertices (3 nv; other entries untouched), B = T x N, T the mean of the
+ * incident boundary edges, N the vertex normal made orthogonal to T, phi =
+ * boundary_vector_angle (0: the binormal). Uses s->normal, so x must be the surface of the last
+ * update_geometry. */
+static cf_status boundary_binormals(const cf_flow *flow, const spin_state *s, const double *x, double *out)
+{
+    const cf_mesh *mesh = flow->mesh;
+    const int32_t *off = mesh->boundary_loop_offsets, *lv = mesh->boundary_loop_vertices;
+    double cp = cos(s->opt.boundary_vector_angle), sp = sin(s->opt.boundary_vector_angle);
+    for (int32_t b = 0; b < mesh->boundary_loop_count; ++b) {
+        int32_t n = off[b + 1] - off[b];
+        for (int32_t k = 0; k < n; ++k) {
+            int32_t v = lv[off[b] + k], prev = lv[off[b] + (k + n - 1) % n], next = lv[off[b] + (k + 1) % n];
+            double t[3], nn[3], bb[3];
+            for (int c = 0; c < 3; ++c) t[c] = x[3 * next + c] - x[3 * prev + c];
+            double tl = sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
+            if (!(tl > 0.0)) return cfi_error(flow->ctx, CF_ERR_NUMERICAL, "vertex %d: no boundary tangent", v);
+            for (int c = 0; c < 3; ++c) t[c] /= tl;
+            const double *nv = s->normal + 3 * v;
+            double d = nv[0] * t[0] + nv[1] * t[1] + nv[2] * t[2];
+            for (int c = 0; c < 3; ++c) nn[c] = nv[c] - d * t[c];
+            double nl = sqrt(nn[0] * nn[0] + nn[1] * nn[1] + nn[2] * nn[2]);
+            if (!(nl > 0.0)) return cfi_error(flow->ctx, CF_ERR_NUMERICAL, "vertex %d: normal parallel to the boundary", v);
+            bb[0] = (t[1] * nn[2] - t[2] * nn[1]) / nl;
+            bb[1] = (t[2] * nn[0] - t[0] * nn[2]) / nl;
+            bb[2] = (t[0] * nn[1] - t[1] * nn[0]) / nl;
+            /* V = cos(phi) B + sin(phi) N, a vector of the N-B plane */
+            for (int c = 0; c < 3; ++c) out[3 * v + c] = cp * bb[c] + sp * nn[c] / nl;
+        }
+    }
+    return CF_OK;
+}
+
+/* Hamilton product on (w, x, y, z) arrays. */
+static void qmul4(const double *a, const double *b, double *o)
+{
+    o[0] = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3];
+    o[1] = a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2];
+    o[2] = a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1];
+    o[3] = a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0];
+}
+
+/* Q_i for every boundary vertex: columns r, r V~, r u1, r u2 with r the
+ * rotation taking V = current binormal to V~ under v -> conj(r) v r
+ * (r = cos(theta/2) - sin(theta/2) w, w = V x V~ / |V x V~|, Sec. 6.3.1), and
+ * u1, u2 unit imaginary quaternions orthogonal to V~. */
+static void boundary_frames(const cf_flow *flow, spin_state *s)
+{
+    const cf_mesh *mesh = flow->mesh;
+    int cmc = s->opt.boundary_mode == CF_SPIN_BOUNDARY_CMC;
+    for (int32_t i = 0; i < s->nv; ++i) {
+        if (!mesh->vertex_on_boundary[i]) continue;
+        const double *v = s->binormal + 3 * i;
+        const double *vt = cmc ? v : s->target + 3 * i;
+        double w[3] = {v[1] * vt[2] - v[2] * vt[1], v[2] * vt[0] - v[0] * vt[2], v[0] * vt[1] - v[1] * vt[0]};
+        double sn = sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+        double cs = v[0] * vt[0] + v[1] * vt[1] + v[2] * vt[2];
+        double theta = atan2(sn, cs);
+        double r[4] = {cos(0.5 * theta), 0.0, 0.0, 0.0};
+        if (sn > 0.0)
+            for (int c = 0; c < 3; ++c) r[1 + c] = -sin(0.5 * theta) * w[c] / sn;
+        /* u1, u2 orthogonal to V~ */
+        double a[3] = {1.0, 0.0, 0.0};
+        if (fabs(vt[0]) > 0.8) a[0] = 0.0, a[1] = 1.0;
+        double u1[3] = {a[1] * vt[2] - a[2] * vt[1], a[2] * vt[0] - a[0] * vt[2], a[0] * vt[1] - a[1] * vt[0]};
+        double l1 = sqrt(u1[0] * u1[0] + u1[1] * u1[1] + u1[2] * u1[2]);
+        for (int c = 0; c < 3; ++c) u1[c] /= l1;
+        double u2[3] = {vt[1] * u1[2] - vt[2] * u1[1], vt[2] * u1[0] - vt[0] * u1[2], vt[0] * u1[1] - vt[1] * u1[0]};
+        double cols[4][4];
+        double e1[4] = {0.0, vt[0], vt[1], vt[2]}, e2[4] = {0.0, u1[0], u1[1], u1[2]}, e3[4] = {0.0, u2[0], u2[1], u2[2]};
+        memcpy(cols[0], r, sizeof r);
+        qmul4(r, e1, cols[1]);
+        qmul4(r, e2, cols[2]);
+        qmul4(r, e3, cols[3]);
+        double *q = s->frames + 16 * (int64_t)i;
+        for (int row = 0; row < 4; ++row)
+            for (int c = 0; c < 4; ++c) q[4 * row + c] = cols[c][row];
+    }
 }
 
 /* ---- creation ---------------------------------------------------------- */
@@ -283,6 +373,8 @@ static cf_status spin_create(cf_flow *flow, const void *options)
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: unknown boundary mode %d", o->boundary_mode);
     double axis_len = sqrt(o->boundary_axis[0] * o->boundary_axis[0] + o->boundary_axis[1] * o->boundary_axis[1] +
                            o->boundary_axis[2] * o->boundary_axis[2]);
+    if (!(fabs(o->boundary_vector_angle) <= 1.5))
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: boundary_vector_angle must be in [-1.5, 1.5] (V = +-N is excluded)");
     if (o->boundary_mode == CF_SPIN_BOUNDARY_PRESCRIBED && (!(axis_len > 0.0) || !isfinite(axis_len) || !isfinite(o->boundary_angle)))
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: boundary_axis must be a nonzero finite vector");
     if (!(o->mobius_weight >= 0.0) || !isfinite(o->mobius_weight))
@@ -629,6 +721,12 @@ static cf_status spin_step(cf_flow *flow, cf_flow_info *info)
     st = cfi_dirac_fill(s->dirac, mesh, x, s->rho, s->eps);
     if (st != CF_OK) return st;
     if (s->fixed_boundary) cfi_dirac_fix_boundary(s->dirac, mesh, s->qrhs);
+    if (s->restricted_boundary) {
+        st = boundary_binormals(flow, s, x, s->binormal);
+        if (st != CF_OK) return st;
+        boundary_frames(flow, s);
+        cfi_dirac_restrict_boundary(s->dirac, mesh, s->frames);
+    }
     double tb = cfi_now_seconds();
     t_asm += tb - ta;
     st = cf_cholesky_factorize(s->chol, s->dirac->x);
@@ -641,12 +739,30 @@ static cf_status spin_step(cf_flow *flow, cf_flow_info *info)
         for (int32_t i = 0; i < nv; ++i) {
             s->lambda[4 * i] = 1.0;
             s->lambda[4 * i + 1] = s->lambda[4 * i + 2] = s->lambda[4 * i + 3] = 0.0;
+            if (s->restricted_boundary && mesh->vertex_on_boundary[i]) {
+                /* start from Q_i^T 1 restricted to the admissible components */
+                const double *q = s->frames + 16 * (int64_t)i;
+                s->lambda[4 * i] = q[0];
+                s->lambda[4 * i + 1] = q[1];
+                s->lambda[4 * i + 2] = s->lambda[4 * i + 3] = 0.0;
+            }
         }
         st = cfi_spin_power_iteration(s->chol, s->area, nv, s->opt.power_iterations, s->lambda, s->qwork);
     }
     t_sol += cfi_now_seconds() - tc;
     if (st != CF_OK) return cfi_error(ctx, st, "spin-willmore: eigenvector solve failed");
     s->diag.eigenvalue = cfi_spin_rayleigh(s->dirac->x, s->area, nv, s->eps, s->lambda, s->qwork);
+    if (s->restricted_boundary) {
+        /* back to lambda = Q mu on the boundary */
+        for (int32_t i = 0; i < nv; ++i) {
+            if (!mesh->vertex_on_boundary[i]) continue;
+            const double *q = s->frames + 16 * (int64_t)i;
+            double mu[4];
+            memcpy(mu, s->lambda + 4 * i, sizeof mu);
+            for (int r = 0; r < 4; ++r)
+                s->lambda[4 * i + r] = q[4 * r] * mu[0] + q[4 * r + 1] * mu[1] + q[4 * r + 2] * mu[2] + q[4 * r + 3] * mu[3];
+        }
+    }
 
     /* VI. edges and positions */
     ta = cfi_now_seconds();

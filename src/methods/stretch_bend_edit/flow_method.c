@@ -33,13 +33,21 @@ typedef struct sbe_state {
     cf_sparse *a_free;        /* nfree x nfree */
     cf_cholesky *chol;
     double *rhs_const;        /* 3 nfree: A_fc x_c */
-    double *rhs;              /* 3 nv column-major */
-    double *hu;               /* 3 nv column-major |H| u' */
+    double *rhs;              /* 3 nv interleaved right-hand side (full) */
+    double *hu;               /* 3 nv interleaved |H| u' */
     double *rhs_free;         /* 3 nfree */
     double *sol_free;         /* 3 nfree */
     int32_t rhs_cap_free;     /* allocated size of the nfree arrays */
     double energy;            /* E at the current positions */
     double factorize_seconds; /* of the last (re)factorisation, reported once */
+    /* Anderson acceleration (options.anderson = depth > 0), all 3 nv: */
+    int32_t aa_depth;
+    int32_t aa_count;         /* valid columns in the history */
+    int32_t aa_next;          /* next column to overwrite */
+    int32_t aa_have_prev;     /* f_prev, g_prev valid */
+    double *aa_df, *aa_dg;    /* depth columns of differences of f = G(x) - x and of G(x) */
+    double *aa_fprev, *aa_gprev, *aa_g, *aa_x;
+    int64_t aa_accepted, aa_rejected;
 } sbe_state;
 
 static const char *const energy_names[] = {"hybrid", "stretch", "bend", "arap", "arap-rims", NULL};
@@ -92,6 +100,8 @@ static const cf_param_desc params[] = {
      "dual area M_v of the bending energy"},
     {"scale_free", CF_PARAM_BOOL, offsetof(cf_stretch_bend_options, scale_free), 0, 1, NULL,
      "divide the stretching energy by the rest area so lambda does not depend on the model's size"},
+    {"anderson", CF_PARAM_INT, offsetof(cf_stretch_bend_options, anderson), 0, 10, NULL,
+     "Anderson acceleration depth (0 = plain local/global); energy-safeguarded"},
 };
 
 static void free_system(sbe_state *s, cf_context *ctx)
@@ -118,6 +128,13 @@ static void state_free(sbe_state *s, cf_context *ctx)
     CFI_FREE(ctx, s->rest, 3 * (size_t)nv);
     CFI_FREE(ctx, s->rhs, 3 * (size_t)nv);
     CFI_FREE(ctx, s->hu, 3 * (size_t)nv);
+    size_t n3 = 3 * (size_t)nv, depth = (size_t)s->aa_depth;
+    CFI_FREE(ctx, s->aa_df, depth * n3);
+    CFI_FREE(ctx, s->aa_dg, depth * n3);
+    CFI_FREE(ctx, s->aa_fprev, n3);
+    CFI_FREE(ctx, s->aa_gprev, n3);
+    CFI_FREE(ctx, s->aa_g, n3);
+    CFI_FREE(ctx, s->aa_x, n3);
     cfi_sbe_model_free(&s->model);
     cfi_free(ctx, s, sizeof *s);
 }
@@ -346,6 +363,19 @@ static cf_status sbe_create(cf_flow *flow, const void *options)
     s->rhs = CFI_ALLOC(ctx, double, 3 * (size_t)nv);
     s->hu = CFI_ALLOC(ctx, double, 3 * (size_t)nv);
     if (!s->rest || !s->rhs || !s->hu) return CF_ERR_NOMEM;
+    if (o->anderson < 0 || o->anderson > 10)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "stretch-bend-edit: anderson depth %d not in [0, 10]", (int)o->anderson);
+    if (o->anderson > 0) {
+        size_t n3 = 3 * (size_t)nv, depth = (size_t)o->anderson;
+        s->aa_depth = o->anderson;
+        s->aa_df = CFI_ALLOC(ctx, double, depth * n3);
+        s->aa_dg = CFI_ALLOC(ctx, double, depth * n3);
+        s->aa_fprev = CFI_ALLOC(ctx, double, n3);
+        s->aa_gprev = CFI_ALLOC(ctx, double, n3);
+        s->aa_g = CFI_ALLOC(ctx, double, n3);
+        s->aa_x = CFI_ALLOC(ctx, double, n3);
+        if (!s->aa_df || !s->aa_dg || !s->aa_fprev || !s->aa_gprev || !s->aa_g || !s->aa_x) return CF_ERR_NOMEM;
+    }
     const double *rest = o->rest_positions ? o->rest_positions : mesh->positions;
     for (int32_t i = 0; i < 3 * nv; ++i) {
         if (!isfinite(rest[i]))
@@ -371,34 +401,11 @@ static cf_status sbe_create(cf_flow *flow, const void *options)
     return CF_OK;
 }
 
-/* Right-hand side of Eq. 23 on all vertices, column-major into s->rhs:
- * alpha b (Eq. 22, from the terms) + beta K (|H| u'). */
+/* Right-hand side of Eq. 23 on all vertices (interleaved) into s->rhs. */
 static void assemble_rhs(sbe_state *s)
 {
-    cfi_sbe_model *m = &s->model;
-    int32_t nv = m->nv;
-    double *rhs = s->rhs;
-    memset(rhs, 0, 3 * (size_t)nv * sizeof(double));
-    for (int32_t r = 0; r < m->rot_count; ++r) {
-        const double *rot = m->rotations + 9 * r;
-        for (int32_t t = m->rot_offsets[r]; t < m->rot_offsets[r + 1]; ++t) {
-            int32_t i = m->term_ij[2 * t], j = m->term_ij[2 * t + 1];
-            const double *e = m->term_e + 3 * t;
-            double w = m->alpha * m->term_w[t];
-            for (int d = 0; d < 3; ++d) {
-                double re = w * (rot[3 * d] * e[0] + rot[3 * d + 1] * e[1] + rot[3 * d + 2] * e[2]);
-                rhs[(size_t)d * nv + i] += re;
-                rhs[(size_t)d * nv + j] -= re;
-            }
-        }
-    }
-    if (m->beta > 0.0) {
-        for (int d = 0; d < 3; ++d)
-            for (int32_t v = 0; v < nv; ++v)
-                s->hu[(size_t)d * nv + v] = m->hm[v] / m->mass[v] * m->u[(size_t)d * nv + v];
-        for (int d = 0; d < 3; ++d)
-            cf_sparse_multiply_add(m->k, m->beta, s->hu + (size_t)d * nv, 1.0, rhs + (size_t)d * nv);
-    }
+    s->model.hu = s->hu;
+    cfi_sbe_assemble_rhs(&s->model, s->rhs);
 }
 
 /* Global phase: x (3 nv interleaved) receives the minimiser over the free
@@ -414,7 +421,7 @@ static cf_status global_solve(sbe_state *s, double *x, double *assemble_seconds,
         int32_t f = s->free_index[v];
         if (f < 0) continue;
         for (int d = 0; d < 3; ++d)
-            s->rhs_free[(size_t)d * nfree + f] = rhs[(size_t)d * nv + v] - s->rhs_const[(size_t)d * nfree + f];
+            s->rhs_free[(size_t)d * nfree + f] = rhs[3 * (size_t)v + d] - s->rhs_const[(size_t)d * nfree + f];
     }
     double t1 = cfi_now_seconds();
     cf_status st = cf_cholesky_solve(s->chol, 3, s->rhs_free, s->sol_free);
@@ -451,7 +458,7 @@ cf_status cfi_sbe_flow_gradient(cf_flow *flow, const double *x, double *grad)
     /* The energy is x^T A x - 2 rhs^T x + const, so its gradient is
      * 2 (A x - rhs). */
     for (int32_t v = 0; v < nv; ++v)
-        for (int d = 0; d < 3; ++d) grad[3 * v + d] = 2.0 * (ax[(size_t)d * nv + v] - s->rhs[(size_t)d * nv + v]);
+        for (int d = 0; d < 3; ++d) grad[3 * v + d] = 2.0 * (ax[(size_t)d * nv + v] - s->rhs[3 * (size_t)v + d]);
     return CF_OK;
 }
 
@@ -464,6 +471,93 @@ cfi_sbe_model *cfi_sbe_flow_model(cf_flow *flow)
 /* One local/global iteration: global solve with the rotations and u' of the
  * current state, then the local step at the new state (which also gives the
  * energy E(x') reported for it). */
+/* Anderson mixing (Walker & Ni 2011, type II) of the fixed-point map
+ * G = global(local(x)): with f = G(x) - x and the last columns of
+ * differences dF, dG, gamma = argmin |f - dF gamma| and the candidate is
+ * G(x) - dG gamma, written into s->aa_x. Returns 0 when there is no history
+ * or the small least-squares system is singular. */
+static int anderson_candidate(sbe_state *s, const double *x)
+{
+    size_t n3 = 3 * (size_t)s->model.nv;
+    double *f = s->aa_x; /* scratch: f = g - x */
+    for (size_t i = 0; i < n3; ++i) f[i] = s->aa_g[i] - x[i];
+    int32_t m = s->aa_count;
+    if (m == 0) return 0;
+    double gram[10 * 10], rhs[10], gamma[10];
+    for (int32_t a = 0; a < m; ++a) {
+        const double *da = s->aa_df + (size_t)a * n3;
+        double r = 0.0;
+        for (size_t i = 0; i < n3; ++i) r += da[i] * f[i];
+        rhs[a] = r;
+        for (int32_t b = 0; b <= a; ++b) {
+            const double *db = s->aa_df + (size_t)b * n3;
+            double g = 0.0;
+            for (size_t i = 0; i < n3; ++i) g += da[i] * db[i];
+            gram[a * 10 + b] = gram[b * 10 + a] = g;
+        }
+    }
+    /* Cholesky of the Gram matrix with a relative Tikhonov shift. */
+    double big = 0.0;
+    for (int32_t a = 0; a < m; ++a) big = fmax(big, gram[a * 10 + a]);
+    if (!(big > 0.0)) return 0;
+    for (int32_t a = 0; a < m; ++a) gram[a * 10 + a] += 1e-10 * big;
+    for (int32_t a = 0; a < m; ++a) {
+        for (int32_t b = 0; b <= a; ++b) {
+            double v = gram[a * 10 + b];
+            for (int32_t k = 0; k < b; ++k) v -= gram[a * 10 + k] * gram[b * 10 + k];
+            if (a == b) {
+                if (!(v > 0.0)) return 0;
+                gram[a * 10 + a] = sqrt(v);
+            } else {
+                gram[a * 10 + b] = v / gram[b * 10 + b];
+            }
+        }
+    }
+    for (int32_t a = 0; a < m; ++a) {
+        double v = rhs[a];
+        for (int32_t k = 0; k < a; ++k) v -= gram[a * 10 + k] * gamma[k];
+        gamma[a] = v / gram[a * 10 + a];
+    }
+    for (int32_t a = m - 1; a >= 0; --a) {
+        double v = gamma[a];
+        for (int32_t k = a + 1; k < m; ++k) v -= gram[k * 10 + a] * gamma[k];
+        gamma[a] = v / gram[a * 10 + a];
+    }
+    for (size_t i = 0; i < n3; ++i) {
+        double v = s->aa_g[i];
+        for (int32_t a = 0; a < m; ++a) v -= gamma[a] * s->aa_dg[(size_t)a * n3 + i];
+        f[i] = v;
+    }
+    return 1;
+}
+
+/* Pushes f = g - x and g into the history (differences with the previous
+ * pair, circular buffer of aa_depth columns). */
+static void anderson_push(sbe_state *s, const double *x)
+{
+    size_t n3 = 3 * (size_t)s->model.nv;
+    if (s->aa_have_prev) {
+        double *df = s->aa_df + (size_t)s->aa_next * n3, *dg = s->aa_dg + (size_t)s->aa_next * n3;
+        for (size_t i = 0; i < n3; ++i) {
+            double f = s->aa_g[i] - x[i];
+            df[i] = f - s->aa_fprev[i];
+            dg[i] = s->aa_g[i] - s->aa_gprev[i];
+        }
+        s->aa_next = (s->aa_next + 1) % s->aa_depth;
+        if (s->aa_count < s->aa_depth) ++s->aa_count;
+    }
+    for (size_t i = 0; i < n3; ++i) {
+        s->aa_fprev[i] = s->aa_g[i] - x[i];
+        s->aa_gprev[i] = s->aa_g[i];
+    }
+    s->aa_have_prev = 1;
+}
+
+/* One local/global iteration: global solve with the rotations and u' of the
+ * current state, then the local step at the new state (which also gives the
+ * energy E(x') reported for it). With Anderson acceleration the candidate
+ * mixed from the history replaces the plain result when its energy is not
+ * higher than the current one. */
 static cf_status sbe_step(cf_flow *flow, cf_flow_info *info)
 {
     sbe_state *s = flow->impl;
@@ -472,15 +566,47 @@ static cf_status sbe_step(cf_flow *flow, cf_flow_info *info)
     if (!s->chol)
         return cfi_error(flow->ctx, CF_ERR_INVALID_ARG,
                          "stretch-bend-edit: no valid handle set (the last cf_stretch_bend_set_handles failed)");
-    double assemble = 0.0, solve = 0.0;
-    cf_status st = global_solve(s, x, &assemble, &solve);
-    if (st != CF_OK) return st;
-    double t2 = cfi_now_seconds();
-
-    double previous = s->energy;
-    st = cfi_sbe_local_step(m, x, 0, &s->energy);
-    if (st != CF_OK) return st;
-    double t3 = cfi_now_seconds();
+    size_t n3 = 3 * (size_t)m->nv;
+    double assemble = 0.0, solve = 0.0, previous = s->energy;
+    cf_status st;
+    double t2, t3;
+    if (s->aa_depth == 0) {
+        st = global_solve(s, x, &assemble, &solve);
+        if (st != CF_OK) return st;
+        t2 = cfi_now_seconds();
+        st = cfi_sbe_local_step(m, x, 0, &s->energy);
+        if (st != CF_OK) return st;
+        t3 = cfi_now_seconds();
+    } else {
+        st = global_solve(s, s->aa_g, &assemble, &solve);
+        if (st != CF_OK) return st;
+        t2 = cfi_now_seconds();
+        anderson_push(s, x);
+        int have = anderson_candidate(s, x);
+        int accepted = 0;
+        if (have) {
+            double e_aa = 0.0;
+            st = cfi_sbe_local_step(m, s->aa_x, 0, &e_aa);
+            if (st == CF_OK && isfinite(e_aa) && e_aa <= previous) {
+                memcpy(x, s->aa_x, n3 * sizeof(double));
+                s->energy = e_aa;
+                accepted = 1;
+                ++s->aa_accepted;
+            } else {
+                /* Rejected: restart the history from the plain step. */
+                ++s->aa_rejected;
+                s->aa_count = 0;
+                s->aa_next = 0;
+                s->aa_have_prev = 0;
+            }
+        }
+        if (!accepted) {
+            memcpy(x, s->aa_g, n3 * sizeof(double));
+            st = cfi_sbe_local_step(m, x, 0, &s->energy);
+            if (st != CF_OK) return st;
+        }
+        t3 = cfi_now_seconds();
+    }
     /* Stopping rule: relative energy decrease below the tolerance. */
     double scale = fabs(previous) > 0.0 ? fabs(previous) : 1.0;
     double decrease = (previous - s->energy) / scale;
@@ -490,6 +616,12 @@ static cf_status sbe_step(cf_flow *flow, cf_flow_info *info)
     fill_terms(s, info);
     info->residual_names[0] = "relative_decrease";
     info->residuals[0] = decrease;
+    if (s->aa_depth > 0) {
+        info->residual_names[1] = "anderson_accepted";
+        info->residuals[1] = (double)s->aa_accepted;
+        info->residual_names[2] = "anderson_rejected";
+        info->residuals[2] = (double)s->aa_rejected;
+    }
     info->assemble_seconds = assemble + (t3 - t2);
     info->factorize_seconds = s->factorize_seconds;
     s->factorize_seconds = 0.0;
@@ -503,6 +635,9 @@ static cf_status sbe_reset(cf_flow *flow)
 {
     sbe_state *s = flow->impl;
     if (!s) return CF_OK;
+    s->aa_count = 0;
+    s->aa_next = 0;
+    s->aa_have_prev = 0;
     snap_handles(s, flow->positions);
     cf_status st = cfi_sbe_local_step(&s->model, flow->positions, 1, &s->energy);
     if (st == CF_OK) fill_terms(s, &flow->info);

@@ -140,6 +140,43 @@ static cf_status build_k(cfi_sbe_model *m, const double *w_edge)
     return st;
 }
 
+/* out = K x for interleaved 3-vectors (K symmetric, both triangles stored,
+ * so row v is column v): one pass over K for all three coordinates. */
+static void k_apply3(const cf_sparse *k, const double *x, double *out)
+{
+    for (int32_t v = 0; v < k->ncols; ++v) {
+        double a = 0.0, b = 0.0, c = 0.0;
+        for (int32_t p = k->colptr[v]; p < k->colptr[v + 1]; ++p) {
+            const double *xw = x + 3 * (size_t)k->rowind[p];
+            double w = k->values[p];
+            a += w * xw[0];
+            b += w * xw[1];
+            c += w * xw[2];
+        }
+        out[3 * (size_t)v] = a;
+        out[3 * (size_t)v + 1] = b;
+        out[3 * (size_t)v + 2] = c;
+    }
+}
+
+/* out += alpha K x, interleaved. */
+static void k_apply3_add(const cf_sparse *k, double alpha, const double *x, double *out)
+{
+    for (int32_t v = 0; v < k->ncols; ++v) {
+        double a = 0.0, b = 0.0, c = 0.0;
+        for (int32_t p = k->colptr[v]; p < k->colptr[v + 1]; ++p) {
+            const double *xw = x + 3 * (size_t)k->rowind[p];
+            double w = k->values[p];
+            a += w * xw[0];
+            b += w * xw[1];
+            c += w * xw[2];
+        }
+        out[3 * (size_t)v] += alpha * a;
+        out[3 * (size_t)v + 1] += alpha * b;
+        out[3 * (size_t)v + 2] += alpha * c;
+    }
+}
+
 cf_status cfi_sbe_model_init(cfi_sbe_model *m, cf_context *ctx, const cf_mesh *mesh, const double *rest,
                              const cf_stretch_bend_options *o)
 {
@@ -257,20 +294,19 @@ cf_status cfi_sbe_model_init(cfi_sbe_model *m, cf_context *ctx, const cf_mesh *m
                 st = cfi_error(ctx, CF_ERR_BAD_MESH, "vertex %d: dual area %g is not positive", v, m->mass[v]);
                 goto done;
             }
-            for (int d = 0; d < 3; ++d) m->xcol[d * nv + v] = rest[3 * v + d];
         }
-        for (int d = 0; d < 3; ++d) cf_sparse_multiply(m->k, m->xcol + (size_t)d * nv, m->kx + (size_t)d * nv);
+        k_apply3(m->k, rest, m->kx);
         /* |H_v| M_v = |(K x)_v| (Sec. 3.2: "the norm of the mean curvature
          * vector"); u' starts as the rest direction, zero where K x = 0
          * (there |H_v| = 0 and u' does not enter the energy). */
         for (int32_t v = 0; v < nv; ++v) {
-            double a = m->kx[v], b = m->kx[nv + v], c = m->kx[2 * nv + v];
+            double a = m->kx[3 * v], b = m->kx[3 * v + 1], c = m->kx[3 * v + 2];
             double n = sqrt(a * a + b * b + c * c);
             m->hm[v] = n;
             double s = n > 0.0 ? 1.0 / n : 0.0;
-            m->u[v] = a * s;
-            m->u[nv + v] = b * s;
-            m->u[2 * nv + v] = c * s;
+            m->u[3 * v] = a * s;
+            m->u[3 * v + 1] = b * s;
+            m->u[3 * v + 2] = c * s;
         }
     }
 done:
@@ -412,11 +448,10 @@ static int triangle_rotation(const double p[6], const double b[9], double r[9], 
 }
 
 /* Eq. 22 for the terms of rotation r: b_i += alpha w R e, b_j -= alpha w R e
- * (column-major, 3 nv), fused into the local step while the terms are in
+ * (interleaved, 3 nv), fused into the local step while the terms are in
  * cache. */
 static void accumulate_rhs(const cfi_sbe_model *m, int32_t r, double *rhs)
 {
-    int32_t nv = m->nv;
     const double *rot = m->rotations + 9 * r;
     for (int32_t t = m->rot_offsets[r]; t < m->rot_offsets[r + 1]; ++t) {
         int32_t i = m->term_ij[2 * t], j = m->term_ij[2 * t + 1];
@@ -424,10 +459,27 @@ static void accumulate_rhs(const cfi_sbe_model *m, int32_t r, double *rhs)
         double w = m->alpha * m->term_w[t];
         for (int d = 0; d < 3; ++d) {
             double re = w * (rot[3 * d] * e[0] + rot[3 * d + 1] * e[1] + rot[3 * d + 2] * e[2]);
-            rhs[(size_t)d * nv + i] += re;
-            rhs[(size_t)d * nv + j] -= re;
+            rhs[3 * (size_t)i + d] += re;
+            rhs[3 * (size_t)j + d] -= re;
         }
     }
+}
+
+/* beta K (|H| u') of Eq. 23, added to rhs (interleaved). */
+static void add_bend_rhs(const cfi_sbe_model *m, double *rhs)
+{
+    for (int32_t v = 0; v < m->nv; ++v) {
+        double h = m->hm[v] / m->mass[v];
+        for (int d = 0; d < 3; ++d) m->hu[3 * (size_t)v + d] = h * m->u[3 * (size_t)v + d];
+    }
+    k_apply3_add(m->k, m->beta, m->hu, rhs);
+}
+
+void cfi_sbe_assemble_rhs(cfi_sbe_model *m, double *rhs)
+{
+    memset(rhs, 0, 3 * (size_t)m->nv * sizeof(double));
+    for (int32_t r = 0; r < m->rot_count; ++r) accumulate_rhs(m, r, rhs);
+    if (m->beta > 0.0) add_bend_rhs(m, rhs);
 }
 
 cf_status cfi_sbe_local_step(cfi_sbe_model *m, const double *x, int exact, double *total)
@@ -508,31 +560,22 @@ cf_status cfi_sbe_local_step(cfi_sbe_model *m, const double *x, int exact, doubl
     }
     double bend_energy = 0.0;
     if (m->beta > 0.0) {
-        for (int32_t v = 0; v < nv; ++v)
-            for (int d = 0; d < 3; ++d) m->xcol[d * nv + v] = x[3 * v + d];
-        for (int d = 0; d < 3; ++d) cf_sparse_multiply(m->k, m->xcol + (size_t)d * nv, m->kx + (size_t)d * nv);
+        k_apply3(m->k, x, m->kx);
         /* Sec. 4.2: u'_v = (K x')_v / |(K x')_v|; with the optimal u' the
          * term of Eq. 15 is (|K x'|_v - M_v |H_v|)^2 / M_v. A zero vector
          * keeps the previous direction (any unit vector is optimal then). */
         for (int32_t v = 0; v < nv; ++v) {
-            double a = m->kx[v], b = m->kx[nv + v], c = m->kx[2 * nv + v];
+            double a = m->kx[3 * v], b = m->kx[3 * v + 1], c = m->kx[3 * v + 2];
             double n = sqrt(a * a + b * b + c * c);
             if (n > 0.0) {
-                m->u[v] = a / n;
-                m->u[nv + v] = b / n;
-                m->u[2 * nv + v] = c / n;
+                m->u[3 * v] = a / n;
+                m->u[3 * v + 1] = b / n;
+                m->u[3 * v + 2] = c / n;
             }
             double diff = n - m->hm[v];
             bend_energy += diff * diff / m->mass[v];
         }
-        if (rhs) {
-            /* beta K (|H| u') of Eq. 23. */
-            for (int d = 0; d < 3; ++d)
-                for (int32_t v = 0; v < nv; ++v)
-                    m->hu[(size_t)d * nv + v] = m->hm[v] / m->mass[v] * m->u[(size_t)d * nv + v];
-            for (int d = 0; d < 3; ++d)
-                cf_sparse_multiply_add(m->k, m->beta, m->hu + (size_t)d * nv, 1.0, rhs + (size_t)d * nv);
-        }
+        if (rhs) add_bend_rhs(m, rhs);
     }
     m->term_energy = term_energy;
     m->bend_energy = bend_energy;
@@ -571,7 +614,7 @@ double cfi_sbe_fixed_energy(const cfi_sbe_model *m, const double *x)
             }
             double s = 0.0;
             for (int d = 0; d < 3; ++d) {
-                double q = kx[d] / m->mass[v] - m->hm[v] / m->mass[v] * m->u[(size_t)d * nv + v];
+                double q = kx[d] / m->mass[v] - m->hm[v] / m->mass[v] * m->u[3 * (size_t)v + d];
                 s += q * q;
             }
             e_bend += m->mass[v] * s;

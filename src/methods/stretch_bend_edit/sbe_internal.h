@@ -35,16 +35,16 @@ typedef struct cfi_sbe_model {
     double *term_a;          /* 2 term_count: rest edge in its face's frame (stretch) */
     int32_t per_face;        /* rotations are per face (stretch) rather than per vertex */
     int64_t svd_fallbacks;   /* local steps that needed the full SVD (statistics) */
-    double *rhs;             /* 3 nv column-major, not owned: when set, the local step also
+    double *rhs;             /* 3 nv interleaved, not owned: when set, the local step also
                                 assembles the next global step's right-hand side into it */
-    double *hu;              /* 3 nv column-major scratch for |H| u', not owned (with rhs) */
+    double *hu;              /* 3 nv interleaved scratch for |H| u', not owned (with rhs) */
     double *covariance;      /* 9 rot_count, scratch */
     cf_sparse *k;            /* K = 2 L (rest), only when beta > 0 */
     double *mass;            /* nv rest dual areas M_v (beta > 0) */
     double *hm;              /* nv |(K x)_v| at rest = M_v |H_v| (beta > 0) */
-    double *u;               /* 3 nv column-major unit vectors u' (beta > 0) */
-    double *xcol;            /* 3 nv column-major scratch */
-    double *kx;              /* 3 nv column-major scratch */
+    double *u;               /* 3 nv interleaved unit vectors u' (beta > 0) */
+    double *xcol;            /* 3 nv scratch */
+    double *kx;              /* 3 nv interleaved scratch (K x') */
     double term_energy;      /* last local step: E_s or E_arap (unweighted) */
     double bend_energy;      /* last local step: E_db (unweighted) */
 } cfi_sbe_model;
@@ -62,6 +62,10 @@ void cfi_sbe_model_free(cfi_sbe_model *m);
  * at the previous rotation, never accepted if it lowers tr(R^T C) below the
  * previous rotation's, with the SVD as fallback when it does not converge. */
 cf_status cfi_sbe_local_step(cfi_sbe_model *m, const double *x, int exact, double *total);
+
+/* Right-hand side of Eq. 23 (interleaved, 3 nv) for the model's current
+ * rotations and u' (needs m->hu when beta > 0). */
+void cfi_sbe_assemble_rhs(cfi_sbe_model *m, double *rhs);
 
 /* For tests, on a CF_FLOW_STRETCH_BEND_EDIT flow: the global phase alone
  * into x (3 nv) with the flow's current rotations and u'; the gradient

@@ -134,8 +134,49 @@ static void test_params_by_name(void)
     cf_context_destroy(&ctx);
 }
 
+/* Allocation failures in create fail cleanly; the step allocates nothing of
+ * its own (counted through the context allocator). */
+static void test_allocation(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *mesh = NULL;
+    CHECK_OK(ctx, cf_generate_bumpy_sphere(ctx, 2, 0.2, 3u, &mesh));
+    cf_flow_options o;
+    CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o));
+    CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "sigma", "0.05"));
+    size_t base = cf_context_bytes_in_use(ctx);
+    cf_flow *flow = NULL;
+    int ok = 0;
+    for (int64_t n = 1; n < 400 && !ok; ++n) {
+        cf_context_fail_allocation(ctx, n, 0);
+        cf_status st = cf_flow_create(ctx, mesh, NULL, &o, &flow);
+        cf_context_fail_allocation(ctx, 0, 0);
+        CHECK(st == CF_OK || st == CF_ERR_NOMEM);
+        if (st == CF_OK) {
+            ok = 1;
+            break;
+        }
+        CHECK(flow == NULL);
+        CHECK(cf_context_bytes_in_use(ctx) == base);
+    }
+    CHECK(ok);
+    if (flow) {
+        CHECK_OK(ctx, cf_flow_step(flow, NULL));   /* first step: solver workspaces */
+        int64_t before = cf_context_allocation_count(ctx);
+        CHECK_OK(ctx, cf_flow_step(flow, NULL));
+        int64_t after = cf_context_allocation_count(ctx);
+        fprintf(stderr, "   allocations during the second step: %lld\n", (long long)(after - before));
+        CHECK(after == before);
+        cf_flow_destroy(&flow);
+    }
+    cf_mesh_destroy(&mesh);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 int main(void)
 {
+    CFT_RUN(test_allocation);
     CFT_RUN(test_bumpy_sphere);
     CFT_RUN(test_spot);
     CFT_RUN(test_bunny);

@@ -13,6 +13,7 @@
 
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 static int contains(const char *s, const char *part) { return strstr(s, part) != NULL; }
@@ -250,8 +251,68 @@ static void test_allocation_failures(void)
     cf_context_destroy(&ctx);
 }
 
+/* The rest pose is explicit (options.rest_positions): a mesh whose own
+ * positions are a sheared copy, edited with the rest pose given and the
+ * handles on the rest pose, returns to the rest pose (zero energy there),
+ * which it would not with the mesh's positions as rest. */
+static void test_explicit_rest_pose(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *bar = NULL;
+    CHECK_OK(ctx, cf_generate_bar(ctx, 2, 2, 6, 1.0, 1.0, 3.0, 0, &bar));
+    if (!bar) return;
+    int32_t nv = cf_mesh_vertex_count(bar), nf = cf_mesh_face_count(bar);
+    const double *rest = cf_mesh_positions(bar);
+    double *sheared = malloc(sizeof(double) * 3 * (size_t)nv);
+    for (int32_t v = 0; v < nv; ++v) {
+        sheared[3 * v] = rest[3 * v] + 0.3 * rest[3 * v + 2];
+        sheared[3 * v + 1] = rest[3 * v + 1];
+        sheared[3 * v + 2] = rest[3 * v + 2];
+    }
+    cf_mesh_desc desc = {0};
+    desc.vertex_count = nv;
+    desc.positions = sheared;
+    desc.face_count = nf;
+    desc.triangles = cf_mesh_triangles(bar);
+    cf_mesh *mesh = NULL;
+    CHECK_OK(ctx, cf_mesh_create(ctx, &desc, &mesh));
+    cf_handle_set *h = NULL;
+    const char *json = "{\"sets\": [{\"name\": \"ends\", \"relative_box\": {\"min\": [0,0,0], \"max\": [1,1,0]}, "
+                       "\"fixed\": true}, {\"name\": \"top\", \"relative_box\": {\"min\": [0,0,1], \"max\": [1,1,1]}, "
+                       "\"fixed\": true}]}";
+    CHECK_OK(ctx, cf_handle_set_parse_json(ctx, mesh, rest, json, "rest", &h));
+    if (!mesh || !h) return;
+    cf_stretch_bend_options o;
+    cf_stretch_bend_options_default(&o);
+    o.energy = CF_EDIT_ARAP;
+    o.handles = h;
+    o.rest_positions = rest;
+    o.max_iterations = 500;
+    o.relative_tolerance = 1e-12;
+    double *y = malloc(sizeof(double) * 3 * (size_t)nv);
+    cf_flow_info info;
+    CHECK_OK(ctx, cf_stretch_bend_edit(ctx, mesh, NULL, &o, y, &info)); /* starts from the sheared positions */
+    double err = 0.0;
+    for (int32_t i = 0; i < 3 * nv; ++i) err = fmax(err, fabs(y[i] - rest[i]));
+    CHECK_LE(err, 1e-6);
+    CHECK_LE(fabs(info.energy), 1e-10);
+    /* With the mesh's (sheared) positions as rest pose the same handles
+     * give a deformed result with positive energy. */
+    o.rest_positions = NULL;
+    CHECK_OK(ctx, cf_stretch_bend_edit(ctx, mesh, NULL, &o, y, &info));
+    CHECK(info.energy > 1e-3);
+    free(y);
+    free(sheared);
+    cf_handle_set_destroy(&h);
+    cf_mesh_destroy(&mesh);
+    cf_mesh_destroy(&bar);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 int main(void)
 {
+    CFT_RUN(test_explicit_rest_pose);
     CFT_RUN(test_allocation_failures);
     CFT_RUN(test_bad_files);
     CFT_RUN(test_good_file);

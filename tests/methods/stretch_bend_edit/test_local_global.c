@@ -45,6 +45,21 @@ static cf_handle_set *bar_handles(cf_context *ctx, const cf_mesh *mesh, double s
     return h;
 }
 
+static cf_flow *make_flow_aa(cf_context *ctx, const cf_mesh *mesh, const cf_handle_set *h, cf_edit_energy energy,
+                             int32_t anderson)
+{
+    cf_flow_options fo;
+    CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_STRETCH_BEND_EDIT, &fo));
+    cf_stretch_bend_options *o = cf_flow_options_method(&fo);
+    o->energy = energy;
+    o->handles = h;
+    o->relative_tolerance = 0.0;
+    o->anderson = anderson;
+    cf_flow *flow = NULL;
+    CHECK_OK(ctx, cf_flow_create(ctx, mesh, NULL, &fo, &flow));
+    return flow;
+}
+
 static cf_flow *make_flow(cf_context *ctx, const cf_mesh *mesh, const cf_handle_set *h, cf_edit_energy energy)
 {
     cf_flow_options fo;
@@ -307,6 +322,49 @@ static void test_fast_local_step_is_optimal(void)
     cf_context_destroy(&ctx);
 }
 
+/* Anderson acceleration (option `anderson`): the energy still never
+ * increases (candidates are only accepted if they lower it), nothing is
+ * allocated in the loop, and for the hybrid energy on a twisted bar it
+ * reaches in 100 iterations a lower energy than the plain iteration in 300
+ * (measured 0.0573 vs 0.0718; the other energies converge fast enough
+ * without it). */
+static void test_anderson(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *mesh = NULL;
+    CHECK_OK(ctx, cf_generate_bar(ctx, 3, 3, 9, 1.0, 1.0, 3.0, 0, &mesh));
+    cf_handle_set *h = bar_handles(ctx, mesh, 0.3, 1.5);
+    for (int e = 0; e < CF_EDIT_ENERGY_COUNT; ++e) {
+        cf_flow *plain = make_flow_aa(ctx, mesh, h, (cf_edit_energy)e, 0);
+        cf_flow *fast = make_flow_aa(ctx, mesh, h, (cf_edit_energy)e, 5);
+        if (!plain || !fast) continue;
+        double prev = cf_flow_energy(fast);
+        int monotone = 1;
+        int64_t allocations = 0;
+        for (int k = 0; k < 100; ++k) {
+            cf_flow_info info;
+            CHECK_OK(ctx, cf_flow_step(fast, &info));
+            if (info.energy > prev + 1e-10 * fabs(prev)) monotone = 0; /* round-off as in the plain test */
+            prev = info.energy;
+            if (k == 1) allocations = cf_context_allocation_count(ctx);
+        }
+        CHECK(cf_context_allocation_count(ctx) == allocations);
+        CHECK(monotone);
+        CHECK_OK(ctx, cf_flow_run(plain, 300, NULL));
+        const cf_flow_info *fi = cf_flow_last_info(fast);
+        fprintf(stderr, "  %-9s anderson(5) 100 iterations: E %.6g (%g accepted, %g rejected); plain 300: E %.6g\n",
+                cf_edit_energy_name((cf_edit_energy)e), fi->energy, fi->residuals[1], fi->residuals[2],
+                cf_flow_energy(plain));
+        if (e == CF_EDIT_HYBRID) CHECK_LE(cf_flow_energy(fast), cf_flow_energy(plain));
+        cf_flow_destroy(&plain);
+        cf_flow_destroy(&fast);
+    }
+    cf_handle_set_destroy(&h);
+    cf_mesh_destroy(&mesh);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 /* Preallocation: after the first steps (the solver's workspace is made on
  * the first solve), further iterations allocate nothing. */
 static void test_no_allocation_in_loop(void)
@@ -333,6 +391,7 @@ static void test_no_allocation_in_loop(void)
 int main(void)
 {
     CFT_RUN(test_no_allocation_in_loop);
+    CFT_RUN(test_anderson);
     CFT_RUN(test_fast_local_step_is_optimal);
     CFT_RUN(test_monotone_decrease);
     CFT_RUN(test_gradient_finite_difference);

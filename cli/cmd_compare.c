@@ -51,12 +51,13 @@ int cli_compare(int argc, char **argv)
                                              {NULL, 0, NULL, 0}};
     int as_json = 0, c;
     const char *ply = NULL;
-    while ((c = getopt_long(argc, argv, "h", longopts, NULL)) != -1) {
+    opterr = 0;
+    while ((c = getopt_long(argc, argv, ":h", longopts, NULL)) != -1) {
         switch (c) {
         case 'j': as_json = 1; break;
         case 'p': ply = optarg; break;
         case 'h': usage(stdout); return CLI_EXIT_OK;
-        default: return cli_usage_error("compare", "invalid option");
+        default: return cli_option_error("compare", c, argv);
         }
     }
     if (optind + 2 != argc) return cli_usage_error("compare", "expected two meshes A B, got %d", argc - optind);

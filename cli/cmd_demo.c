@@ -57,7 +57,8 @@ int cli_demo(int argc, char **argv)
     long long steps = -1;
     bool quiet = false;
     int c;
-    while ((c = getopt_long(argc, argv, "d:n:qh", longopts, NULL)) != -1) {
+    opterr = 0;
+    while ((c = getopt_long(argc, argv, ":d:n:qh", longopts, NULL)) != -1) {
         switch (c) {
         case 'd': dir = optarg; break;
         case 'n':
@@ -65,7 +66,7 @@ int cli_demo(int argc, char **argv)
             break;
         case 'q': quiet = true; break;
         case 'h': usage(stdout); return CLI_EXIT_OK;
-        default: return cli_usage_error("demo", "invalid option");
+        default: return cli_option_error("demo", c, argv);
         }
     }
     if (optind != argc) return cli_usage_error("demo", "unexpected argument '%s'", argv[optind]);

@@ -30,8 +30,9 @@ static void usage(FILE *out)
             "                        handle file is evaluated on it. Default: start from the rest pose\n"
             "      --mass KIND       dual area of the bending term: voronoi (default) or barycentric\n"
             "      --no-scale-free   do not divide the stretching energy by the rest area\n"
-            "  -a, --anderson M      Anderson acceleration with M past iterates (0..10) [0 = off]; a mixed\n"
-            "                        step is kept only if it lowers the energy. Try 5 for large edits\n"
+            "  -a, --anderson M      Anderson acceleration with M past iterates (0..10, 0 = off; default\n"
+            "                        -1 = 5 for hybrid/stretch/bend, off for ARAP); a mixed step is\n"
+            "                        kept only if it lowers the energy\n"
             "  -o, --output OUT      output mesh (required)\n"
             "  -l, --log FILE        JSONL log, one object per iteration (energy terms stretch, bend)\n"
             "  -q, --quiet           no status lines\n"
@@ -46,7 +47,7 @@ static void usage(FILE *out)
 int cli_edit(int argc, char **argv)
 {
     enum { OPT_MASS = 256, OPT_NO_SCALE_FREE };
-    long long anderson = 0;
+    long long anderson = -1;
     static const struct option longopts[] = {
         {"handles", required_argument, NULL, 'H'},    {"energy", required_argument, NULL, 'e'},
         {"lambda", required_argument, NULL, 'L'},     {"iterations", required_argument, NULL, 'n'},
@@ -81,7 +82,7 @@ int cli_edit(int argc, char **argv)
             break;
         case 's': start_path = optarg; break;
         case 'a':
-            if (!cli_parse_int(cmd, "--anderson", optarg, 0, 10, &anderson)) return CLI_EXIT_USAGE;
+            if (!cli_parse_int(cmd, "--anderson", optarg, -1, 10, &anderson)) return CLI_EXIT_USAGE;
             break;
         case OPT_MASS: mass = optarg; break;
         case OPT_NO_SCALE_FREE: scale_free = false; break;

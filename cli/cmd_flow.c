@@ -93,7 +93,8 @@ int cli_flow(int argc, char **argv)
     int param_count = 0;
     if (!param_args) return CLI_EXIT_NUMERICAL;
     int c;
-    while ((c = getopt_long(argc, argv, "m:n:t:p:o:l:qh", longopts, NULL)) != -1) {
+    opterr = 0;
+    while ((c = getopt_long(argc, argv, ":m:n:t:p:o:l:qh", longopts, NULL)) != -1) {
         switch (c) {
         case 'm': method = optarg; break;
         case 'n':
@@ -107,7 +108,7 @@ int cli_flow(int argc, char **argv)
         case OPT_LIST_METHODS: want_methods = true; break;
         case OPT_LIST_PARAMS: want_params = true; break;
         case 'h': usage(stdout); free(param_args); return CLI_EXIT_OK;
-        default: free(param_args); return cli_usage_error(cmd, "invalid option");
+        default: free(param_args); return cli_option_error(cmd, c, argv);
         }
     }
     if (want_methods) {
@@ -166,28 +167,13 @@ int cli_flow(int argc, char **argv)
         if (st == CF_ERR_INVALID_ARG) code = CLI_EXIT_USAGE;
         goto done;
     }
-    if (log_path && (code = cli_progress_open_log(&progress, log_path)) != CLI_EXIT_OK) goto done;
-    cli_progress_log(&progress, cf_flow_last_info(flow));
-    cf_flow_set_progress(flow, cli_progress_callback, &progress);
-    cf_flow_info info;
-    cf_status run = cf_flow_run(flow, steps, &info);
-    int log_code = cli_progress_finish(&progress);
-    if (run != CF_OK) {
-        code = cli_fail(ctx, input, run);
-        if (code == CLI_EXIT_USAGE) code = CLI_EXIT_NUMERICAL;
-        fprintf(stderr, "curvflow: writing the last good state (iteration %lld) to %s\n",
-                (long long)cf_flow_last_info(flow)->iteration, output);
-    }
-    st = cf_write_mesh_file(ctx, output, mesh, cf_flow_positions(flow), NULL, 0);
-    if (st != CF_OK) {
-        int wcode = cli_fail(ctx, output, st);
-        if (code == CLI_EXIT_OK) code = wcode == CLI_EXIT_USAGE ? CLI_EXIT_INPUT : wcode;
-    } else if (!quiet && run == CF_OK) {
+    bool completed = false;
+    code = cli_run_flow_and_write(ctx, flow, &progress, log_path, steps, input, mesh, output, &completed);
+    if (completed && !quiet) {
         const cf_flow_info *last = cf_flow_last_info(flow);
         fprintf(stderr, "curvflow: %s: %lld steps, energy %.9g, area drift %+.3e, volume drift %+.3e; wrote %s\n",
                 method, (long long)last->iteration, last->energy, last->area_drift, last->volume_drift, output);
     }
-    if (code == CLI_EXIT_OK) code = log_code;
 done:
     cli_progress_finish(&progress);
     cf_flow_destroy(&flow);

@@ -8,6 +8,7 @@
 #include "curvflow/io.h"
 
 #include <getopt.h>
+#include <math.h>
 #include <string.h>
 
 static void usage(FILE *out)
@@ -35,6 +36,8 @@ enum {
     OPT_RESOLUTION
 };
 
+static double or_default(double given, double fallback) { return isnan(given) ? fallback : given; }
+
 int cli_generate(int argc, char **argv)
 {
     static const struct option longopts[] = {
@@ -52,11 +55,15 @@ int cli_generate(int argc, char **argv)
     const char *output = NULL;
     long long subdiv = -1, seed = 1, n_major = 48, n_minor = 24, nx = -1, ny = -1, nz = 2, n_around = 32,
               n_along = 16, n = -1, pattern = 0, resolution = 2;
-    double radius = 1.0, amplitude = -1.0, major = 1.0, minor = 0.4, width = -1.0, height = -1.0, depth = 1.0,
+    /* NAN = not given (kind-specific default); cli_parse_double never yields NaN,
+     * so an explicit negative value reaches the generator and is rejected
+     * there instead of silently becoming the default */
+    double radius = 1.0, amplitude = NAN, major = 1.0, minor = 0.4, width = NAN, height = NAN, depth = 1.0,
            size = 1.0;
     const char *cmd = "generate";
     int c;
-    while ((c = getopt_long(argc, argv, "o:h", longopts, NULL)) != -1) {
+    opterr = 0;
+    while ((c = getopt_long(argc, argv, ":o:h", longopts, NULL)) != -1) {
         bool ok = true;
         switch (c) {
         case 'o': output = optarg; break;
@@ -81,7 +88,7 @@ int cli_generate(int argc, char **argv)
         case OPT_HEIGHT: ok = cli_parse_double(cmd, "--height", optarg, &height); break;
         case OPT_DEPTH: ok = cli_parse_double(cmd, "--depth", optarg, &depth); break;
         case OPT_SIZE: ok = cli_parse_double(cmd, "--size", optarg, &size); break;
-        default: return cli_usage_error(cmd, "invalid option");
+        default: return cli_option_error(cmd, c, argv);
         }
         if (!ok) return CLI_EXIT_USAGE;
     }
@@ -96,22 +103,22 @@ int cli_generate(int argc, char **argv)
     if (strcmp(kind, "icosphere") == 0) {
         st = cf_generate_icosphere(ctx, (int32_t)(subdiv < 0 ? 3 : subdiv), radius, &mesh);
     } else if (strcmp(kind, "bumpy-sphere") == 0) {
-        st = cf_generate_bumpy_sphere(ctx, (int32_t)(subdiv < 0 ? 4 : subdiv), amplitude < 0 ? 0.25 : amplitude,
+        st = cf_generate_bumpy_sphere(ctx, (int32_t)(subdiv < 0 ? 4 : subdiv), or_default(amplitude, 0.25),
                                       (uint32_t)seed, &mesh);
     } else if (strcmp(kind, "torus") == 0) {
         st = cf_generate_torus(ctx, major, minor, (int32_t)n_major, (int32_t)n_minor, &mesh);
     } else if (strcmp(kind, "grid") == 0) {
-        st = cf_generate_grid(ctx, (int32_t)(nx < 0 ? 16 : nx), (int32_t)(ny < 0 ? 16 : ny), width < 0 ? 1.0 : width,
-                              height < 0 ? 1.0 : height, &mesh);
+        st = cf_generate_grid(ctx, (int32_t)(nx < 0 ? 16 : nx), (int32_t)(ny < 0 ? 16 : ny), or_default(width, 1.0),
+                              or_default(height, 1.0), &mesh);
     } else if (strcmp(kind, "cylinder") == 0) {
-        st = cf_generate_cylinder(ctx, (int32_t)n_around, (int32_t)n_along, radius, height < 0 ? 2.0 : height, &mesh);
+        st = cf_generate_cylinder(ctx, (int32_t)n_around, (int32_t)n_along, radius, or_default(height, 2.0), &mesh);
     } else if (strcmp(kind, "bar") == 0) {
         st = cf_generate_bar(ctx, (int32_t)(nx < 0 ? 20 : nx), (int32_t)(ny < 0 ? 2 : ny), (int32_t)nz,
-                             width < 0 ? 10.0 : width, height < 0 ? 1.0 : height, depth, (int32_t)pattern, &mesh);
+                             or_default(width, 10.0), or_default(height, 1.0), depth, (int32_t)pattern, &mesh);
     } else if (strcmp(kind, "sheet") == 0) {
         st = cf_generate_sheet(ctx, (int32_t)(n < 0 ? 16 : n), size, (int32_t)pattern, &mesh);
     } else if (strcmp(kind, "bumpy-plane") == 0) {
-        st = cf_generate_bumpy_plane(ctx, (int32_t)(n < 0 ? 32 : n), size, amplitude < 0 ? 0.1 : amplitude,
+        st = cf_generate_bumpy_plane(ctx, (int32_t)(n < 0 ? 32 : n), size, or_default(amplitude, 0.1),
                                      (uint32_t)seed, &mesh);
     } else if (strcmp(kind, "double-torus") == 0) {
         st = cf_generate_double_torus(ctx, (int32_t)resolution, &mesh);

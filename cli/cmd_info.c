@@ -44,11 +44,12 @@ int cli_info(int argc, char **argv)
     static const struct option longopts[] = {
         {"json", no_argument, NULL, 'j'}, {"help", no_argument, NULL, 'h'}, {NULL, 0, NULL, 0}};
     int as_json = 0, c;
-    while ((c = getopt_long(argc, argv, "h", longopts, NULL)) != -1) {
+    opterr = 0;
+    while ((c = getopt_long(argc, argv, ":h", longopts, NULL)) != -1) {
         switch (c) {
         case 'j': as_json = 1; break;
         case 'h': usage(stdout); return CLI_EXIT_OK;
-        default: return cli_usage_error("info", "invalid option");
+        default: return cli_option_error("info", c, argv);
         }
     }
     if (optind + 1 != argc) return cli_usage_error("info", "expected one input mesh, got %d", argc - optind);

@@ -59,7 +59,8 @@ int cli_render(int argc, char **argv)
     cf_render_options ro;
     cf_render_options_default(&ro);
     int c;
-    while ((c = getopt_long(argc, argv, "o:h", longopts, NULL)) != -1) {
+    opterr = 0;
+    while ((c = getopt_long(argc, argv, ":o:h", longopts, NULL)) != -1) {
         switch (c) {
         case 'o': output = optarg; break;
         case OPT_CHECKER: ro.uv_checker = 1; break;
@@ -94,7 +95,7 @@ int cli_render(int argc, char **argv)
         }
         case OPT_PERSP: ro.perspective = 1; break;
         case 'h': usage(stdout); return CLI_EXIT_OK;
-        default: return cli_usage_error(cmd, "invalid option");
+        default: return cli_option_error(cmd, c, argv);
         }
     }
     if (optind + 1 != argc) return cli_usage_error(cmd, "expected one input mesh");

@@ -51,6 +51,26 @@ int cli_usage_error(const char *command, const char *fmt, ...)
     return CLI_EXIT_USAGE;
 }
 
+int cli_option_error(const char *command, int c, char **argv)
+{
+    const char *arg = optind > 0 ? argv[optind - 1] : "";
+    bool is_long = strncmp(arg, "--", 2) == 0;
+    int name_len = (int)strcspn(arg, "=");
+    if (c == ':') {
+        if (is_long) return cli_usage_error(command, "option '%.*s' requires an argument", name_len, arg);
+        return cli_usage_error(command, "option '-%c' requires an argument", optopt);
+    }
+    if (is_long) {
+        /* glibc leaves optopt 0 for an unknown long option and sets it to
+         * the option's value when a flag was given an argument */
+        if (optopt != 0 && arg[name_len] == '=')
+            return cli_usage_error(command, "option '%.*s' does not take an argument", name_len, arg);
+        return cli_usage_error(command, "unrecognized option '%.*s'", name_len, arg);
+    }
+    if (optopt > 0 && optopt < 128) return cli_usage_error(command, "invalid option '-%c'", optopt);
+    return cli_usage_error(command, "invalid option '%s'", arg);
+}
+
 bool cli_parse_int(const char *command, const char *option, const char *text, long long min_value,
                    long long max_value, long long *out)
 {
@@ -121,6 +141,35 @@ int cli_make_dir(const char *path)
         return CLI_EXIT_INPUT;
     }
     return CLI_EXIT_OK;
+}
+
+int cli_run_flow_and_write(cf_context *ctx, cf_flow *flow, cli_progress *progress, const char *log_path,
+                           int64_t steps, const char *input, const cf_mesh *mesh, const char *output,
+                           bool *completed)
+{
+    *completed = false;
+    int code = CLI_EXIT_OK;
+    if (log_path && (code = cli_progress_open_log(progress, log_path)) != CLI_EXIT_OK) return code;
+    cli_progress_log(progress, cf_flow_last_info(flow));
+    cf_flow_set_progress(flow, cli_progress_callback, progress);
+    cf_flow_info info;
+    cf_status run = cf_flow_run(flow, steps, &info);
+    int log_code = cli_progress_finish(progress);
+    if (run != CF_OK) {
+        code = cli_fail(ctx, input, run);
+        if (code == CLI_EXIT_USAGE) code = CLI_EXIT_NUMERICAL;
+        fprintf(stderr, "curvflow: writing the last good state (iteration %lld) to %s\n",
+                (long long)cf_flow_last_info(flow)->iteration, output);
+    }
+    cf_status st = cf_write_mesh_file(ctx, output, mesh, cf_flow_positions(flow), NULL, 0);
+    if (st != CF_OK) {
+        int wcode = cli_fail(ctx, output, st);
+        if (code == CLI_EXIT_OK) code = wcode == CLI_EXIT_USAGE ? CLI_EXIT_INPUT : wcode;
+    } else if (run == CF_OK) {
+        *completed = true;
+    }
+    if (code == CLI_EXIT_OK) code = log_code;
+    return code;
 }
 
 double cli_now(void)

@@ -32,6 +32,12 @@ int cli_usage_error(const char *command, const char *fmt, ...)
 #endif
     ;
 
+/* Reports a failed getopt_long() in the tool's one-line format instead of
+ * getopt's own "<cmd>: unrecognized option" line. Use with `opterr = 0` and
+ * an optstring starting with ':' so that a missing argument returns ':'.
+ * `c` is getopt_long's return value ('?' or ':'). Returns 1 (usage). */
+int cli_option_error(const char *command, int c, char **argv);
+
 /* Strict number parsing (whole string, finite, in range); print a usage
  * error naming the option on failure and return false. */
 bool cli_parse_int(const char *command, const char *option, const char *text, long long min_value,
@@ -73,6 +79,17 @@ void cli_progress_log(cli_progress *p, const cf_flow_info *info);
 int cli_progress_callback(void *user, const cf_flow_info *info);
 /* Ends the bar line; closes the log. Returns 0 or 2 if the log could not be written. */
 int cli_progress_finish(cli_progress *p);
+
+/* Runs `steps` steps of a created flow with the progress reporter (the
+ * JSONL log opened at log_path when it is not NULL) and writes the reached
+ * positions to `output`, also after a numerical failure (the last good
+ * state, with a message naming the iteration). Returns the exit code: 0,
+ * 2 (log or output unwritable), 3 (numerical failure). *completed is set
+ * when the run succeeded and the output was written, so the caller can
+ * print its summary line. Shared by `flow` and `edit`. */
+int cli_run_flow_and_write(cf_context *ctx, cf_flow *flow, cli_progress *progress, const char *log_path,
+                           int64_t steps, const char *input, const cf_mesh *mesh, const char *output,
+                           bool *completed);
 
 /* Wall-clock seconds (monotonic). */
 double cli_now(void);

@@ -114,7 +114,8 @@ CF_API cf_status cf_similarity_align(cf_context *ctx, int32_t n, const double *s
                                      const double *weights, int with_scale, double rotation[9], double *scale,
                                      double translation[3], double *rms);
 
-/* out_i = s R x_i + t (out may equal x). */
+/* out_i = s R x_i + t for n points (x, out: 3 n; out may equal x). Does
+ * nothing when a pointer is NULL or n is out of range. */
 CF_API void cf_similarity_apply(int32_t n, const double rotation[9], double scale, const double translation[3],
                                 const double *x, double *out);
 

@@ -13,6 +13,16 @@
  *  - L x = 2 H N dA (integrated mean-curvature normal), H > 0 on a sphere
  *    with outward normals.
  *  - K_i = 2 pi - sum of corner angles (interior), pi - sum (boundary).
+ *
+ * Statuses shared by every function below (others are listed where they
+ * apply): CF_OK; CF_ERR_INVALID_ARG for a NULL context, mesh, positions,
+ * input or output array, or an unknown kind; CF_ERR_NONFINITE when a
+ * position is NaN/Inf (the message names the vertex); CF_ERR_DEGENERATE_FACE
+ * ("face f: zero area") from the operators that divide by a face area
+ * (cotangents, cotan weights and Laplacian, mixed Voronoi areas and mean
+ * curvature, face normals, *2, gradient, divergence, harmonic basis);
+ * CF_ERR_NOMEM from those that allocate. On failure caller-allocated
+ * outputs may hold partial values.
  */
 #ifndef CURVFLOW_OPS_H
 #define CURVFLOW_OPS_H
@@ -38,7 +48,8 @@ CF_API cf_status cf_face_areas(cf_context *ctx, const cf_mesh *mesh, const doubl
 /* Unit face normals (3 nf), right-hand rule on the corner order. */
 CF_API cf_status cf_face_normals(cf_context *ctx, const cf_mesh *mesh, const double *positions, double *normals);
 
-/* Area-weighted unit vertex normals (3 nv). */
+/* Area-weighted unit vertex normals (3 nv). CF_ERR_NUMERICAL when the
+ * area vectors around a vertex cancel (no normal). */
 CF_API cf_status cf_vertex_normals(cf_context *ctx, const cf_mesh *mesh, const double *positions, double *normals);
 
 typedef enum cf_dual_area_kind {
@@ -85,7 +96,8 @@ CF_API cf_status cf_dec_star2(cf_context *ctx, const cf_mesh *mesh, const double
 CF_API cf_status cf_mean_curvature_normal(cf_context *ctx, const cf_mesh *mesh, const double *positions, double *hn);
 
 /* Pointwise signed mean curvature H_i = <L x, N_i> / (2 A_i) with
- * mixed-Voronoi A_i (Meyer et al. 2003) and area-weighted normal N_i (nv).
+ * mixed-Voronoi A_i (Meyer et al. 2003) and area-weighted normal N_i (nv);
+ * CF_ERR_NUMERICAL when N_i or A_i vanishes.
  * 1/R on a sphere. (Barycentric A_i does not converge pointwise on
  * irregular meshes: ~15% max error on every refined icosphere, while the
  * Voronoi estimate converges as O(h^2); see docs/ops.md.) */
@@ -135,7 +147,11 @@ CF_API cf_status cf_one_form_to_vector_field(cf_context *ctx, const cf_mesh *mes
 
 /* One or more levels of Loop subdivision (Loop 1987; boundary rules of
  * Hoppe et al. 1994). Creates a new mesh whose rest positions are the
- * subdivided ones. Texture coordinates are subdivided linearly. */
+ * subdivided ones. Texture coordinates are subdivided linearly.
+ * levels: 1 .. 10 (each multiplies the face count by 4). *out receives a
+ * new mesh on the same context (free with cf_mesh_destroy), NULL on
+ * failure. CF_ERR_INVALID_ARG also when the result would not fit int32
+ * counts. */
 CF_API cf_status cf_loop_subdivide(cf_context *ctx, const cf_mesh *mesh, const double *positions, int32_t levels,
                                    cf_mesh **out);
 

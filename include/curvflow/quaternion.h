@@ -27,7 +27,9 @@ CF_API double cf_quat_norm2(cf_quat a);
 CF_API double cf_quat_norm(cf_quat a);
 CF_API cf_quat cf_quat_inverse(cf_quat a);                 /* conj / |a|^2; zero gives zero */
 CF_API cf_quat cf_quat_normalize(cf_quat a);
-/* Unit quaternion rotating by `angle` radians about the unit axis. */
+/* Unit quaternion rotating by `angle` radians about `axis` (normalised
+ * here; a zero or NULL axis gives the identity). Pointer arguments of
+ * the functions below may be NULL: nothing is read or written. */
 CF_API cf_quat cf_quat_from_axis_angle(const double axis[3], double angle);
 /* conj(q) v q for an imaginary v: the map of spin transformations (Crane
  * et al. 2011), i.e. the inverse of the rotation q v conj(q), scaled by

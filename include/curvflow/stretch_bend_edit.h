@@ -26,9 +26,11 @@
  * factorised once per handle set, three right-hand sides) followed by one
  * local step (Procrustes rotations with determinant correction, Eq. 24, and
  * u' = normalised K x'). The energy reported after a step is E(x') with the
- * optimal rotations, so it never increases from step to step (also with the
- * optional Anderson acceleration, which keeps a mixed step only if it lowers
- * the energy).
+ * optimal rotations, so it never increases from step to step (also with
+ * Anderson acceleration, on by default for hybrid/stretch/bend, which keeps
+ * a mixed step only if it lowers the energy). The first step after create,
+ * reset or new handles tries the rotations of the state before the handles
+ * moved and those of the snapped state, and keeps the better result.
  *
  * Note: E(v) in Eq. 7 uses the full weight W of every edge, as printed; it
  * reproduces App. B's table but, unlike CGAL's per-face variant, is not
@@ -123,9 +125,10 @@ typedef struct cf_stretch_bend_options {
     int32_t mass;                /* cf_edit_mass, default CF_EDIT_MASS_VORONOI */
     int32_t scale_free;          /* 1: stretch term divided by total rest area (default) */
     int32_t anderson;            /* Anderson acceleration of the local/global fixed-point map with this
-                                    many past iterates (0 = off, default; at most 10). A step is kept only
-                                    if it lowers the energy, else the plain step is taken, so the energy
-                                    still never increases. */
+                                    many past iterates (0 = off, at most 10; default -1 = 5 for hybrid,
+                                    stretch and bend, 0 for the ARAP energies). A step is kept only if it
+                                    lowers the energy, else the plain step is taken, so the energy still
+                                    never increases. */
     const cf_handle_set *handles;   /* required; must outlive the flow */
     const double *rest_positions;   /* 3 nv rest pose, NULL = the mesh's positions; must outlive the flow */
 } cf_stretch_bend_options;

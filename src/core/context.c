@@ -33,7 +33,13 @@ const char *cf_status_name(cf_status status)
     return "CF_ERR_UNKNOWN";
 }
 
-const char *cf_version_string(void) { return "0.1.0"; }
+/* Built from the header's numbers so the two cannot drift apart. */
+#define CFI_STRINGIFY2(x) #x
+#define CFI_STRINGIFY(x) CFI_STRINGIFY2(x)
+const char *cf_version_string(void)
+{
+    return CFI_STRINGIFY(CF_VERSION_MAJOR) "." CFI_STRINGIFY(CF_VERSION_MINOR) "." CFI_STRINGIFY(CF_VERSION_PATCH);
+}
 
 static void *default_malloc(void *user, size_t bytes) { (void)user; return malloc(bytes); }
 static void *default_realloc(void *user, void *ptr, size_t old_bytes, size_t new_bytes)
@@ -165,12 +171,18 @@ void *cfi_alloc_array(cf_context *ctx, size_t count, size_t size)
     return p;
 }
 
+/* Messages and log lines are one line each (curvflow.h): line breaks in
+ * formatted arguments (file names, parser excerpts) become spaces. */
+static void one_line(char *text)
+{
+    for (char *c = text; *c; ++c)
+        if (*c == '\n' || *c == '\r') *c = ' ';
+}
+
 static void vrecord(cf_context *ctx, const char *fmt, va_list ap)
 {
     vsnprintf(ctx->message, sizeof ctx->message, fmt, ap);
-    /* keep the message to one line */
-    for (char *c = ctx->message; *c; ++c)
-        if (*c == '\n' || *c == '\r') *c = ' ';
+    one_line(ctx->message);
 }
 
 cf_status cfi_error(cf_context *ctx, cf_status status, const char *fmt, ...)
@@ -194,6 +206,7 @@ cf_status cfi_error_prefix(cf_context *ctx, const char *fmt, ...)
     va_start(ap, fmt);
     int n = vsnprintf(ctx->message, sizeof ctx->message, fmt, ap);
     va_end(ap);
+    one_line(ctx->message);
     size_t used = n < 0 ? 0 : (size_t)n;
     if (used + 2 < sizeof ctx->message) {
         memcpy(ctx->message + used, ": ", 2);
@@ -215,6 +228,7 @@ void cfi_log(cf_context *ctx, cf_log_level level, const char *fmt, ...)
     va_start(ap, fmt);
     vsnprintf(line, sizeof line, fmt, ap);
     va_end(ap);
+    one_line(line);
     ctx->log_fn(ctx->log_user, level, line);
 }
 

@@ -245,8 +245,10 @@ cf_status cf_render_rgb(cf_context *ctx, const cf_mesh *mesh, const double *posi
                 if (o->uv_checker) {
                     double uu = b0 * uv0[0] + b1 * uv1[0] + b2 * uv2[0];
                     double vv = b0 * uv0[1] + b1 * uv1[1] + b2 * uv2[1];
-                    long long cu = (long long)floor(uu * o->checker_count), cv = (long long)floor(vv * o->checker_count);
-                    if ((cu + cv) & 1) k *= 0.55;
+                    /* parity of the cell index, in doubles: casting floor(u n)
+                     * to an integer overflows (UB) for large uv or n */
+                    double cell = floor(uu * o->checker_count) + floor(vv * o->checker_count);
+                    if (fabs(fmod(cell, 2.0)) == 1.0) k *= 0.55;
                 }
                 for (int c = 0; c < 3; ++c) rgb[3 * pix + (size_t)c] = to_byte(k * base[c]);
             }

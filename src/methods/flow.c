@@ -195,7 +195,8 @@ cf_status cf_flow_options_format(const cf_flow_options *options, const cf_param_
 {
     if (!options || !param || !buf || size == 0) return CF_ERR_INVALID_ARG;
     const unsigned char *base = options->storage.bytes;
-    if (param->offset >= CF_FLOW_OPTIONS_STORAGE) return CF_ERR_INVALID_ARG;
+    size_t field_bytes = param->type == CF_PARAM_DOUBLE ? sizeof(double) : sizeof(int32_t);
+    if (param->offset > CF_FLOW_OPTIONS_STORAGE - field_bytes) return CF_ERR_INVALID_ARG;
     int n = 0;
     switch (param->type) {
     case CF_PARAM_DOUBLE: {

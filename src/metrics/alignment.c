@@ -15,7 +15,8 @@ cf_status cf_similarity_align(cf_context *ctx, int32_t n, const double *source, 
     if (!ctx) return CF_ERR_INVALID_ARG;
     if (!source || !target || !rotation || !scale || !translation)
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "similarity_align: NULL argument");
-    if (n < 1) return cfi_error(ctx, CF_ERR_INVALID_ARG, "similarity_align: need at least 1 point, got %d", n);
+    if (n < 1 || n > INT32_MAX / 3)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "similarity_align: point count %d outside [1, %d]", n, INT32_MAX / 3);
     double wsum = 0.0, mx[3] = {0, 0, 0}, my[3] = {0, 0, 0};
     for (int32_t i = 0; i < n; ++i) {
         double w = weights ? weights[i] : 1.0;
@@ -77,6 +78,7 @@ cf_status cf_similarity_align(cf_context *ctx, int32_t n, const double *source, 
 void cf_similarity_apply(int32_t n, const double rotation[9], double scale, const double translation[3],
                          const double *x, double *out)
 {
+    if (!rotation || !translation || !x || !out || n > INT32_MAX / 3) return;
     for (int32_t i = 0; i < n; ++i) {
         double p[3] = {x[3 * i], x[3 * i + 1], x[3 * i + 2]};
         for (int r = 0; r < 3; ++r)

@@ -53,6 +53,7 @@ cf_status cf_fit_sphere(cf_context *ctx, int32_t n, const double *points, double
     if (!ctx) return CF_ERR_INVALID_ARG;
     if (!points || !center || !radius) return cfi_error(ctx, CF_ERR_INVALID_ARG, "fit_sphere: NULL argument");
     if (n < 4) return cfi_error(ctx, CF_ERR_NUMERICAL, "fit_sphere: need at least 4 points, got %d", n);
+    if (n > INT32_MAX / 3) return cfi_error(ctx, CF_ERR_INVALID_ARG, "fit_sphere: too many points (%d)", n);
     /* work relative to the centroid, scaled to unit RMS radius, for
      * conditioning */
     double g[3] = {0.0, 0.0, 0.0};

@@ -223,7 +223,7 @@ cf_status cf_point_to_surface_distance(cf_context *ctx, int32_t n, const double 
         double dmax = 0.0, sum = 0.0;
         int32_t imax = -1;
         for (int32_t i = 0; i < n; ++i) {
-            double d = sqrt(bvh_nearest2(&b, mesh, positions, points + 3 * i));
+            double d = sqrt(bvh_nearest2(&b, mesh, positions, points + 3 * (size_t)i));
             if (dist) dist[i] = d;
             if (d > dmax || imax < 0) {
                 dmax = d;

@@ -1,6 +1,6 @@
 /*
  * Corner angles and their cotangents, angles[3 f + k] at corner k of face f.
- * Angles use atan2(|u x v|, u . v), accurate also near 0 and pi.
+ * Angles use atan2(|u x v|, u . v) (cfi_corner_angle), accurate also near 0 and pi.
  */
 #include "curvflow/ops.h"
 #include "ops/ops_internal.h"
@@ -11,13 +11,7 @@ cf_status cf_corner_angles(cf_context *ctx, const cf_mesh *mesh, const double *p
     if (s != CF_OK) return s;
     for (int32_t f = 0; f < mesh->nf; ++f) {
         const int32_t *t = mesh->triangles + 3 * f;
-        for (int k = 0; k < 3; ++k) {
-            double u[3], v[3], c[3];
-            cfi_v3_sub(positions + 3 * t[(k + 1) % 3], positions + 3 * t[k], u);
-            cfi_v3_sub(positions + 3 * t[(k + 2) % 3], positions + 3 * t[k], v);
-            cfi_v3_cross(u, v, c);
-            angles[3 * f + k] = atan2(cfi_v3_norm(c), cfi_v3_dot(u, v));
-        }
+        for (int k = 0; k < 3; ++k) angles[3 * f + k] = cfi_corner_angle(positions, t, k);
     }
     return CF_OK;
 }

@@ -16,28 +16,48 @@ static cf_status check_mesh(cf_context *ctx, const cf_mesh *mesh, const void *ou
     return CF_OK;
 }
 
+/* Value of triplet k of d0: (d0 f)_e = f_j - f_i, columns (i, j) of edge e. */
+static double d0_value(const cf_mesh *mesh, int64_t k)
+{
+    (void)mesh;
+    return k % 2 ? 1.0 : -1.0;
+}
+
+/* Value of triplet h (halfedge h = a -> b of face h / 3) of d1: +1 when it
+ * runs along its edge's i -> j. */
+static double d1_value(const cf_mesh *mesh, int64_t h)
+{
+    int32_t e = mesh->halfedge_edge[h];
+    return mesh->triangles[h] == mesh->edge_vertices[2 * e] ? 1.0 : -1.0;
+}
+
+/* A signed incidence matrix with `per_row` entries per row: triplet k sits
+ * in row k / per_row, column cols[k], with value value(mesh, k). */
+static cf_status incidence_matrix(cf_context *ctx, const cf_mesh *mesh, int32_t nrows, int32_t ncols, int per_row,
+                                  const int32_t *cols, double (*value)(const cf_mesh *, int64_t), cf_sparse **out)
+{
+    int64_t n = (int64_t)per_row * nrows;
+    int32_t *rows = CFI_ALLOC(ctx, int32_t, n);
+    double *vals = CFI_ALLOC(ctx, double, n);
+    cf_status s = CF_ERR_NOMEM;
+    if (rows && vals) {
+        for (int64_t k = 0; k < n; ++k) {
+            rows[k] = (int32_t)(k / per_row);
+            vals[k] = value(mesh, k);
+        }
+        s = cf_sparse_from_triplets(ctx, nrows, ncols, n, rows, cols, vals, 0, out, NULL);
+    }
+    CFI_FREE(ctx, rows, n);
+    CFI_FREE(ctx, vals, n);
+    return s;
+}
+
 cf_status cf_dec_d0(cf_context *ctx, const cf_mesh *mesh, cf_sparse **out)
 {
     cf_status s = check_mesh(ctx, mesh, out, "dec_d0");
     if (s != CF_OK) return s;
     *out = NULL;
-    int64_t n = 2 * (int64_t)mesh->ne;
-    int32_t *rows = CFI_ALLOC(ctx, int32_t, n);
-    double *vals = CFI_ALLOC(ctx, double, n);
-    if (!rows || !vals) {
-        s = CF_ERR_NOMEM;
-        goto done;
-    }
-    for (int32_t e = 0; e < mesh->ne; ++e) {
-        rows[2 * e] = rows[2 * e + 1] = e;
-        vals[2 * e] = -1.0; /* (d0 f)_e = f_j - f_i */
-        vals[2 * e + 1] = 1.0;
-    }
-    s = cf_sparse_from_triplets(ctx, mesh->ne, mesh->nv, n, rows, mesh->edge_vertices, vals, 0, out, NULL);
-done:
-    CFI_FREE(ctx, rows, n);
-    CFI_FREE(ctx, vals, n);
-    return s;
+    return incidence_matrix(ctx, mesh, mesh->ne, mesh->nv, 2, mesh->edge_vertices, d0_value, out);
 }
 
 cf_status cf_dec_d1(cf_context *ctx, const cf_mesh *mesh, cf_sparse **out)
@@ -45,24 +65,7 @@ cf_status cf_dec_d1(cf_context *ctx, const cf_mesh *mesh, cf_sparse **out)
     cf_status s = check_mesh(ctx, mesh, out, "dec_d1");
     if (s != CF_OK) return s;
     *out = NULL;
-    int64_t n = 3 * (int64_t)mesh->nf;
-    int32_t *rows = CFI_ALLOC(ctx, int32_t, n);
-    double *vals = CFI_ALLOC(ctx, double, n);
-    if (!rows || !vals) {
-        s = CF_ERR_NOMEM;
-        goto done;
-    }
-    for (int64_t h = 0; h < n; ++h) {
-        int32_t e = mesh->halfedge_edge[h];
-        rows[h] = (int32_t)(h / 3);
-        /* +1 when halfedge h = (a -> b) runs along the edge's i -> j */
-        vals[h] = mesh->triangles[h] == mesh->edge_vertices[2 * e] ? 1.0 : -1.0;
-    }
-    s = cf_sparse_from_triplets(ctx, mesh->nf, mesh->ne, n, rows, mesh->halfedge_edge, vals, 0, out, NULL);
-done:
-    CFI_FREE(ctx, rows, n);
-    CFI_FREE(ctx, vals, n);
-    return s;
+    return incidence_matrix(ctx, mesh, mesh->nf, mesh->ne, 3, mesh->halfedge_edge, d1_value, out);
 }
 
 cf_status cf_dec_star0(cf_context *ctx, const cf_mesh *mesh, const double *positions, double *star0)
@@ -80,9 +83,7 @@ cf_status cf_dec_star2(cf_context *ctx, const cf_mesh *mesh, const double *posit
     cf_status s = cfi_ops_check(ctx, mesh, positions, star2, "dec_star2");
     if (s != CF_OK) return s;
     for (int32_t f = 0; f < mesh->nf; ++f) {
-        double n[3];
-        cfi_face_area_vector(mesh, positions, f, n);
-        double a = 0.5 * cfi_v3_norm(n);
+        double a = cfi_face_area(mesh, positions, f);
         if (!(a > 0.0)) return cfi_error(ctx, CF_ERR_DEGENERATE_FACE, "face %d: zero area", f);
         star2[f] = 1.0 / a;
     }

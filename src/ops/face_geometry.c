@@ -9,11 +9,7 @@ cf_status cf_face_areas(cf_context *ctx, const cf_mesh *mesh, const double *posi
 {
     cf_status s = cfi_ops_check(ctx, mesh, positions, areas, "face_areas");
     if (s != CF_OK) return s;
-    for (int32_t f = 0; f < mesh->nf; ++f) {
-        double n[3];
-        cfi_face_area_vector(mesh, positions, f, n);
-        areas[f] = 0.5 * cfi_v3_norm(n);
-    }
+    for (int32_t f = 0; f < mesh->nf; ++f) areas[f] = cfi_face_area(mesh, positions, f);
     return CF_OK;
 }
 
@@ -36,11 +32,7 @@ cf_status cf_total_area(cf_context *ctx, const cf_mesh *mesh, const double *posi
     cf_status s = cfi_ops_check(ctx, mesh, positions, area, "total_area");
     if (s != CF_OK) return s;
     double sum = 0.0;
-    for (int32_t f = 0; f < mesh->nf; ++f) {
-        double n[3];
-        cfi_face_area_vector(mesh, positions, f, n);
-        sum += 0.5 * cfi_v3_norm(n);
-    }
+    for (int32_t f = 0; f < mesh->nf; ++f) sum += cfi_face_area(mesh, positions, f);
     *area = sum;
     return CF_OK;
 }

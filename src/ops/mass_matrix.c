@@ -30,9 +30,7 @@ static cf_status galerkin(cf_context *ctx, const cf_mesh *mesh, const double *po
     }
     for (int32_t f = 0; f < mesh->nf; ++f) {
         const int32_t *t = mesh->triangles + 3 * f;
-        double nrm[3];
-        cfi_face_area_vector(mesh, positions, f, nrm);
-        double area = 0.5 * cfi_v3_norm(nrm);
+        double area = cfi_face_area(mesh, positions, f);
         for (int a = 0; a < 3; ++a)
             for (int b = 0; b < 3; ++b) {
                 int64_t k = 9 * (int64_t)f + 3 * a + b;

@@ -31,17 +31,15 @@ cf_status cf_mean_curvature(cf_context *ctx, const cf_mesh *mesh, const double *
     if (s != CF_OK) goto done;
     s = cf_vertex_areas(ctx, mesh, positions, CF_DUAL_AREA_MIXED_VORONOI, h);
     if (s != CF_OK) goto done;
-    for (int64_t i = 0; i < n3; ++i) nrm[i] = 0.0;
-    for (int32_t f = 0; f < mesh->nf; ++f) {
-        double n[3];
-        cfi_face_area_vector(mesh, positions, f, n);
-        for (int k = 0; k < 3; ++k)
-            for (int c = 0; c < 3; ++c) nrm[3 * mesh->triangles[3 * f + k] + c] += n[c];
-    }
+    cfi_vertex_area_vectors(mesh, positions, nrm);
     for (int32_t v = 0; v < mesh->nv; ++v) {
         double len = cfi_v3_norm(nrm + 3 * v);
-        if (!(len > 0.0) || !(h[v] > 0.0)) {
+        if (!(len > 0.0)) {
             s = cfi_error(ctx, CF_ERR_NUMERICAL, "vertex %d: no normal (incident area vectors cancel)", v);
+            goto done;
+        }
+        if (!(h[v] > 0.0)) {
+            s = cfi_error(ctx, CF_ERR_NUMERICAL, "vertex %d: mixed Voronoi area is %g", v, h[v]);
             goto done;
         }
         h[v] = cfi_v3_dot(hn + 3 * v, nrm + 3 * v) / (len * 2.0 * h[v]);

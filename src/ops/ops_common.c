@@ -1,4 +1,5 @@
-/* Argument checks and per-face cotangents shared by the operator files. */
+/* Argument checks, per-face cotangents and hat gradients, and per-vertex
+ * area vectors shared by the operator files. */
 #include "ops/ops_internal.h"
 
 cf_status cfi_ops_check(cf_context *ctx, const cf_mesh *mesh, const double *positions, const void *out,
@@ -56,4 +57,15 @@ cf_status cfi_face_hat_gradients(cf_context *ctx, const cf_mesh *mesh, const dou
     }
     if (area) *area = 0.5 * a2;
     return CF_OK;
+}
+
+void cfi_vertex_area_vectors(const cf_mesh *mesh, const double *positions, double *out)
+{
+    for (int64_t i = 0; i < 3 * (int64_t)mesh->nv; ++i) out[i] = 0.0;
+    for (int32_t f = 0; f < mesh->nf; ++f) {
+        double n[3];
+        cfi_face_area_vector(mesh, positions, f, n);
+        for (int k = 0; k < 3; ++k)
+            for (int c = 0; c < 3; ++c) out[3 * mesh->triangles[3 * f + k] + c] += n[c];
+    }
 }

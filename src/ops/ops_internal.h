@@ -58,4 +58,29 @@ static inline void cfi_face_area_vector(const cf_mesh *mesh, const double *posit
     cfi_v3_cross(e1, e2, out);
 }
 
+/* Sum over the faces around each vertex of their area vectors
+ * (x1 - x0) x (x2 - x0): 3 nv doubles, overwritten. Unnormalised
+ * area-weighted vertex normals (twice the area). */
+void cfi_vertex_area_vectors(const cf_mesh *mesh, const double *positions, double *out);
+
+/* Area of face f: half the norm of its area vector. */
+static inline double cfi_face_area(const cf_mesh *mesh, const double *positions, int32_t f)
+{
+    double n[3];
+    cfi_face_area_vector(mesh, positions, f, n);
+    return 0.5 * cfi_v3_norm(n);
+}
+
+/* Angle at corner k of the triangle t (three vertex indices), as
+ * atan2(|u x v|, u . v) with u, v the edges leaving the corner: accurate
+ * also near 0 and pi, where acos of the normalised dot product is not. */
+static inline double cfi_corner_angle(const double *positions, const int32_t *t, int k)
+{
+    double u[3], v[3], c[3];
+    cfi_v3_sub(positions + 3 * t[(k + 1) % 3], positions + 3 * t[k], u);
+    cfi_v3_sub(positions + 3 * t[(k + 2) % 3], positions + 3 * t[k], v);
+    cfi_v3_cross(u, v, c);
+    return atan2(cfi_v3_norm(c), cfi_v3_dot(u, v));
+}
+
 #endif /* CF_OPS_OPS_INTERNAL_H */

@@ -13,10 +13,11 @@ cf_quat cf_quat_make(double w, double x, double y, double z)
     return q;
 }
 
-cf_quat cf_quat_from_vector(const double v[3]) { return cf_quat_make(0.0, v[0], v[1], v[2]); }
+cf_quat cf_quat_from_vector(const double v[3]) { return v ? cf_quat_make(0.0, v[0], v[1], v[2]) : cf_quat_make(0.0, 0.0, 0.0, 0.0); }
 
 void cf_quat_to_vector(cf_quat q, double v[3])
 {
+    if (!v) return;
     v[0] = q.x;
     v[1] = q.y;
     v[2] = q.z;
@@ -65,6 +66,7 @@ cf_quat cf_quat_normalize(cf_quat a)
  * v -> q v conj(q) (right-hand rule). */
 cf_quat cf_quat_from_axis_angle(const double axis[3], double angle)
 {
+    if (!axis) return cf_quat_make(1.0, 0.0, 0.0, 0.0);
     double n = sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
     if (n == 0.0) return cf_quat_make(1.0, 0.0, 0.0, 0.0);
     double s = sin(0.5 * angle) / n;
@@ -73,6 +75,7 @@ cf_quat cf_quat_from_axis_angle(const double axis[3], double angle)
 
 void cf_quat_conj_sandwich(cf_quat q, const double v[3], double out[3])
 {
+    if (!v || !out) return;
     cf_quat r = cf_quat_mul(cf_quat_mul(cf_quat_conj(q), cf_quat_from_vector(v)), q);
     cf_quat_to_vector(r, out);
 }
@@ -80,6 +83,7 @@ void cf_quat_conj_sandwich(cf_quat q, const double v[3], double out[3])
 /* Le Folgoc Eq. (7): column j of the matrix is q e_j. */
 void cf_quat_left_matrix(cf_quat q, double m[16])
 {
+    if (!m) return;
     m[0] = q.w;  m[1] = -q.x; m[2] = -q.y;  m[3] = -q.z;
     m[4] = q.x;  m[5] = q.w;  m[6] = -q.z;  m[7] = q.y;
     m[8] = q.y;  m[9] = q.z;  m[10] = q.w;  m[11] = -q.x;
@@ -90,6 +94,7 @@ void cf_quat_left_matrix(cf_quat q, double m[16])
  * (quaternion multiplication does not commute). */
 void cf_quat_right_matrix(cf_quat q, double m[16])
 {
+    if (!m) return;
     m[0] = q.w;  m[1] = -q.x; m[2] = -q.y;  m[3] = -q.z;
     m[4] = q.x;  m[5] = q.w;  m[6] = q.z;   m[7] = -q.y;
     m[8] = q.y;  m[9] = -q.z; m[10] = q.w;  m[11] = q.x;

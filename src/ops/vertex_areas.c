@@ -19,9 +19,7 @@ cf_status cf_vertex_areas(cf_context *ctx, const cf_mesh *mesh, const double *po
     for (int32_t f = 0; f < mesh->nf; ++f) {
         const int32_t *t = mesh->triangles + 3 * f;
         if (kind == CF_DUAL_AREA_BARYCENTRIC) {
-            double n[3];
-            cfi_face_area_vector(mesh, positions, f, n);
-            double a = cfi_v3_norm(n) / 6.0;
+            double a = cfi_face_area(mesh, positions, f) / 3.0;
             for (int k = 0; k < 3; ++k) areas[t[k]] += a;
             continue;
         }

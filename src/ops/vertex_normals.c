@@ -9,13 +9,7 @@ cf_status cf_vertex_normals(cf_context *ctx, const cf_mesh *mesh, const double *
 {
     cf_status s = cfi_ops_check(ctx, mesh, positions, normals, "vertex_normals");
     if (s != CF_OK) return s;
-    for (int64_t i = 0; i < 3 * (int64_t)mesh->nv; ++i) normals[i] = 0.0;
-    for (int32_t f = 0; f < mesh->nf; ++f) {
-        double n[3];
-        cfi_face_area_vector(mesh, positions, f, n);
-        for (int k = 0; k < 3; ++k)
-            for (int c = 0; c < 3; ++c) normals[3 * mesh->triangles[3 * f + k] + c] += n[c];
-    }
+    cfi_vertex_area_vectors(mesh, positions, normals);
     for (int32_t v = 0; v < mesh->nv; ++v) {
         double len = cfi_v3_norm(normals + 3 * v);
         if (!(len > 0.0))

@@ -69,6 +69,8 @@ static int exists(const char *name)
                      rc_, (expected), out_text, err_text);                                               \
     } while (0)
 
+static int count_lines(const char *text);
+
 static void test_help_and_usage(void)
 {
     CHECK_RUN("--help", 0);
@@ -88,7 +90,20 @@ static void test_help_and_usage(void)
         snprintf(args, sizeof args, "%s --no-such-option", cmds[i]);
         CHECK_RUN(args, 1);
         CHECK(strstr(err_text, "--help") != NULL);
+        /* one message line in the tool's format naming the option, then the
+         * hint; getopt's own "<cmd>: unrecognized option" line is silenced */
+        const char *expected = "curvflow: unrecognized option '--no-such-option'\n";
+        CHECK(strncmp(err_text, expected, strlen(expected)) == 0);
+        CHECK(count_lines(err_text) == 2);
     }
+    CHECK_RUN("flow --method implicit-mcf ico.obj -o", 1);
+    CHECK(strstr(err_text, "option '-o' requires an argument") != NULL);
+    CHECK_RUN("flow ico.obj --output", 1);
+    CHECK(strstr(err_text, "option '--output' requires an argument") != NULL);
+    CHECK_RUN("info --json=yes ico.obj", 1);
+    CHECK(strstr(err_text, "option '--json' does not take an argument") != NULL);
+    CHECK_RUN("render -z ico.obj", 1);
+    CHECK(strstr(err_text, "invalid option '-z'") != NULL);
 }
 
 static void test_generate(void)
@@ -126,6 +141,25 @@ static void test_generate(void)
     CHECK_RUN("generate icosphere --subdivisions 12 -o x.obj", 1);
     CHECK(strstr(err_text, "--subdivisions") != NULL);
     CHECK_RUN("generate icosphere --radius abc -o x.obj", 1);
+    /* an explicit negative value is passed on (and rejected), not replaced by the default */
+    CHECK_RUN("generate grid --width -2 -o x.obj", 1);
+    CHECK(strstr(err_text, "-2") != NULL);
+    CHECK_RUN("generate bumpy-sphere --subdivisions 1 --amplitude -0.2 -o neg.obj", 0);
+    CHECK_RUN("generate bumpy-sphere --subdivisions 1 -o pos.obj", 0);
+    {
+        cf_context *c2 = cft_context();
+        cf_mesh *neg = NULL, *pos = NULL;
+        CHECK_OK(c2, cf_load_mesh(c2, in_dir("neg.obj"), &neg));
+        CHECK_OK(c2, cf_load_mesh(c2, in_dir("pos.obj"), &pos));
+        if (neg && pos) {
+            CHECK(cf_mesh_vertex_count(neg) == cf_mesh_vertex_count(pos));
+            CHECK(memcmp(cf_mesh_positions(neg), cf_mesh_positions(pos),
+                         3 * (size_t)cf_mesh_vertex_count(neg) * sizeof(double)) != 0);
+        }
+        cf_mesh_destroy(&neg);
+        cf_mesh_destroy(&pos);
+        cf_context_destroy(&c2);
+    }
     CHECK_RUN("generate icosphere -o x.xyz", 2);
     CHECK_RUN("generate icosphere -o no_such_dir/x.obj", 2);
     CHECK(!exists("x.obj"));
@@ -408,7 +442,7 @@ static void test_no_temp_files(void)
     if (!d) return;
     const char *expected[] = {".", "..", "stdout.txt", "stderr.txt", "ico.obj", "bumpy.obj", "torus.ply", "grid.off",
                               "kind0.ply", "kind1.ply", "kind2.ply", "kind3.ply", "kind4.ply", "broken.obj", "fin.obj",
-                              "smooth.obj", "run.jsonl", "p.ply", "blown.obj", "same.ply", "demo", "b.png", "q.png"};
+                              "smooth.obj", "run.jsonl", "p.ply", "blown.obj", "same.ply", "demo", "b.png", "q.png", "neg.obj", "pos.obj"};
     struct dirent *e;
     while ((e = readdir(d)) != NULL) {
         int known = 0;

@@ -36,22 +36,23 @@ static void quiet(void *user, cf_log_level level, const char *line)
     (void)line;
 }
 
-static void run(cf_context *ctx, const cf_mesh *m, cf_status (*fn)(cf_context *, const cf_mesh *, const double *),
-                const char *name)
+typedef cf_status (*metric_fn)(cf_context *, const cf_mesh *, const double *);
+
+typedef struct metric_call {
+    const cf_mesh *m;
+    metric_fn fn;
+} metric_call;
+
+static cf_status call_metric(cf_context *ctx, void *user)
 {
-    size_t base = cf_context_bytes_in_use(ctx);
-    const double *x = cf_mesh_positions(m);
-    int64_t before = cf_context_allocation_count(ctx);
-    CHECK_OK(ctx, fn(ctx, m, x));
-    int64_t count = cf_context_allocation_count(ctx) - before;
-    CHECK(count > 0);
-    for (int64_t k = 1; k <= count; ++k) {
-        cf_context_fail_allocation(ctx, k, 0);
-        CHECK_STATUS(fn(ctx, m, x), CF_ERR_NOMEM);
-        cf_context_fail_allocation(ctx, 0, 0);
-        CHECK(cf_context_bytes_in_use(ctx) == base);
-    }
-    fprintf(stderr, "  %-10s %lld allocations, each failure handled\n", name, (long long)count);
+    const metric_call *c = user;
+    return c->fn(ctx, c->m, cf_mesh_positions(c->m));
+}
+
+static void run(cf_context *ctx, const cf_mesh *m, metric_fn fn, const char *name)
+{
+    metric_call c = {m, fn};
+    CHECK(cft_allocation_sweep(ctx, name, call_metric, &c, 0) > 0);
 }
 
 static void test_injection(void)

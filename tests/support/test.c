@@ -90,6 +90,40 @@ cf_context *cft_context(void)
     return ctx;
 }
 
+int64_t cft_allocation_sweep(cf_context *ctx, const char *name, cft_alloc_call call, void *user, int may_recover)
+{
+    size_t base = cf_context_bytes_in_use(ctx);
+    int64_t before = cf_context_allocation_count(ctx);
+    cf_status s = call(ctx, user);
+    ++cft_checks;
+    if (s != CF_OK) {
+        cft_fail(__FILE__, __LINE__, "%s: unhindered run returned %s: %s", name, cf_status_name(s),
+                 cf_context_message(ctx));
+        return 0;
+    }
+    int64_t count = cf_context_allocation_count(ctx) - before;
+    ++cft_checks;
+    if (cf_context_bytes_in_use(ctx) != base)
+        cft_fail(__FILE__, __LINE__, "%s: unhindered run leaked %zu bytes", name, cf_context_bytes_in_use(ctx) - base);
+    for (int64_t k = 1; k <= count; ++k) {
+        cf_context_fail_allocation(ctx, k, 0);
+        s = call(ctx, user);
+        cf_context_fail_allocation(ctx, 0, 0);
+        ++cft_checks;
+        if (s != CF_ERR_NOMEM && !(may_recover && s == CF_OK))
+            cft_fail(__FILE__, __LINE__, "%s: failing allocation %lld of %lld gave %s, expected CF_ERR_NOMEM", name,
+                     (long long)k, (long long)count, cf_status_name(s));
+        ++cft_checks;
+        if (cf_context_bytes_in_use(ctx) != base) {
+            cft_fail(__FILE__, __LINE__, "%s: failing allocation %lld of %lld leaked %zu bytes", name, (long long)k,
+                     (long long)count, cf_context_bytes_in_use(ctx) - base);
+            base = cf_context_bytes_in_use(ctx); /* report each leak once */
+        }
+    }
+    fprintf(stderr, "  %-12s %lld allocations, each failure handled\n", name, (long long)count);
+    return count;
+}
+
 int cft_near(double a, double b, double rtol, double atol)
 {
     if (isnan(a) || isnan(b)) return 0;

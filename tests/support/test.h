@@ -36,6 +36,18 @@ const char *cft_require_shared_mesh(const char *name);
 const char *cft_temp_path(const char *suffix);
 /* A context that prints library log lines to stderr. */
 cf_context *cft_context(void);
+/* Failure-injection sweep (STYLE.md sec. 4, as CHOLMOD's Tcov/t_memory.c).
+ * `call` must free everything it creates and return the library's status
+ * (and turn "failed but left an output object" into an error of its own).
+ * The sweep runs it once unhindered (must return CF_OK), then once for each
+ * allocation k of that run with the k-th allocation failing: every run must
+ * return CF_ERR_NOMEM (or CF_OK when may_recover, for calls into a library
+ * that retries, e.g. CHOLMOD trying several orderings) and leave
+ * cf_context_bytes_in_use unchanged. Each failure is a test failure naming
+ * `name` and k. Returns the number of allocations of the unhindered run. */
+typedef cf_status (*cft_alloc_call)(cf_context *ctx, void *user);
+int64_t cft_allocation_sweep(cf_context *ctx, const char *name, cft_alloc_call call, void *user, int may_recover);
+
 /* true if |a - b| <= atol + rtol * max(|a|, |b|) */
 int cft_near(double a, double b, double rtol, double atol);
 

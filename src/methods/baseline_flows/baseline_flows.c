@@ -39,7 +39,7 @@ typedef struct baseline_state {
     int32_t nv;
     double tau;             /* actual time step (scaled, see the header) */
     cf_sparse *l;           /* cotan Laplacian of the current positions (pattern fixed) */
-    int64_t *slot_map;      /* 9 nf slots of L's triplets */
+    int64_t *slot_map;      /* nv + 2 ne slots of L's triplets (cfi_cotan_laplacian_triplet_count) */
     int64_t slot_count;
     int64_t *l_diag;        /* nv: slot of L(i, i) */
     double *l0_values;      /* conformal MCF: L values of the initial mesh (nnz) */
@@ -102,17 +102,24 @@ static int is_bilaplacian(const cf_flow *flow)
     return kind_of(flow) == CF_FLOW_EXPLICIT_BILAPLACIAN || kind_of(flow) == CF_FLOW_IMPLICIT_BILAPLACIAN;
 }
 
+/* The lumped masses (option 'mass') of the current positions; every one
+ * must be positive since the steps divide by them. */
+static cf_status assemble_mass(cf_flow *flow, baseline_state *s)
+{
+    cf_dual_area_kind dk = s->opt.mass == CF_MASS_LUMPED_VORONOI ? CF_DUAL_AREA_MIXED_VORONOI : CF_DUAL_AREA_BARYCENTRIC;
+    cf_status st = cf_vertex_areas(flow->ctx, flow->mesh, flow->positions, dk, s->mass);
+    if (st != CF_OK) return st;
+    for (int32_t i = 0; i < s->nv; ++i)
+        if (!(s->mass[i] > 0.0)) return cfi_error(flow->ctx, CF_ERR_NUMERICAL, "vertex %d: dual area is %g", i, s->mass[i]);
+    return CF_OK;
+}
+
 /* L and the lumped masses of the current positions. */
 static cf_status assemble(cf_flow *flow, baseline_state *s)
 {
     cf_status st = cfi_cotan_laplacian_refill(s->l, flow->mesh, flow->positions, s->slot_map);
     if (st != CF_OK) return st;
-    cf_dual_area_kind dk = s->opt.mass == CF_MASS_LUMPED_VORONOI ? CF_DUAL_AREA_MIXED_VORONOI : CF_DUAL_AREA_BARYCENTRIC;
-    st = cf_vertex_areas(flow->ctx, flow->mesh, flow->positions, dk, s->mass);
-    if (st != CF_OK) return st;
-    for (int32_t i = 0; i < s->nv; ++i)
-        if (!(s->mass[i] > 0.0)) return cfi_error(flow->ctx, CF_ERR_NUMERICAL, "vertex %d: dual area is %g", i, s->mass[i]);
-    return CF_OK;
+    return assemble_mass(flow, s);
 }
 
 /* (1/2) sum_i |(L x)_i|^2 / m_i with L, M already assembled at x; leaves
@@ -426,13 +433,8 @@ static cf_status implicit_step(cf_flow *flow, cf_flow_info *info)
     cf_status st;
     if (kind == CF_FLOW_CONFORMAL_MCF) {
         /* Kazhdan 2012, Eq. (4): stiffness frozen at the initial mesh. */
-        cf_dual_area_kind dk =
-            s->opt.mass == CF_MASS_LUMPED_VORONOI ? CF_DUAL_AREA_MIXED_VORONOI : CF_DUAL_AREA_BARYCENTRIC;
-        st = cf_vertex_areas(flow->ctx, flow->mesh, flow->positions, dk, s->mass);
+        st = assemble_mass(flow, s);
         if (st != CF_OK) return st;
-        for (int32_t i = 0; i < nv; ++i)
-            if (!(s->mass[i] > 0.0))
-                return cfi_error(flow->ctx, CF_ERR_NUMERICAL, "vertex %d: dual area is %g", i, s->mass[i]);
         int64_t nnz = cf_sparse_nnz(s->a);
         for (int64_t p = 0; p < nnz; ++p) s->a->values[p] = s->tau * s->l0_values[p];
         for (int32_t i = 0; i < nv; ++i) s->a->values[s->a_diag[i]] += s->mass[i];

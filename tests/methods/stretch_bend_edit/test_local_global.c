@@ -60,6 +60,8 @@ static cf_flow *make_flow_aa(cf_context *ctx, const cf_mesh *mesh, const cf_hand
     return flow;
 }
 
+/* The plain local/global iteration (the paper's; the default adds Anderson
+ * acceleration for hybrid/stretch/bend, tested in test_anderson). */
 static cf_flow *make_flow(cf_context *ctx, const cf_mesh *mesh, const cf_handle_set *h, cf_edit_energy energy)
 {
     cf_flow_options fo;
@@ -68,6 +70,7 @@ static cf_flow *make_flow(cf_context *ctx, const cf_mesh *mesh, const cf_handle_
     o->energy = energy;
     o->handles = h;
     o->relative_tolerance = 0.0;
+    o->anderson = 0;
     cf_flow *flow = NULL;
     CHECK_OK(ctx, cf_flow_create(ctx, mesh, NULL, &fo, &flow));
     return flow;

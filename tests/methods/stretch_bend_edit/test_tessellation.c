@@ -3,6 +3,10 @@
  *  - Fig. 3: twisting a flat sheet at two resolutions gives nearly the same
  *    hybrid result, while ARAP's results differ clearly more (its bending
  *    resistance comes from the cell size, App. B).
+ *  - Fig. 4's bar at two resolutions (the issue's test): pulled sideways,
+ *    every energy is resolution-insensitive (membrane-dominated); with the
+ *    top face turned by 90 degrees the walls must fold and ARAP's results
+ *    differ clearly more than the hybrid's.
  *  - Fig. 4: pulling the top of a bar under two triangulations of the same
  *    vertices changes ARAP's result, not hybrid's or spokes-and-rims'.
  * Distances are measured at shared vertices relative to the bounding-box
@@ -107,6 +111,129 @@ static void test_sheet_twist_resolution(void)
     cf_handle_set_destroy(&hf);
     cf_mesh_destroy(&coarse);
     cf_mesh_destroy(&fine);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+/* Handles of the 1 x 1 x 4 bar: bottom face (z = 0) fixed; top face (z = 4)
+ * either translated by `pull` along x (Fig. 4's edit) or, for bend != 0,
+ * rotated by `bend` radians about the y-parallel line through its centre. */
+static cf_handle_set *bar_handles(cf_context *ctx, const cf_mesh *mesh, double pull, double bend)
+{
+    int32_t nv = cf_mesh_vertex_count(mesh);
+    const double *x = cf_mesh_positions(mesh);
+    int32_t *vs = malloc(sizeof(int32_t) * (size_t)nv);
+    double *ts = malloc(sizeof(double) * 3 * (size_t)nv);
+    int32_t n = 0;
+    for (int32_t v = 0; v < nv; ++v) {
+        const double *p = x + 3 * v;
+        if (!(p[2] < 1e-9 || p[2] > 4.0 - 1e-9)) continue;
+        double *t = ts + 3 * n;
+        memcpy(t, p, 3 * sizeof(double));
+        if (p[2] > 1.0) {
+            double dx = p[0] - 0.5;
+            t[0] = 0.5 + cos(bend) * dx + pull;
+            t[2] = 4.0 - sin(bend) * dx;
+        }
+        vs[n++] = v;
+    }
+    cf_handle_set *h = NULL;
+    CHECK_OK(ctx, cf_handle_set_create(ctx, n, vs, ts, &h));
+    free(vs);
+    free(ts);
+    return h;
+}
+
+/* Fig. 4's bar, 1 x 1 x 4, at 3 x 3 x 12 and 6 x 6 x 24 cells. The fine
+ * lattice refines the coarse one, so every coarse vertex is a fine vertex;
+ * cf_generate_bar numbers vertices in emission order, so they are matched
+ * by position. Returns the max distance at the shared vertices relative to
+ * the diagonal sqrt(18), for the pull (bend = 0) or the bend. */
+static double bar_resolution_distance(cf_context *ctx, const cf_mesh *mc, const cf_mesh *mf, const int32_t *map,
+                                      cf_edit_energy e, double pull, double bend)
+{
+    cf_handle_set *hc = bar_handles(ctx, mc, pull, bend), *hf = bar_handles(ctx, mf, pull, bend);
+    double *yc = solve(ctx, mc, hc, e, 3000);
+    double *yf = solve(ctx, mf, hf, e, 3000);
+    double worst = 0.0;
+    for (int32_t v = 0; v < cf_mesh_vertex_count(mc); ++v) {
+        const double *a = yc + 3 * v, *b = yf + 3 * map[v];
+        worst = fmax(worst, sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
+                                 (a[2] - b[2]) * (a[2] - b[2])));
+    }
+    double d = worst / sqrt(18.0);
+    fprintf(stderr, "  bar %s %-9s 3x3x12 vs 6x6x24: max distance %.5f of the diagonal\n", bend != 0.0 ? "bend" : "pull",
+            cf_edit_energy_name(e), d);
+    free(yc);
+    free(yf);
+    cf_handle_set_destroy(&hc);
+    cf_handle_set_destroy(&hf);
+    return d;
+}
+
+/* The issue's "pulling the bar at two resolutions" (Fig. 4's bar and edit;
+ * the figure itself compares triangulations, tested below).
+ * Pull (top face moved sideways by 1.5, not rotated), measured after 3000
+ * iterations: hybrid 1.45% of the diagonal, ARAP 0.33%, spokes-and-rims
+ * 0.28%. Here the claim "ARAP differs clearly more" does NOT hold, and
+ * cannot be expected to: the bar bends as a beam whose cross-sections stay
+ * square, so the cost is membrane strain of the side walls, which every
+ * energy resolves consistently; ARAP's cell-size-dependent bending
+ * resistance (App. B: a fold costs half as much per refinement) only
+ * decides the shape when the walls must fold. (No lambda changes this:
+ * the hybrid distance is 2.9% / 0.9% / 1.1% at lambda = 0.1 / 0.9 / 0.99,
+ * ARAP's does not depend on lambda. Hybrid and ARAP differ from each other
+ * by 6% of the diagonal on the fine bar, so they do not agree trivially.)
+ * The hybrid's 1.5% comes from its own discretisation of the bar's sharp
+ * edges (rest |H_v| ~ 1/h there) and from its slow convergence (1.7% after
+ * 20000 iterations with Anderson acceleration).
+ * Bend (top face turned by 90 degrees about a horizontal axis through its
+ * centre): the walls must fold near the top, and the claim holds: hybrid
+ * 1.3% (1.4% with more iterations, 2.1% after 20000), ARAP 14.4%,
+ * spokes-and-rims 13.5% — on the fine bar ARAP folds at the top (largest
+ * displacement 0.18 of the diagonal against the hybrid's 0.32).
+ * Bounds: the measured values with a margin (hybrid pull 3%, bend 3.5%,
+ * covering the drift with iteration count); ARAP pull 0.6% (twice the
+ * measured); bend: ARAP and rims above 10% and 4 times the hybrid. */
+static void test_bar_resolution(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *mc = NULL, *mf = NULL;
+    CHECK_OK(ctx, cf_generate_bar(ctx, 3, 3, 12, 1.0, 1.0, 4.0, 0, &mc));
+    CHECK_OK(ctx, cf_generate_bar(ctx, 6, 6, 24, 1.0, 1.0, 4.0, 0, &mf));
+    if (!mc || !mf) return;
+    int32_t nc = cf_mesh_vertex_count(mc), nf = cf_mesh_vertex_count(mf);
+    CHECK(nc == 164 && nf == 650);
+    const double *xc = cf_mesh_positions(mc), *xf = cf_mesh_positions(mf);
+    int32_t *map = malloc(sizeof(int32_t) * (size_t)nc);
+    int32_t matched = 0;
+    for (int32_t v = 0; v < nc; ++v) {
+        map[v] = -1;
+        for (int32_t w = 0; w < nf && map[v] < 0; ++w)
+            if (fabs(xc[3 * v] - xf[3 * w]) + fabs(xc[3 * v + 1] - xf[3 * w + 1]) + fabs(xc[3 * v + 2] - xf[3 * w + 2]) <
+                1e-9)
+                map[v] = w;
+        matched += map[v] >= 0;
+    }
+    CHECK(matched == nc);
+    if (matched == nc) {
+        double pi = 3.14159265358979323846;
+        double ph = bar_resolution_distance(ctx, mc, mf, map, CF_EDIT_HYBRID, 1.5, 0.0);
+        double pa = bar_resolution_distance(ctx, mc, mf, map, CF_EDIT_ARAP, 1.5, 0.0);
+        double pr = bar_resolution_distance(ctx, mc, mf, map, CF_EDIT_ARAP_RIMS, 1.5, 0.0);
+        CHECK_LE(ph, 0.03);
+        CHECK_LE(pa, 0.006);
+        CHECK_LE(pr, 0.006);
+        double bh = bar_resolution_distance(ctx, mc, mf, map, CF_EDIT_HYBRID, 0.0, 0.5 * pi);
+        double ba = bar_resolution_distance(ctx, mc, mf, map, CF_EDIT_ARAP, 0.0, 0.5 * pi);
+        double br = bar_resolution_distance(ctx, mc, mf, map, CF_EDIT_ARAP_RIMS, 0.0, 0.5 * pi);
+        CHECK_LE(bh, 0.035);
+        CHECK(ba > 0.10 && ba > 4.0 * bh);
+        CHECK(br > 0.10 && br > 4.0 * bh);
+    }
+    free(map);
+    cf_mesh_destroy(&mc);
+    cf_mesh_destroy(&mf);
     CHECK(cf_context_bytes_in_use(ctx) == 0);
     cf_context_destroy(&ctx);
 }
@@ -309,6 +436,7 @@ static void test_bar_retriangulation(void)
 int main(void)
 {
     CFT_RUN(test_sheet_twist_resolution);
+    CFT_RUN(test_bar_resolution);
     CFT_RUN(test_bar_retriangulation);
     return cft_finish();
 }

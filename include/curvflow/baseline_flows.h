@@ -26,8 +26,10 @@
  * so that a uniformly scaled mesh follows the same (scaled) path. The
  * explicit flows are stable for time_step below about 1/3 (MCF) and 1/20
  * (bi-Laplacian) on near-equilateral meshes; above the limit the step is
- * rejected with CF_ERR_NUMERICAL as soon as the energy rises by more than
- * 50 % in one step (the previous state is kept).
+ * rejected with CF_ERR_NUMERICAL as soon as an explicit step raises the
+ * energy at all (beyond a 1e-9 relative rounding slack: below the limit
+ * forward Euler on these gradient flows lowers it, an unstable mode raises
+ * it), and the previous state is kept.
  */
 #ifndef CURVFLOW_BASELINE_FLOWS_H
 #define CURVFLOW_BASELINE_FLOWS_H

@@ -128,24 +128,37 @@ typedef struct cf_flow cf_flow;
 
 /* Creates a flow. `positions` (3 nv) is the starting state; NULL starts from
  * the mesh's rest positions. options is required (it names the kind) and
- * is copied. The mesh must outlive the flow. */
+ * is copied. The mesh must outlive the flow. Statuses: CF_OK,
+ * CF_ERR_INVALID_ARG (NULL argument, unknown kind, a parameter out of
+ * range), CF_ERR_NONFINITE (a starting position, naming the vertex),
+ * CF_ERR_NOMEM, CF_ERR_NUMERICAL (non-finite initial energy), and the
+ * method's own (e.g. CF_ERR_UNSUPPORTED, CF_ERR_BAD_MESH, solver errors);
+ * *out is NULL on failure. */
 CF_API cf_status cf_flow_create(cf_context *ctx, const cf_mesh *mesh, const double *positions,
                                 const cf_flow_options *options, cf_flow **out);
 
 /* One step. On failure the state is the one before the step and the
  * context message is prefixed "iteration N: ". The context's recorded error
- * is cleared when the step starts. info may be NULL. */
+ * is cleared when the step starts. info may be NULL. Statuses: the
+ * method's errors, CF_ERR_NUMERICAL for a non-finite position, energy,
+ * area or volume after the step, CF_ERR_CANCELLED when the progress
+ * callback asks to stop (the step is kept). */
 CF_API cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info);
 
 /* Up to `steps` steps, calling the progress callback after each. Stops
- * early with CF_OK when the method reports convergence. */
+ * early with CF_OK when the method reports convergence. steps >= 0
+ * (CF_ERR_INVALID_ARG otherwise); the first failing step's status is
+ * returned with the state before it. info (optional) receives the last
+ * accepted step's info. */
 CF_API cf_status cf_flow_run(cf_flow *flow, int64_t steps, cf_flow_info *info);
 
 CF_API void cf_flow_set_progress(cf_flow *flow, cf_progress_fn fn, void *user);
 
 /* Current positions (3 nv), valid until the next step or destroy. */
 CF_API const double *cf_flow_positions(const cf_flow *flow);
-/* Replaces the state (3 nv); methods that keep extra state reset it. */
+/* Replaces the state (3 nv); methods that keep extra state reset it.
+ * CF_ERR_INVALID_ARG (NULL), CF_ERR_NONFINITE (naming the vertex); on any
+ * failure the previous state is kept. */
 CF_API cf_status cf_flow_set_positions(cf_flow *flow, const double *positions);
 CF_API const cf_mesh *cf_flow_mesh(const cf_flow *flow);
 CF_API cf_flow_kind cf_flow_get_kind(const cf_flow *flow);
@@ -160,7 +173,9 @@ CF_API int32_t cf_flow_converged(const cf_flow *flow);
 CF_API void cf_flow_destroy(cf_flow **flow);
 
 /* One-off convenience: creates, runs `steps` steps, copies the final
- * positions into out_positions (3 nv, caller-allocated), destroys. */
+ * positions into out_positions (3 nv, caller-allocated), destroys. The
+ * positions reached are copied also when a step fails (the last good
+ * state); when creation fails out_positions is left untouched. */
 CF_API cf_status cf_flow_apply(cf_context *ctx, const cf_mesh *mesh, const cf_flow_options *options, int64_t steps,
                                double *out_positions, cf_flow_info *info);
 

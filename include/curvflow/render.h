@@ -54,8 +54,9 @@ CF_API cf_status cf_render_rgb(cf_context *ctx, const cf_mesh *mesh, const doubl
 CF_API cf_status cf_render_png(cf_context *ctx, const char *path, const cf_mesh *mesh, const double *positions,
                                const cf_render_options *options);
 
-/* Encodes an RGB buffer as PNG and writes it atomically (CF_ERR_IO naming
- * the path). */
+/* Encodes an RGB buffer (3 * width * height bytes, rows from the top) as
+ * PNG and writes it atomically. Statuses: CF_OK, CF_ERR_INVALID_ARG (NULL
+ * path or buffer, size outside 1..16384), CF_ERR_IO naming the path. */
 CF_API cf_status cf_write_png(cf_context *ctx, const char *path, int32_t width, int32_t height, const uint8_t *rgb);
 
 #ifdef __cplusplus

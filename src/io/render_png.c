@@ -164,9 +164,12 @@ cf_status cf_render_rgb(cf_context *ctx, const cf_mesh *mesh, const double *posi
     /* Camera frame: d towards the camera, u up, r = u x d right (r, u, d right-handed). */
     double d[3] = {o->view[0], o->view[1], o->view[2]}, u[3], r[3];
     if (!normalize3(d)) return cfi_error(ctx, CF_ERR_INVALID_ARG, "render: view direction is zero");
-    double ud = dot3(o->up, d);
+    double ud = dot3(o->up, d), up_len = sqrt(dot3(o->up, o->up));
     for (int k = 0; k < 3; ++k) u[k] = o->up[k] - ud * d[k];
-    if (!normalize3(u)) return cfi_error(ctx, CF_ERR_INVALID_ARG, "render: up is parallel to the view direction");
+    /* relative test: for an up exactly along view the projection leaves
+     * only rounding (~1e-17 |up|), which normalize3 alone would accept */
+    if (!(sqrt(dot3(u, u)) > 1e-9 * up_len) || !normalize3(u))
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "render: up is parallel to the view direction (or zero)");
     cross3(u, d, r);
     double cam_dist = 3.0 * radius;
     double cam[3] = {center[0] + cam_dist * d[0], center[1] + cam_dist * d[1], center[2] + cam_dist * d[2]};

@@ -143,6 +143,15 @@ static void test_uv_checker(void)
     o.up[1] = 0.0;
     o.up[2] = 2.0;
     CHECK_STATUS(cf_render_rgb(ctx, ico, NULL, &o, tiny), CF_ERR_INVALID_ARG);
+    /* up along an oblique view: the projection leaves only rounding, which
+     * must still count as parallel */
+    double saved_view[3] = {o.view[0], o.view[1], o.view[2]};
+    static const double oblique[3] = {0.4, 0.5, 1.0}; /* accepted before the relative test */
+    for (int k = 0; k < 3; ++k) o.view[k] = o.up[k] = oblique[k];
+    CHECK_STATUS(cf_render_rgb(ctx, ico, NULL, &o, tiny), CF_ERR_INVALID_ARG);
+    CHECK(strstr(cf_context_message(ctx), "parallel") != NULL);
+    for (int k = 0; k < 3; ++k) o.view[k] = saved_view[k];
+    o.up[0] = 0.0;
     o.up[2] = 0.0;
     o.up[1] = 1.0;
     o.width = 0;

@@ -22,7 +22,8 @@ static void usage(FILE *out)
             "the validation report, corner angle statistics (min / median / fraction below 10 deg,\n"
             "and per face: median smallest angle, fraction of faces whose smallest angle is below 10 deg),\n"
             "face area statistics and, for closed meshes, the Willmore energy W/4pi.\n\n"
-            "  --json       print one JSON object instead of text\n"
+            "  --json       print one JSON object instead of text (for an unreadable file:\n"
+            "               {\"file\", \"readable\": false, \"status\", \"error\"})\n"
             "  -h, --help   show this help\n\n"
             "Exit status: 0 valid mesh, 2 unreadable file or invalid mesh (the report is still printed).\n");
 }
@@ -65,6 +66,16 @@ int cli_info(int argc, char **argv)
 
     cf_status st = cf_read_mesh_file(ctx, path, &data);
     if (st != CF_OK) {
+        if (as_json) {
+            /* stdout stays one JSON object also for an unreadable file */
+            json_object_set_new(root, "file", json_string(path));
+            json_object_set_new(root, "readable", json_false());
+            json_object_set_new(root, "status", json_string(cf_status_name(st)));
+            json_object_set_new(root, "error", json_string(cf_context_message(ctx)));
+            char *text = json_dumps(root, JSON_INDENT(2) | JSON_PRESERVE_ORDER);
+            if (text) puts(text);
+            free(text);
+        }
         code = cli_fail(ctx, path, st);
         if (code == CLI_EXIT_USAGE) code = CLI_EXIT_INPUT;
         goto done;

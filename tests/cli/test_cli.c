@@ -209,6 +209,19 @@ static void test_info(void)
     CHECK(strstr(err_text, "curvflow: broken.obj:") != NULL);
     CHECK_RUN("info missing.obj", 2);
     CHECK(strstr(err_text, "missing.obj") != NULL);
+    /* --json keeps stdout one JSON object also when the file cannot be read */
+    CHECK_RUN("info --json broken.obj", 2);
+    root = json_loads(out_text, 0, &jerr);
+    CHECK(root != NULL);
+    if (root) {
+        CHECK(json_is_false(json_object_get(root, "readable")));
+        CHECK(strcmp(json_string_value(json_object_get(root, "file")), "broken.obj") == 0);
+        const char *status = json_string_value(json_object_get(root, "status"));
+        CHECK(status && strncmp(status, "CF_ERR_", 7) == 0);
+        const char *error = json_string_value(json_object_get(root, "error"));
+        CHECK(error && strstr(err_text, error) != NULL); /* the same message as on stderr */
+    }
+    json_decref(root);
     /* a non-manifold edge: the file reads, validation reports it, exit 2 */
     f = fopen(in_dir("fin.obj"), "w");
     if (f) {

@@ -105,7 +105,8 @@ static const cf_param_desc params[] = {
     {"scale_free", CF_PARAM_BOOL, offsetof(cf_stretch_bend_options, scale_free), 0, 1, NULL,
      "divide the stretching energy by the rest area so lambda does not depend on the model's size"},
     {"anderson", CF_PARAM_INT, offsetof(cf_stretch_bend_options, anderson), -1, 10, NULL,
-     "Anderson acceleration depth (0 = plain local/global); energy-safeguarded"},
+     "Anderson acceleration depth (0 = plain local/global; -1 = 5 for hybrid/stretch/bend, 0 for ARAP); "
+     "energy-safeguarded"},
 };
 
 static void free_system(sbe_state *s, cf_context *ctx)

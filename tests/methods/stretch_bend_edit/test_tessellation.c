@@ -178,7 +178,7 @@ static double bar_resolution_distance(cf_context *ctx, const cf_mesh *mc, const 
  * the figure itself compares triangulations, tested below).
  * Pull (top face moved sideways by 1.5, not rotated), measured with the
  * default options (hybrid with Anderson acceleration): hybrid 1.64% of the
- * diagonal (1.45% with the plain iteration, 3000 steps), ARAP 0.32%,
+ * diagonal (1.25% with the plain iteration, 3000 steps), ARAP 0.32%,
  * spokes-and-rims 0.28%. Here the claim "ARAP differs clearly more" does NOT hold, and
  * cannot be expected to: the bar bends as a beam whose cross-sections stay
  * square, so the cost is membrane strain of the side walls, which every

@@ -65,7 +65,8 @@ int cli_edit(int argc, char **argv)
     bool quiet = false, scale_free = true;
     int c;
     optind = 1;
-    while ((c = getopt_long(argc, argv, "H:e:L:n:t:s:o:l:a:qh", longopts, NULL)) != -1) {
+    opterr = 0;
+    while ((c = getopt_long(argc, argv, ":H:e:L:n:t:s:o:l:a:qh", longopts, NULL)) != -1) {
         switch (c) {
         case 'H': handles_path = optarg; break;
         case 'e': energy = optarg; break;
@@ -90,7 +91,7 @@ int cli_edit(int argc, char **argv)
         case 'l': log_path = optarg; break;
         case 'q': quiet = true; break;
         case 'h': usage(stdout); return CLI_EXIT_OK;
-        default: return cli_usage_error(cmd, "invalid option");
+        default: return cli_option_error(cmd, c, argv);
         }
     }
     if (optind + 1 != argc) return cli_usage_error(cmd, "expected one input mesh");

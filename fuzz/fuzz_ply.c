@@ -1,27 +1,7 @@
-/* libFuzzer target for the PLY reader: any input must give a status, never a
- * crash, leak or sanitizer report; on success the data must also survive
- * mesh validation (cf_mesh_create) without crashing. */
-#include "curvflow/io.h"
-
-#include <stddef.h>
-#include <stdint.h>
-#include <stdlib.h>
-
-int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+/* libFuzzer target for the PLY reader (see fuzz_reader.h). */
+#include "fuzz_reader.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    cf_context *ctx = NULL;
-    if (cf_context_create(&ctx) != CF_OK) return 0;
-    cf_mesh_data *d = NULL;
-    if (cf_read_mesh_memory(ctx, data, size, CF_FORMAT_PLY, "fuzz.ply", &d) == CF_OK) {
-        cf_mesh_desc desc;
-        cf_mesh *mesh = NULL;
-        if (cf_mesh_data_desc(d, &desc) == CF_OK && cf_mesh_create(ctx, &desc, &mesh) == CF_OK) cf_mesh_destroy(&mesh);
-        cf_mesh_data_destroy(&d);
-    }
-    /* everything allocated through the context must be back */
-    if (cf_context_bytes_in_use(ctx) != 0) abort();
-    cf_context_destroy(&ctx);
-    return 0;
+    return fuzz_reader(data, size, CF_FORMAT_PLY, "fuzz.ply");
 }

@@ -130,12 +130,17 @@ CF_API cf_status cf_gradient(cf_context *ctx, const cf_mesh *mesh, const double 
 CF_API cf_status cf_divergence(cf_context *ctx, const cf_mesh *mesh, const double *positions, const double *field,
                                double *div);
 
-/* Basis of harmonic 1-forms (Crane 2013, App. C.1): 2g columns of ne values
- * each, column-major, orthonormal under the *1 inner product.
- * *dimension receives 2g (g summed over components); `basis` must hold
- * ne * 2g doubles (pass NULL to query the dimension only). Deterministic
- * (seeded). Closed meshes only: a mesh with boundary gives
- * CF_ERR_UNSUPPORTED. Other statuses: CF_ERR_INVALID_ARG, CF_ERR_NONFINITE,
+/* Basis of harmonic 1-forms (Crane 2013, App. C.1) spanning the first
+ * cohomology: `dim` columns of ne values each, column-major, orthonormal
+ * under the *1 inner product. dim = sum over connected components of 2g on
+ * closed components and 2g + b - 1 on components with b > 0 boundary loops
+ * (0 on a disk). Each column is closed (d1 h = 0 on every face) and
+ * co-closed at every vertex, d0^T *1 h = 0, boundary vertices included: on a
+ * surface with boundary these are the Neumann harmonic fields (no flux
+ * through the boundary), and a closed 1-form is exact iff it is
+ * *1-orthogonal to all of them. *dimension receives dim; `basis` must hold
+ * ne * dim doubles (pass NULL to query the dimension only). Deterministic
+ * (seeded). Statuses: CF_ERR_INVALID_ARG, CF_ERR_NONFINITE,
  * CF_ERR_DEGENERATE_FACE, CF_ERR_NOMEM, solver errors. */
 CF_API cf_status cf_harmonic_basis(cf_context *ctx, const cf_mesh *mesh, const double *positions, int32_t *dimension,
                                    double *basis);

@@ -1,8 +1,20 @@
 /*
- * Basis of harmonic 1-forms on a closed mesh (Crane, Pinkall & Schroeder
- * 2013, App. C.1, steps I-III) and the per-face vector field of a 1-form
- * (Whitney interpolation at the barycentre; for closed forms it equals the
- * vector v of App. C.1 with <v, e> = omega(e) on every edge of the face).
+ * Basis of harmonic 1-forms (Crane, Pinkall & Schroeder 2013, App. C.1,
+ * steps I-III) and the per-face vector field of a 1-form (Whitney
+ * interpolation at the barycentre; for closed forms it equals the vector v
+ * of App. C.1 with <v, e> = omega(e) on every edge of the face).
+ *
+ * The basis spans the first de Rham cohomology H^1(M): dimension 2g on a
+ * closed component and 2g + b - 1 on a component with b > 0 boundary loops
+ * (0 on a disk). With boundary the representatives are the Neumann harmonic
+ * fields: closed (d1 h = 0 on every face) and co-closed at EVERY vertex,
+ * boundary vertices included (d0^T *1 h = 0). At a boundary vertex that row
+ * is the discrete natural condition "no flux through the boundary"
+ * (*h = 0 along the boundary). These are the right test forms for
+ * exactness: by the Hodge-Morrey-Friedrichs decomposition the closed forms
+ * are dOmega^0 (+) H_N, so a closed form is exact iff it is *1-orthogonal to
+ * every Neumann harmonic field (for an annulus: iff its period around the
+ * hole vanishes).
  *
  * Hodge decomposition (Desbrun et al. 2008), done in two solves that both
  * stay positive definite on any mesh:
@@ -11,15 +23,20 @@
  *     d1 *1^-1 d1^T because cotan weights may be zero or negative (obtuse
  *     pairs), which makes the latter indefinite or undefined. Any closed
  *     form is fine here: only its cohomology class matters.
- *  2. exact part: h = omega1 - d0 alpha with L alpha = d0^T *1 omega1, so h is
- *     closed (d1 d0 = 0) and co-closed (d0^T *1 h = 0): harmonic.
- * Both Laplacians have one constant per connected component in their
- * kernel; adding 1 to the diagonal at one element per component makes them
- * definite without changing the solution, because the right-hand sides
- * sum to zero on each component (then that element's value is forced to 0).
- * Finally the 2g forms are orthonormalised under <a, b> = sum_e *1_e a_e b_e,
+ *  2. exact part: h = omega1 - d0 alpha with L alpha = d0^T *1 omega1
+ *     (Neumann Laplacian: every vertex is a row), so h is closed
+ *     (d1 d0 = 0) and co-closed at every vertex: harmonic.
+ * The cotan Laplacian has one constant per connected component in its
+ * kernel, d1 d1^T one per CLOSED component (on a component with boundary
+ * d1 is onto: a face function g with d1^T g = 0 is constant and vanishes
+ * at a boundary edge). Adding 1 to the diagonal at one element of each such
+ * component makes them definite without changing the solution, because the
+ * right-hand sides sum to zero there (then that element's value is forced
+ * to 0); components with boundary must not be pinned, or d1 h would be
+ * nonzero at the pinned face.
+ * Finally the forms are orthonormalised under <a, b> = sum_e *1_e a_e b_e,
  * which is positive definite on closed forms (it equals the L2 norm of the
- * per-face vector field) even where some *1_e < 0.
+ * per-face vector field, boundary edges included) even where some *1_e < 0.
  */
 #include "curvflow/ops.h"
 #include "ops/ops_internal.h"
@@ -31,8 +48,9 @@ static double halfedge_sign(const cf_mesh *mesh, int64_t h)
 }
 
 /* d1 d1^T: 3 on the diagonal, -1 between faces sharing an edge (opposite
- * traversal), plus the pin on the first face of each component. */
-static cf_status dual_laplacian(cf_context *ctx, const cf_mesh *mesh, cf_sparse **out)
+ * traversal), plus the pin on the first face of each closed component
+ * (open[c] != 0 marks a component with boundary: no pin). */
+static cf_status dual_laplacian(cf_context *ctx, const cf_mesh *mesh, const uint8_t *open, cf_sparse **out)
 {
     int64_t n = (int64_t)mesh->nf + 2 * (int64_t)mesh->ne;
     int32_t *rows = CFI_ALLOC(ctx, int32_t, n);
@@ -48,7 +66,7 @@ static cf_status dual_laplacian(cf_context *ctx, const cf_mesh *mesh, cf_sparse 
     for (int32_t f = 0; f < mesh->nf; ++f) {
         int32_t c = mesh->face_component[f];
         rows[k] = cols[k] = f;
-        vals[k++] = pinned[c] ? 3.0 : 4.0;
+        vals[k++] = pinned[c] || open[c] ? 3.0 : 4.0;
         pinned[c] = 1;
     }
     for (int32_t e = 0; e < mesh->ne; ++e) {
@@ -112,13 +130,31 @@ cf_status cf_harmonic_basis(cf_context *ctx, const cf_mesh *mesh, const double *
 {
     cf_status s = cfi_ops_check(ctx, mesh, positions, dimension, "harmonic_basis");
     if (s != CF_OK) return s;
-    if (mesh->boundary_loop_count > 0)
-        return cfi_error(ctx, CF_ERR_UNSUPPORTED,
-                         "harmonic_basis: mesh has %d boundary loops; only closed meshes are supported",
-                         mesh->boundary_loop_count);
-    int32_t k = 2 * mesh->genus;
+    /* components that touch the boundary */
+    uint8_t *open = CFI_ALLOC(ctx, uint8_t, mesh->component_count);
+    if (!open) return CF_ERR_NOMEM;
+    int32_t closed_count = mesh->component_count;
+    for (int32_t v = 0; v < mesh->nv; ++v) {
+        int32_t c = mesh->vertex_component[v];
+        if (mesh->vertex_on_boundary[v] && !open[c]) {
+            open[c] = 1;
+            --closed_count;
+        }
+    }
+    /* dim ker d1 - dim im d0 = (ne - rank d1) - (nv - #components) with
+     * rank d1 = nf - #closed components: sum over components of 2g on closed
+     * ones and 2g + b - 1 on ones with boundary. */
+    int64_t k64 = (int64_t)mesh->ne - mesh->nv - mesh->nf + mesh->component_count + closed_count;
+    if (CF_NEVER(k64 < 0 || k64 > mesh->ne)) {
+        CFI_FREE(ctx, open, mesh->component_count);
+        return cfi_error(ctx, CF_ERR_NUMERICAL, "harmonic_basis: inconsistent first Betti number %lld", (long long)k64);
+    }
+    int32_t k = (int32_t)k64;
     *dimension = k;
-    if (!basis || k == 0) return CF_OK;
+    if (!basis || k == 0) {
+        CFI_FREE(ctx, open, mesh->component_count);
+        return CF_OK;
+    }
 
     int32_t ne = mesh->ne, nf = mesh->nf, nv = mesh->nv;
     cf_sparse *b = NULL, *l = NULL;
@@ -131,7 +167,7 @@ cf_status cf_harmonic_basis(cf_context *ctx, const cf_mesh *mesh, const double *
         goto done;
     }
     if ((s = cf_cotan_weights(ctx, mesh, positions, w)) != CF_OK) goto done;
-    if ((s = dual_laplacian(ctx, mesh, &b)) != CF_OK) goto done;
+    if ((s = dual_laplacian(ctx, mesh, open, &b)) != CF_OK) goto done;
     if ((s = pinned_laplacian(ctx, mesh, positions, &l)) != CF_OK) goto done;
     if ((s = factor(ctx, b, &cb)) != CF_OK) goto done;
     if ((s = factor(ctx, l, &cl)) != CF_OK) goto done;
@@ -195,6 +231,7 @@ done:
     CFI_FREE(ctx, w, ne);
     CFI_FREE(ctx, rf, (int64_t)nf * k);
     CFI_FREE(ctx, rv, (int64_t)nv * k);
+    CFI_FREE(ctx, open, mesh->component_count);
     return s;
 }
 

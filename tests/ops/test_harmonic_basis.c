@@ -1,13 +1,39 @@
-/* Harmonic 1-form basis (Crane 2013, App. C.1): dimension 2g, closed
- * (d1 h = 0) and co-closed (d0^T *1 h = 0) to 1e-10 relative, orthonormal
- * under *1; the Whitney vector field reproduces a closed form's edge values
- * and the gradient of a linear function. */
+/* Harmonic 1-form basis (Crane 2013, App. C.1): dimension 2g on closed
+ * meshes and 2g + b - 1 per component with b > 0 boundary loops (0 on a
+ * disk), closed (d1 h = 0) and co-closed (d0^T *1 h = 0 at every vertex,
+ * the Neumann condition on the boundary) to 1e-10 relative, orthonormal
+ * under *1; nonzero periods around the holes of annuli (sqrt(2 pi) on a
+ * cylinder, the period of d theta / |d theta|); the Whitney vector field
+ * reproduces a closed form's edge values and the gradient of a linear
+ * function. */
 #include "curvflow/generate.h"
 #include "curvflow/io.h"
 #include "curvflow/ops.h"
 #include "test.h"
 
 #include <stdlib.h>
+#include <string.h>
+
+/* Periods of column c of h around each boundary loop, along the boundary
+ * halfedges (loop of a halfedge = loop of its start vertex). */
+static void boundary_periods(const cf_mesh *m, const double *hc, double *period)
+{
+    int32_t nv = cf_mesh_vertex_count(m), nf = cf_mesh_face_count(m), nb = cf_mesh_boundary_loop_count(m);
+    const int32_t *ev = cf_mesh_edge_vertices(m), *t = cf_mesh_triangles(m), *he = cf_mesh_halfedge_edge(m);
+    const int32_t *tw = cf_mesh_halfedge_twin(m), *off = cf_mesh_boundary_loop_offsets(m);
+    const int32_t *lv = cf_mesh_boundary_loop_vertices(m);
+    int32_t *loop = malloc(sizeof(int32_t) * (size_t)nv);
+    for (int32_t b = 0; b < nb; ++b) {
+        period[b] = 0;
+        for (int32_t k = off[b]; k < off[b + 1]; ++k) loop[lv[k]] = b;
+    }
+    for (int32_t h = 0; h < 3 * nf; ++h) {
+        if (tw[h] >= 0) continue;
+        int32_t e = he[h];
+        period[loop[t[h]]] += (t[h] == ev[2 * e] ? 1.0 : -1.0) * hc[e];
+    }
+    free(loop);
+}
 
 static void check_basis(cf_context *ctx, const cf_mesh *m, int32_t expect, const char *name)
 {
@@ -58,8 +84,32 @@ static void check_basis(cf_context *ctx, const cf_mesh *m, int32_t expect, const
             CHECK_NEAR(ip, c == d ? 1.0 : 0.0, 0, 1e-10);
         }
     }
-    fprintf(stderr, "  %-24s dim %d  max |d1 h| %.1e  max |d0^T *1 h| %.1e (relative)\n", name, dim, worst_closed,
+    fprintf(stderr, "  %-26s dim %d  max |d1 h| %.1e  max |d0^T *1 h| %.1e (relative)\n", name, dim, worst_closed,
             worst_coclosed);
+    /* with holes: the boundary periods sum to zero (Stokes: the sum of d1 h
+     * over all faces). For one component of genus 0 the b - 1 independent
+     * loops carry every class, so each column has a nonzero period (its
+     * class is not zero); otherwise (handles, closed components) some
+     * columns may have none, but at least one column must. */
+    int32_t nb = cf_mesh_boundary_loop_count(m);
+    int every = cf_mesh_genus(m) == 0 && cf_mesh_component_count(m) == 1;
+    if (nb > 1 && dim > 0) {
+        double *p = malloc(sizeof(double) * (size_t)nb), best = 0;
+        for (int32_t c = 0; c < dim; ++c) {
+            boundary_periods(m, h + (int64_t)ne * c, p);
+            double sum = 0, pmax = 0;
+            for (int32_t b = 0; b < nb; ++b) {
+                sum += p[b];
+                pmax = fmax(pmax, fabs(p[b]));
+            }
+            fprintf(stderr, "    column %d: largest boundary period %.4f, sum %.1e\n", c, pmax, sum);
+            if (every) CHECK(pmax > 0.1);   /* smallest measured: 0.17 (chinese_lion) */
+            best = fmax(best, pmax);
+            CHECK_NEAR(sum, 0, 0, 1e-10);
+        }
+        CHECK(best > 0.1);
+        free(p);
+    }
     CHECK_LE(worst_closed, 1e-10);
     CHECK_LE(worst_coclosed, 1e-10);
     /* Whitney field of a closed form: <v_f, e> = omega(e) on each edge of f */
@@ -97,11 +147,74 @@ static void test_generated(void)
     CHECK_OK(ctx, cf_generate_double_torus(ctx, 2, &m));
     if (m) check_basis(ctx, m, 4, "double torus (generated)");
     cf_mesh_destroy(&m);
-    /* meshes with boundary are not supported (closed meshes only) */
-    CHECK_OK(ctx, cf_generate_cylinder(ctx, 10, 3, 1.0, 1.0, &m));
-    int32_t dim;
-    if (m) CHECK_STATUS(cf_harmonic_basis(ctx, m, cf_mesh_positions(m), &dim, NULL), CF_ERR_UNSUPPORTED);
+    /* meshes with boundary: disk 0, annulus 1 */
+    CHECK_OK(ctx, cf_generate_grid(ctx, 12, 9, 1.0, 0.7, &m));
+    if (m) check_basis(ctx, m, 0, "grid (disk)");
     cf_mesh_destroy(&m);
+    CHECK_OK(ctx, cf_generate_cylinder(ctx, 48, 12, 1.0, 1.0, &m));
+    if (m) check_basis(ctx, m, 1, "cylinder (annulus)");
+    if (m) {
+        /* the continuous Neumann harmonic field of a cylinder of radius 1 and
+         * height 1 is d theta / |d theta| with |d theta|^2 = 2 pi, so its
+         * period is 2 pi / sqrt(2 pi) = sqrt(2 pi); 48 chords per turn give
+         * O(1/48^2) discretisation error (about 1e-3), 1e-2 is the margin */
+        int32_t ne = cf_mesh_edge_count(m), dim = 0;
+        double *h = malloc(sizeof(double) * (size_t)ne), p[2];
+        CHECK_OK(ctx, cf_harmonic_basis(ctx, m, cf_mesh_positions(m), &dim, h));
+        boundary_periods(m, h, p);
+        fprintf(stderr, "  cylinder periods %.6f %.6f (sqrt(2 pi) = %.6f)\n", p[0], p[1], sqrt(6.283185307179586));
+        CHECK_NEAR(fabs(p[0]), sqrt(6.283185307179586), 1e-2, 0);
+        CHECK_NEAR(p[0], -p[1], 0, 1e-10);
+        /* deterministic: a second call gives the same bits */
+        double *h2 = malloc(sizeof(double) * (size_t)ne);
+        CHECK_OK(ctx, cf_harmonic_basis(ctx, m, cf_mesh_positions(m), &dim, h2));
+        CHECK(memcmp(h, h2, sizeof(double) * (size_t)ne) == 0);
+        free(h);
+        free(h2);
+    }
+    cf_mesh_destroy(&m);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+/* 2g + b - 1 with genus and holes, and components of both kinds: a torus
+ * with two faces removed (g 1, b 2: dim 3) next to a closed torus (dim 2). */
+static void test_holed_torus(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *t = NULL, *m = NULL;
+    CHECK_OK(ctx, cf_generate_torus(ctx, 1.0, 0.35, 40, 16, &t));
+    if (!t) return;
+    int32_t nv = cf_mesh_vertex_count(t), nf = cf_mesh_face_count(t);
+    const int32_t *tri = cf_mesh_triangles(t);
+    const double *x = cf_mesh_positions(t);
+    double *p = malloc(sizeof(double) * 6 * (size_t)nv);
+    int32_t *f = malloc(sizeof(int32_t) * 6 * (size_t)nf), k = 0;
+    for (int32_t i = 0; i < 3 * nv; ++i) {
+        p[i] = x[i];
+        p[3 * nv + i] = x[i] + (i % 3 == 0 ? 3.0 : 0.0);
+    }
+    for (int32_t i = 0; i < nf; ++i) {
+        if (i == 0 || i == nf / 2) continue;   /* two holes, far apart */
+        for (int j = 0; j < 3; ++j) f[3 * k + j] = tri[3 * i + j];
+        ++k;
+    }
+    for (int32_t i = 0; i < nf; ++i, ++k)
+        for (int j = 0; j < 3; ++j) f[3 * k + j] = tri[3 * i + j] + nv;
+    cf_mesh_desc d = {0};
+    d.vertex_count = 2 * nv;
+    d.positions = p;
+    d.face_count = k;
+    d.triangles = f;
+    CHECK_OK(ctx, cf_mesh_create(ctx, &d, &m));
+    if (m) {
+        CHECK(cf_mesh_boundary_loop_count(m) == 2 && cf_mesh_component_count(m) == 2 && cf_mesh_genus(m) == 2);
+        check_basis(ctx, m, 3 + 2, "holed torus + torus");
+    }
+    free(p);
+    free(f);
+    cf_mesh_destroy(&m);
+    cf_mesh_destroy(&t);
     CHECK(cf_context_bytes_in_use(ctx) == 0);
     cf_context_destroy(&ctx);
 }
@@ -113,6 +226,25 @@ static void test_shared(void)
     if (!cft_shared_mesh_path(names[0])) cft_skip("../shared/meshes is absent");
     cf_context *ctx = cft_context();
     for (int i = 0; i < 4; ++i) {
+        cf_mesh *m = NULL;
+        CHECK_OK(ctx, cf_load_mesh(ctx, cft_shared_mesh_path(names[i]), &m));
+        if (m) check_basis(ctx, m, dims[i], names[i]);
+        cf_mesh_destroy(&m);
+    }
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+/* Shared meshes with boundary (MANIFEST.tsv: genus 0, one component):
+ * disks give 0, the two annuli 1, the bunny scan (5 holes) 4 = 2g + b - 1. */
+static void test_shared_boundary(void)
+{
+    static const char *names[] = {"mushroom_cap_2k.obj", "plane_841.obj", "blade_slivers_8k.obj",
+                                  "chinese_lion_statue_10k.obj", "bunny_scan_35k.obj"};
+    static const int32_t dims[] = {0, 0, 1, 1, 4};
+    if (!cft_shared_mesh_path(names[0])) cft_skip("../shared/meshes is absent");
+    cf_context *ctx = cft_context();
+    for (int i = 0; i < 5; ++i) {
         cf_mesh *m = NULL;
         CHECK_OK(ctx, cf_load_mesh(ctx, cft_shared_mesh_path(names[i]), &m));
         if (m) check_basis(ctx, m, dims[i], names[i]);
@@ -152,6 +284,8 @@ int main(void)
 {
     CFT_RUN(test_whitney_exact);
     CFT_RUN(test_generated);
+    CFT_RUN(test_holed_torus);
     CFT_RUN(test_shared);
+    CFT_RUN(test_shared_boundary);
     return cft_finish();
 }

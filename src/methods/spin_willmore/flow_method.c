@@ -7,7 +7,9 @@
  *   I.   H from the cotan Laplacian (Sec. 6.1);
  *   II.  rhodot = -2 H, optionally filtered v <- v - (id + sigma Delta^k)^-1 v (Sec. 4);
  *   III. constraints (Sec. 6.2): inversion N^x,y,z, then Moebius balancing
- *        (App. E.1), then total curvature 1 and exactness Z_i^x,y,z (App. C.1);
+ *        (App. E.1), then total curvature 1 and exactness Z_i^x,y,z (App. C.1;
+ *        on a free boundary with holes a discrete linearisation instead,
+ *        exactness_columns_linearized);
  *   IV.  rho = tau rhodot (so mu~ = (1 - 2 tau) mu, NOTES.md);
  *   V.   lambda = smallest eigenvector of X(rho) by one inverse power
  *        iteration from lambda = 1 (Sec. 6.4.2), with lambda restricted to
@@ -46,7 +48,9 @@ typedef struct spin_state {
     cf_cholesky *filter_chol;
     double filter_scale;     /* k = 0: sigma / (1 + sigma) */
     double *filter_mass;     /* nv: M of the filter (input areas) */
-    int32_t harmonic_dim;    /* 2g if the exactness constraint is active */
+    int32_t harmonic_dim;    /* dim H^1 (2g + b - 1 with boundary) if the exactness constraint is active */
+    int32_t linearized;      /* exactness on a free boundary: discrete linearisation instead of App. C's Z_i */
+    double *hweights;        /* ne: cotan weights of the input (the *1 of the harmonic basis), linearized only */
     int32_t fixed_boundary;
     int32_t restricted_boundary;   /* PRESCRIBED or CMC */
     int32_t has_boundary;
@@ -62,7 +66,7 @@ typedef struct spin_state {
     double *rest_area;       /* nv: areas of the input, for Moebius balancing */
     double *rhodot, *rho;    /* nv */
     double *lambda, *qrhs, *qwork;   /* 4 nv */
-    double *zrhs, *zsol;     /* 4 nv x 2g */
+    double *zrhs, *zsol;     /* 4 nv x dim (x 3 dim if linearized) */
     double *basis;           /* nv x max_cols */
     int32_t max_cols;
     double *edges;           /* 3 ne */
@@ -102,7 +106,8 @@ static const cf_param_desc spin_params[] = {
      "tau: rho = -2 tau H per step (stable for tau < 1; 0.5 removes curvature to first order)"},
     {"total_curvature", CF_PARAM_BOOL, OPT(total_curvature), 0, 1, NULL, "constraint <rhodot, 1> = 0 (App. B)"},
     {"inversion", CF_PARAM_BOOL, OPT(inversion), 0, 1, NULL, "constraints <rhodot, N> = 0 (App. D)"},
-    {"exactness", CF_PARAM_BOOL, OPT(exactness), 0, 1, NULL, "constraints <rhodot, Z_i> = 0, genus > 0 (App. C)"},
+    {"exactness", CF_PARAM_BOOL, OPT(exactness), 0, 1, NULL,
+     "constraints <rhodot, Z_i> = 0: genus > 0, or holes with boundary=free (App. C)"},
     {"mobius", CF_PARAM_BOOL, OPT(mobius), 0, 1, NULL, "Moebius balancing toward the input area distribution (App. E)"},
     {"mobius_weight", CF_PARAM_DOUBLE, OPT(mobius_weight), 0.0, 100.0, NULL, "scale of the balancing term"},
     {"sigma", CF_PARAM_DOUBLE, OPT(sigma), 0.0, 1e12, NULL,
@@ -266,8 +271,10 @@ static void spin_destroy(cf_flow *flow)
     CFI_FREE(ctx, s->lambda, 4 * nv);
     CFI_FREE(ctx, s->qrhs, 4 * nv);
     CFI_FREE(ctx, s->qwork, 4 * nv);
-    CFI_FREE(ctx, s->zrhs, 4 * nv * g2);
-    CFI_FREE(ctx, s->zsol, 4 * nv * g2);
+    int64_t zc = s->linearized ? 3 * g2 : g2;
+    CFI_FREE(ctx, s->zrhs, 4 * nv * zc);
+    CFI_FREE(ctx, s->zsol, 4 * nv * zc);
+    if (s->hweights) CFI_FREE(ctx, s->hweights, s->ne);
     CFI_FREE(ctx, s->basis, nv * s->max_cols);
     CFI_FREE(ctx, s->edges, 3 * (int64_t)s->ne);
     CFI_FREE(ctx, s->newpos, 3 * nv);
@@ -397,15 +404,24 @@ static cf_status spin_create(cf_flow *flow, const void *options)
     int64_t nv = s->nv;
     cf_status st = CF_OK;
 
-    /* exactness: harmonic 1-forms of the input (closed surfaces of genus > 0).
-     * Harmonic forms depend only on the conformal structure, which the flow
-     * preserves, so the basis is computed once (App. C.1, steps I-III). */
+    /* exactness: harmonic 1-forms of the input (App. C.1, steps I-III), on
+     * closed surfaces of genus > 0 and on free-boundary surfaces that are
+     * not disks (dim 2g + b - 1 > 0). Harmonic forms depend only on the
+     * conformal structure, which the flow preserves, so the basis is
+     * computed once. Not with fixed boundaries (the transformed boundary
+     * edges are the input's, so the periods around the boundary loops vanish
+     * identically) nor with prescribed / cmc ones (lambda is not near 1 on
+     * the boundary and App. C's Z_i were measured to increase the periods
+     * there), see docs/spin.md. */
     int32_t dim = 0;
-    if (o->exactness && !has_boundary && mesh->genus > 0) {
+    if (o->exactness && (has_boundary ? o->boundary_mode == CF_SPIN_BOUNDARY_FREE : mesh->genus > 0)) {
         st = cf_harmonic_basis(ctx, mesh, flow->positions, &dim, NULL);
         if (st != CF_OK) goto fail;
     }
     s->harmonic_dim = dim;
+    s->linearized = dim > 0 && has_boundary;
+    int64_t zcols = s->linearized ? 3 * (int64_t)dim : dim;
+    s->hweights = s->linearized ? CFI_ALLOC(ctx, double, s->ne) : NULL;
     s->max_cols = 4 + 3 * dim + 1;
     s->harmonic = dim ? CFI_ALLOC(ctx, double, (int64_t)s->ne * dim) : NULL;
     s->area = CFI_ALLOC(ctx, double, nv);
@@ -418,8 +434,8 @@ static cf_status spin_create(cf_flow *flow, const void *options)
     s->lambda = CFI_ALLOC(ctx, double, 4 * nv);
     s->qrhs = CFI_ALLOC(ctx, double, 4 * nv);
     s->qwork = CFI_ALLOC(ctx, double, 4 * nv);
-    s->zrhs = dim ? CFI_ALLOC(ctx, double, 4 * nv * dim) : NULL;
-    s->zsol = dim ? CFI_ALLOC(ctx, double, 4 * nv * dim) : NULL;
+    s->zrhs = dim ? CFI_ALLOC(ctx, double, 4 * nv * zcols) : NULL;
+    s->zsol = dim ? CFI_ALLOC(ctx, double, 4 * nv * zcols) : NULL;
     s->basis = CFI_ALLOC(ctx, double, nv * s->max_cols);
     s->edges = CFI_ALLOC(ctx, double, 3 * (int64_t)s->ne);
     s->newpos = CFI_ALLOC(ctx, double, 3 * nv);
@@ -434,7 +450,8 @@ static cf_status spin_create(cf_flow *flow, const void *options)
             goto fail;
         }
     }
-    if ((dim && (!s->harmonic || !s->zrhs || !s->zsol)) || !s->area || !s->normal || !s->lx || !s->h ||
+    if ((dim && (!s->harmonic || !s->zrhs || !s->zsol)) || (s->linearized && !s->hweights) || !s->area ||
+        !s->normal || !s->lx || !s->h ||
         !s->rest_area || !s->rhodot || !s->rho || !s->lambda || !s->qrhs || !s->qwork || !s->basis || !s->edges ||
         !s->newpos || !s->vtmp || !s->vtmp2) {
         st = CF_ERR_NOMEM;
@@ -447,6 +464,10 @@ static cf_status spin_create(cf_flow *flow, const void *options)
         if (CF_NEVER(dim2 != dim)) {
             st = cfi_error(ctx, CF_ERR_NUMERICAL, "spin-willmore: harmonic basis dimension changed");
             goto fail;
+        }
+        if (s->linearized) {
+            st = cf_cotan_weights(ctx, mesh, flow->positions, s->hweights);
+            if (st != CF_OK) goto fail;
         }
     }
     st = cfi_poisson_create(ctx, mesh, flow->positions, &s->poisson);
@@ -561,6 +582,78 @@ static cf_status exactness_columns(cf_flow *flow, spin_state *s, const double *x
             for (int32_t i = 0; i < nv; ++i) b[i] = z[4 * i + c];
             ++*col;
         }
+    }
+    return CF_OK;
+}
+
+/* Exactness on a surface with free boundary. App. C's step "<D Z a,
+ * lambda> = <Z a, D lambda>" needs D to be self-adjoint, which fails with
+ * the natural boundary condition (Green's formula leaves a boundary
+ * integral); measured on annuli, the Z_i constraint does not reduce the
+ * period of the transformed edges at all (docs/spin.md). Instead the
+ * condition <e~, h_g>_*1 = 0 (no harmonic part = no period around any
+ * hole, as h_g spans the Neumann harmonic fields, ops.md) is linearised
+ * through the discrete pipeline of one step:
+ *  - lambda = X(tau rhodot)^-1 M 1 with X(0) 1 = eps M 1 (D 1 = 0), so to
+ *    first order lambda ~ 1 + tau mu, mu = -X(0)^-1 K rhodot, where
+ *    K rhodot = X_1(rhodot) 1 = -(1/6) sum_faces e_m (rho_0 + rho_1 + rho_2)
+ *    at corner m (App. G: the rho-linear term (rho_m e_n - rho_n e_m) / 6,
+ *    sum_n e_n = 0);
+ *  - the edge transform (dirac.c) changes by d e~ = (a_i + a_j) e +
+ *    e x (u_i + u_j) for mu = (a, u);
+ *  - so <d e~, h_g>^c = G_gc . mu, and the constraint is rhodot orthogonal
+ *    (in M) to M^-1 K^T X(0)^-1 G_gc, three columns per harmonic form.
+ * Exact to first order in tau for one inverse power iteration (the
+ * default); an approximation for more. */
+static cf_status exactness_columns_linearized(cf_flow *flow, spin_state *s, const double *x, int32_t *col,
+                                              double *factor_seconds, double *solve_seconds)
+{
+    const cf_mesh *mesh = flow->mesh;
+    int32_t nv = s->nv, dim = s->harmonic_dim, ncol = 3 * dim;
+    double t0 = cfi_now_seconds();
+    cf_status st = cfi_dirac_fill(s->dirac, mesh, x, NULL, s->eps);
+    if (st != CF_OK) return st;
+    st = cf_cholesky_factorize(s->chol0, s->dirac->x);
+    double t1 = cfi_now_seconds();
+    *factor_seconds += t1 - t0;
+    if (st != CF_OK) return st;
+    memset(s->zrhs, 0, 4 * (size_t)nv * ncol * sizeof(double));
+    for (int32_t e = 0; e < s->ne; ++e) {
+        int32_t i = mesh->edge_vertices[2 * e], j = mesh->edge_vertices[2 * e + 1];
+        double v[3] = {x[3 * j] - x[3 * i], x[3 * j + 1] - x[3 * i + 1], x[3 * j + 2] - x[3 * i + 2]};
+        /* coefficient of u_l in (v x u)_c: (v x unit_l)_c */
+        const double vx[3][3] = {{0.0, v[2], -v[1]}, {-v[2], 0.0, v[0]}, {v[1], -v[0], 0.0}};
+        for (int32_t g = 0; g < dim; ++g) {
+            double wh = s->hweights[e] * s->harmonic[(int64_t)g * s->ne + e];
+            for (int c = 0; c < 3; ++c) {
+                double *r = s->zrhs + (int64_t)(3 * g + c) * 4 * nv;
+                double q[4] = {wh * v[c], wh * vx[0][c], wh * vx[1][c], wh * vx[2][c]};
+                for (int k = 0; k < 4; ++k) {
+                    r[4 * i + k] += q[k];
+                    r[4 * j + k] += q[k];
+                }
+            }
+        }
+    }
+    st = cf_cholesky_solve(s->chol0, ncol, s->zrhs, s->zsol);
+    *solve_seconds += cfi_now_seconds() - t1;
+    if (st != CF_OK) return st;
+    for (int32_t k = 0; k < ncol; ++k) {
+        const double *y = s->zsol + (int64_t)k * 4 * nv;
+        double *b = s->basis + (int64_t)(*col) * nv;
+        memset(b, 0, (size_t)nv * sizeof(double));
+        /* K^T y: face f adds -(1/6) sum_m <Im y_tri[m], e_m> to each corner */
+        for (int32_t f = 0; f < s->nf; ++f) {
+            const int32_t *t = mesh->triangles + 3 * f;
+            double sum = 0.0;
+            for (int m = 0; m < 3; ++m) {
+                const double *a = x + 3 * t[(m + 1) % 3], *bb = x + 3 * t[(m + 2) % 3], *ym = y + 4 * t[m];
+                for (int c = 0; c < 3; ++c) sum += ym[1 + c] * (bb[c] - a[c]);
+            }
+            for (int m = 0; m < 3; ++m) b[t[m]] -= sum / 6.0;
+        }
+        for (int32_t i = 0; i < nv; ++i) b[i] /= s->area[i];
+        ++*col;
     }
     return CF_OK;
 }
@@ -695,7 +788,8 @@ static cf_status spin_step(cf_flow *flow, cf_flow_info *info)
         ++ncols;
     }
     if (s->harmonic_dim > 0) {
-        st = exactness_columns(flow, s, x, &ncols, &t_fac, &t_sol);
+        st = s->linearized ? exactness_columns_linearized(flow, s, x, &ncols, &t_fac, &t_sol)
+                           : exactness_columns(flow, s, x, &ncols, &t_fac, &t_sol);
         if (st != CF_OK) return st;
     }
     count += ncols;

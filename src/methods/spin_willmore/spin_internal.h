@@ -109,7 +109,7 @@ typedef struct cfi_spin_diagnostics {
     double total_curvature_change;  /* |<rhodot, 1>_M| / (|rhodot|_M |1|_M) */
     double integrability_error;     /* cfi_spin_integrability_error of the step */
     double eigenvalue;              /* Rayleigh quotient of lambda (shift removed) */
-    int32_t harmonic_dimension;     /* 2g used by the exactness constraint (0 if off) */
+    int32_t harmonic_dimension;     /* dim H^1 used by the exactness constraint: 2g, or 2g + b - 1 with a free boundary (0 if off) */
     double mobius_norm;             /* |balancing term|_M added to rhodot */
 } cfi_spin_diagnostics;
 

@@ -39,6 +39,17 @@ enum { W = 101, H = 101 };
 
 static int is_background(const uint8_t *p) { return p[0] == 255 && p[1] == 255 && p[2] == 255; }
 
+/* Default options for a W x H image viewed along +z. */
+static void front_view_options(cf_render_options *o)
+{
+    cf_render_options_default(o);
+    o->width = W;
+    o->height = H;
+    o->view[0] = 0.0;
+    o->view[1] = 0.0;
+    o->view[2] = 1.0;
+}
+
 static void test_sphere_silhouette_and_shading(void)
 {
     cf_context *ctx = cft_context();
@@ -46,12 +57,7 @@ static void test_sphere_silhouette_and_shading(void)
     CHECK_OK(ctx, cf_generate_icosphere(ctx, 4, 1.0, &mesh));
     if (!mesh) { cf_context_destroy(&ctx); return; }
     cf_render_options o;
-    cf_render_options_default(&o);
-    o.width = W;
-    o.height = H;
-    o.view[0] = 0.0;
-    o.view[1] = 0.0;
-    o.view[2] = 1.0;
+    front_view_options(&o);
     uint8_t *rgb = malloc(3 * W * H);
     CHECK_OK(ctx, cf_render_rgb(ctx, mesh, NULL, &o, rgb));
     int covered = 0;
@@ -100,12 +106,7 @@ static void test_uv_checker(void)
     CHECK_OK(ctx, cf_generate_grid(ctx, 8, 8, 1.0, 1.0, &mesh));
     if (!mesh) { cf_context_destroy(&ctx); return; }
     cf_render_options o;
-    cf_render_options_default(&o);
-    o.width = W;
-    o.height = H;
-    o.view[0] = 0.0;
-    o.view[1] = 0.0;
-    o.view[2] = 1.0;
+    front_view_options(&o);
     o.ambient = 1.0; /* flat: only the checker changes the colour */
     o.uv_checker = 1;
     o.checker_count = 4.0;

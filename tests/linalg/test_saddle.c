@@ -5,21 +5,13 @@
  * and singular matrices; A stored as its upper triangle; allocation-failure
  * injection. */
 #include "test.h"
+#include "linalg_test_util.h"
 
 #include "curvflow/linalg.h"
 
 #include <stdlib.h>
 #include <string.h>
 
-static uint64_t rng_state;
-static void rng_seed(uint64_t s) { rng_state = s * 0x9E3779B97F4A7C15ull + 1; }
-static double rng_unit(void)
-{
-    rng_state ^= rng_state >> 12;
-    rng_state ^= rng_state << 25;
-    rng_state ^= rng_state >> 27;
-    return ((double)((rng_state * 0x2545F4914F6CDD1Dull) >> 11) + 0.5) / 9007199254740992.0 * 2.0 - 1.0;
-}
 static int32_t rng_int(int32_t n) { return (int32_t)((rng_unit() + 1.0) * 0.5 * n) % n; }
 
 /* Weighted path/grid Laplacian (positive semi-definite, constants in its
@@ -79,33 +71,6 @@ static cf_status upper_triangle_copy(cf_context *ctx, const cf_sparse *a, cf_spa
     if (st == CF_OK) (*out)->upper_only = 1;
     free(r); free(c); free(v);
     return st;
-}
-
-static void dense_solve(int32_t n, const double *a_in, const double *b, double *x)
-{
-    double *a = malloc((size_t)n * n * sizeof *a);
-    memcpy(a, a_in, (size_t)n * n * sizeof *a);
-    memcpy(x, b, (size_t)n * sizeof *x);
-    for (int32_t k = 0; k < n; ++k) {
-        int32_t piv = k;
-        for (int32_t i = k + 1; i < n; ++i)
-            if (fabs(a[(size_t)k * n + i]) > fabs(a[(size_t)k * n + piv])) piv = i;
-        for (int32_t j = 0; j < n; ++j) {
-            double t = a[(size_t)j * n + k]; a[(size_t)j * n + k] = a[(size_t)j * n + piv]; a[(size_t)j * n + piv] = t;
-        }
-        double t = x[k]; x[k] = x[piv]; x[piv] = t;
-        for (int32_t i = k + 1; i < n; ++i) {
-            double f = a[(size_t)k * n + i] / a[(size_t)k * n + k];
-            for (int32_t j = k; j < n; ++j) a[(size_t)j * n + i] -= f * a[(size_t)j * n + k];
-            x[i] -= f * x[k];
-        }
-    }
-    for (int32_t i = n - 1; i >= 0; --i) {
-        double s = x[i];
-        for (int32_t j = i + 1; j < n; ++j) s -= a[(size_t)j * n + i] * x[j];
-        x[i] = s / a[(size_t)i * n + i];
-    }
-    free(a);
 }
 
 /* Dense K = [[A, B^T], [B, -C]] */

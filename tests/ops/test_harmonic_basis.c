@@ -219,13 +219,13 @@ static void test_holed_torus(void)
     cf_context_destroy(&ctx);
 }
 
-static void test_shared(void)
+/* check_basis on each of the n shared meshes names[i], expecting dims[i]
+ * harmonic fields; skips the program when ../shared/meshes is absent. */
+static void check_shared(const char *const *names, const int32_t *dims, int n)
 {
-    static const char *names[] = {"bob_5k.obj", "double_torus_315.obj", "elephant_g3_3k.obj", "spot_3k.obj"};
-    static const int32_t dims[] = {2, 4, 6, 0};
     if (!cft_shared_mesh_path(names[0])) cft_skip("../shared/meshes is absent");
     cf_context *ctx = cft_context();
-    for (int i = 0; i < 4; ++i) {
+    for (int i = 0; i < n; ++i) {
         cf_mesh *m = NULL;
         CHECK_OK(ctx, cf_load_mesh(ctx, cft_shared_mesh_path(names[i]), &m));
         if (m) check_basis(ctx, m, dims[i], names[i]);
@@ -235,6 +235,13 @@ static void test_shared(void)
     cf_context_destroy(&ctx);
 }
 
+static void test_shared(void)
+{
+    static const char *names[] = {"bob_5k.obj", "double_torus_315.obj", "elephant_g3_3k.obj", "spot_3k.obj"};
+    static const int32_t dims[] = {2, 4, 6, 0};
+    check_shared(names, dims, 4);
+}
+
 /* Shared meshes with boundary (MANIFEST.tsv: genus 0, one component):
  * disks give 0, the two annuli 1, the bunny scan (5 holes) 4 = 2g + b - 1. */
 static void test_shared_boundary(void)
@@ -242,16 +249,7 @@ static void test_shared_boundary(void)
     static const char *names[] = {"mushroom_cap_2k.obj", "plane_841.obj", "blade_slivers_8k.obj",
                                   "chinese_lion_statue_10k.obj", "bunny_scan_35k.obj"};
     static const int32_t dims[] = {0, 0, 1, 1, 4};
-    if (!cft_shared_mesh_path(names[0])) cft_skip("../shared/meshes is absent");
-    cf_context *ctx = cft_context();
-    for (int i = 0; i < 5; ++i) {
-        cf_mesh *m = NULL;
-        CHECK_OK(ctx, cf_load_mesh(ctx, cft_shared_mesh_path(names[i]), &m));
-        if (m) check_basis(ctx, m, dims[i], names[i]);
-        cf_mesh_destroy(&m);
-    }
-    CHECK(cf_context_bytes_in_use(ctx) == 0);
-    cf_context_destroy(&ctx);
+    check_shared(names, dims, 5);
 }
 
 /* Whitney field of an exact form d0 f with linear f is the gradient. */

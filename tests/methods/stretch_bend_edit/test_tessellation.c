@@ -12,6 +12,7 @@
  * Distances are measured at shared vertices relative to the bounding-box
  * diagonal of the rest shape.
  */
+#include "sbe_test_util.h"
 #include "test.h"
 
 #include "curvflow/generate.h"
@@ -40,31 +41,30 @@ static double *solve(cf_context *ctx, const cf_mesh *mesh, const cf_handle_set *
 
 /* Sheet [0,1]^2 at resolution n: left edge fixed, right edge twisted by
  * `angle` about the line y = 1/2, z = 0 and pulled in by `pull` along x. */
+typedef struct { double angle, pull; } sheet_edit;
+
+static int twist_rule(int32_t v, const double *p, double *t, const void *user)
+{
+    (void)v;
+    const sheet_edit *se = user;
+    if (p[0] < 1e-9) {
+        memcpy(t, p, 3 * sizeof(double));
+        return 1;
+    }
+    if (p[0] > 1.0 - 1e-9) {
+        double qy = p[1] - 0.5;
+        t[0] = p[0] - se->pull;
+        t[1] = 0.5 + cos(se->angle) * qy;
+        t[2] = sin(se->angle) * qy;
+        return 1;
+    }
+    return 0;
+}
+
 static cf_handle_set *twist_handles(cf_context *ctx, const cf_mesh *mesh, double angle, double pull)
 {
-    int32_t nv = cf_mesh_vertex_count(mesh);
-    const double *x = cf_mesh_positions(mesh);
-    int32_t *vs = malloc(sizeof(int32_t) * (size_t)nv);
-    double *ts = malloc(sizeof(double) * 3 * (size_t)nv);
-    int32_t n = 0;
-    for (int32_t v = 0; v < nv; ++v) {
-        const double *p = x + 3 * v;
-        if (p[0] < 1e-9) {
-            memcpy(ts + 3 * n, p, 3 * sizeof(double));
-            vs[n++] = v;
-        } else if (p[0] > 1.0 - 1e-9) {
-            double qy = p[1] - 0.5;
-            ts[3 * n] = p[0] - pull;
-            ts[3 * n + 1] = 0.5 + cos(angle) * qy;
-            ts[3 * n + 2] = sin(angle) * qy;
-            vs[n++] = v;
-        }
-    }
-    cf_handle_set *h = NULL;
-    CHECK_OK(ctx, cf_handle_set_create(ctx, n, vs, ts, &h));
-    free(vs);
-    free(ts);
-    return h;
+    sheet_edit se = {angle, pull};
+    return sbe_handles_where(ctx, mesh, twist_rule, &se);
 }
 
 static void test_sheet_twist_resolution(void)
@@ -121,30 +121,26 @@ static void test_sheet_twist_resolution(void)
 /* Handles of the 1 x 1 x 4 bar: bottom face (z = 0) fixed; top face (z = 4)
  * either translated by `pull` along x (Fig. 4's edit) or, for bend != 0,
  * rotated by `bend` radians about the y-parallel line through its centre. */
+typedef struct { double pull, bend; } bar_edit;
+
+static int bar_rule(int32_t v, const double *p, double *t, const void *user)
+{
+    (void)v;
+    const bar_edit *b = user;
+    if (!(p[2] < 1e-9 || p[2] > 4.0 - 1e-9)) return 0;
+    memcpy(t, p, 3 * sizeof(double));
+    if (p[2] > 1.0) {
+        double dx = p[0] - 0.5;
+        t[0] = 0.5 + cos(b->bend) * dx + b->pull;
+        t[2] = 4.0 - sin(b->bend) * dx;
+    }
+    return 1;
+}
+
 static cf_handle_set *bar_handles(cf_context *ctx, const cf_mesh *mesh, double pull, double bend)
 {
-    int32_t nv = cf_mesh_vertex_count(mesh);
-    const double *x = cf_mesh_positions(mesh);
-    int32_t *vs = malloc(sizeof(int32_t) * (size_t)nv);
-    double *ts = malloc(sizeof(double) * 3 * (size_t)nv);
-    int32_t n = 0;
-    for (int32_t v = 0; v < nv; ++v) {
-        const double *p = x + 3 * v;
-        if (!(p[2] < 1e-9 || p[2] > 4.0 - 1e-9)) continue;
-        double *t = ts + 3 * n;
-        memcpy(t, p, 3 * sizeof(double));
-        if (p[2] > 1.0) {
-            double dx = p[0] - 0.5;
-            t[0] = 0.5 + cos(bend) * dx + pull;
-            t[2] = 4.0 - sin(bend) * dx;
-        }
-        vs[n++] = v;
-    }
-    cf_handle_set *h = NULL;
-    CHECK_OK(ctx, cf_handle_set_create(ctx, n, vs, ts, &h));
-    free(vs);
-    free(ts);
-    return h;
+    bar_edit b = {pull, bend};
+    return sbe_handles_where(ctx, mesh, bar_rule, &b);
 }
 
 /* Fig. 4's bar, 1 x 1 x 4, at 3 x 3 x 12 and 6 x 6 x 24 cells. The fine
@@ -242,26 +238,20 @@ static void test_bar_resolution(void)
     cf_context_destroy(&ctx);
 }
 
+/* Bottom face of the 1 x 1 x 4 bar fixed, top face moved by `user` (a
+ * double) along x. */
+static int pull_rule(int32_t v, const double *p, double *t, const void *user)
+{
+    (void)v;
+    if (!(p[2] < 1e-9 || p[2] > 4.0 - 1e-9)) return 0;
+    memcpy(t, p, 3 * sizeof(double));
+    if (p[2] > 1.0) t[0] += *(const double *)user;
+    return 1;
+}
+
 static cf_handle_set *pull_handles(cf_context *ctx, const cf_mesh *mesh, double pull)
 {
-    int32_t nv = cf_mesh_vertex_count(mesh);
-    const double *x = cf_mesh_positions(mesh);
-    int32_t *vs = malloc(sizeof(int32_t) * (size_t)nv);
-    double *ts = malloc(sizeof(double) * 3 * (size_t)nv);
-    int32_t n = 0;
-    for (int32_t v = 0; v < nv; ++v) {
-        const double *p = x + 3 * v;
-        if (p[2] < 1e-9 || p[2] > 4.0 - 1e-9) {
-            memcpy(ts + 3 * n, p, 3 * sizeof(double));
-            if (p[2] > 1.0) ts[3 * n] += pull;
-            vs[n++] = v;
-        }
-    }
-    cf_handle_set *h = NULL;
-    CHECK_OK(ctx, cf_handle_set_create(ctx, n, vs, ts, &h));
-    free(vs);
-    free(ts);
-    return h;
+    return sbe_handles_where(ctx, mesh, pull_rule, &pull);
 }
 
 /* The same bar re-triangulated: every square cell of cf_generate_bar

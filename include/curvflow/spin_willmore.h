@@ -74,6 +74,9 @@ typedef struct cf_spin_willmore_options {
                                 * scale invariant). Default 1 */
     double tolerance;          /* converged when the relative energy decrease of a step is
                                 * below this. Default 1e-6 */
+    double blowup_factor;      /* a step whose energy exceeds this factor times the energy before
+                                * it is a numerical failure (CF_ERR_NUMERICAL, the last good state
+                                * is kept). Default 10; 0 disables the check */
 } cf_spin_willmore_options;
 
 CF_API void cf_spin_willmore_options_default(cf_spin_willmore_options *options);

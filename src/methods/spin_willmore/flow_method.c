@@ -94,6 +94,7 @@ void cf_spin_willmore_options_default(cf_spin_willmore_options *o)
     o->power_iterations = 1;
     o->normalize = 1;
     o->tolerance = 1e-6;
+    o->blowup_factor = 10.0;
 }
 
 static void options_default(void *options) { cf_spin_willmore_options_default(options); }
@@ -125,6 +126,8 @@ static const cf_param_desc spin_params[] = {
     {"power_iterations", CF_PARAM_INT, OPT(power_iterations), 1, 100, NULL, "inverse power iterations per step"},
     {"normalize", CF_PARAM_BOOL, OPT(normalize), 0, 1, NULL, "keep total area and centroid"},
     {"tolerance", CF_PARAM_DOUBLE, OPT(tolerance), 0.0, 1.0, NULL, "converged below this relative energy decrease"},
+    {"blowup_factor", CF_PARAM_DOUBLE, OPT(blowup_factor), 0.0, 1e12, NULL,
+     "fail a step whose energy grows more than this factor (0: never)"},
 };
 #undef OPT
 
@@ -373,6 +376,9 @@ static cf_status spin_create(cf_flow *flow, const void *options)
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: filter_k must be 0..3, got %d", o->filter_k);
     if (!(o->sigma >= 0.0) || !isfinite(o->sigma))
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: sigma must be >= 0, got %g", o->sigma);
+    if (!(o->blowup_factor == 0.0 || o->blowup_factor > 1.0) || !isfinite(o->blowup_factor))
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: blowup_factor must be 0 (off) or > 1, got %g",
+                         o->blowup_factor);
     if (o->power_iterations < 1)
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: power_iterations must be >= 1, got %d",
                          o->power_iterations);
@@ -896,6 +902,15 @@ static cf_status spin_step(cf_flow *flow, cf_flow_info *info)
     st = update_geometry(flow, s, x);
     t_asm += cfi_now_seconds() - ta;
     if (st != CF_OK) return st;
+    /* An explicit step on rho can overshoot where the realised curvature
+     * change is far from the prescribed one (thin cone tips, slivers;
+     * docs/spin.md): a jump of the energy by more than blowup_factor is
+     * reported as a failure so that the flow layer keeps the last good state. */
+    if (s->opt.blowup_factor > 0.0 && energy_before > 0.0 && s->energy > s->opt.blowup_factor * energy_before)
+        return cfi_error(ctx, CF_ERR_NUMERICAL,
+                         "spin-willmore: energy grew from %.6g to %.6g in one step (more than %gx): the step blew "
+                         "up; try a smaller time_step",
+                         energy_before, s->energy, s->opt.blowup_factor);
 
     info->time_step = s->opt.time_step;
     info->energy = s->energy;

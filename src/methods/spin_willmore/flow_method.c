@@ -818,7 +818,11 @@ static cf_status spin_step(cf_flow *flow, cf_flow_info *info)
 
     /* V. lambda from X(rho) */
     double ta = cfi_now_seconds();
-    st = cfi_dirac_fill(s->dirac, mesh, x, s->rho, s->eps);
+    /* The shift eps M only makes the eigenproblem definite (X(0) 1 = 0). With a
+     * fixed boundary the interior block is definite already and the problem is a
+     * linear solve, where a shift would bias lambda away from 1: at tau -> 0 it
+     * shrank the mushroom cap by 0.8 % and blade_slivers_8k by 47 % per step. */
+    st = cfi_dirac_fill(s->dirac, mesh, x, s->rho, s->fixed_boundary ? 0.0 : s->eps);
     if (st != CF_OK) return st;
     if (s->fixed_boundary) cfi_dirac_fix_boundary(s->dirac, mesh, s->qrhs);
     if (s->restricted_boundary) {

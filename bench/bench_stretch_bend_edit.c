@@ -79,7 +79,7 @@ int main(int argc, char **argv)
     if (cf_handle_set_create(ctx, n, vs, ts, &h) != CF_OK) return 1;
 
     printf("method\tenergy\tV\tF\thandles\titerations\tsetup_ms\tms_per_iteration\tassemble_local_ms\tsolve_ms\t"
-           "min_ms_per_iteration\tenergy_first\tenergy_last\n");
+           "min_ms_per_iteration\tenergy_first\tenergy_last\tanderson_accepted\tanderson_rejected\n");
     /* One row per energy, plus the hybrid with Anderson acceleration (depth 5). */
     for (int row = 0; row <= CF_EDIT_ENERGY_COUNT; ++row) {
         int e = row < CF_EDIT_ENERGY_COUNT ? row : CF_EDIT_HYBRID;
@@ -111,10 +111,16 @@ int main(int argc, char **argv)
             solve += info.solve_seconds;
             ++done;
         }
+        /* Anderson's counters are residuals 1 and 2 when it is on. */
+        double accepted = 0.0, rejected = 0.0;
+        if (o->anderson > 0 && done > 0) {
+            accepted = info.residuals[1];
+            rejected = info.residuals[2];
+        }
         if (done == 0) done = 1;
-        printf("stretch-bend-edit\t%s\t%d\t%d\t%d\t%d\t%.1f\t%.2f\t%.2f\t%.2f\t%.2f\t%.6g\t%.6g\n",
+        printf("stretch-bend-edit\t%s\t%d\t%d\t%d\t%d\t%.1f\t%.2f\t%.2f\t%.2f\t%.2f\t%.6g\t%.6g\t%.0f\t%.0f\n",
                label, nv, nf, n, done, 1e3 * setup, 1e3 * total / done,
-               1e3 * assemble / done, 1e3 * solve / done, 1e3 * best, e0, cf_flow_energy(flow));
+               1e3 * assemble / done, 1e3 * solve / done, 1e3 * best, e0, cf_flow_energy(flow), accepted, rejected);
         fflush(stdout);
         cf_flow_destroy(&flow);
     }

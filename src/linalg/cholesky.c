@@ -24,6 +24,9 @@ struct cf_cholesky {
     cholmod_dense *y;
     cholmod_dense *e;
     cf_solver_timings timings;
+    cfi_quat_map *quat;   /* quaternion_blocks: the factor is of the complex form */
+    double *zwork;        /* complex right-hand sides, n doubles per column */
+    int32_t zwork_cols;
 };
 
 void cf_cholesky_options_default(cf_cholesky_options *options)
@@ -31,6 +34,7 @@ void cf_cholesky_options_default(cf_cholesky_options *options)
     if (!options) return;
     options->block_size = 1;
     options->ordering = CF_ORDERING_AUTO;
+    options->quaternion_blocks = 0;
 }
 
 int32_t cf_cholesky_size(const cf_cholesky *chol) { return chol ? chol->n : 0; }
@@ -56,6 +60,8 @@ void cf_cholesky_destroy(cf_cholesky **pchol)
         cholmod_free_dense(&chol->e, chol->common);
     }
     CFI_FREE(ctx, chol->colptr, (size_t)chol->n + 1);
+    cfi_quat_map_destroy(ctx, &chol->quat);
+    CFI_FREE(ctx, chol->zwork, (size_t)chol->n * chol->zwork_cols);
     CFI_FREE(ctx, chol, 1);
     *pchol = NULL;
 }
@@ -182,6 +188,9 @@ cf_status cf_cholesky_create(cf_context *ctx, const cf_sparse *a, const cf_chole
                          opt.block_size, a->ncols);
     if (opt.ordering < CF_ORDERING_AUTO || opt.ordering > CF_ORDERING_NATURAL)
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "cholesky create: unknown ordering %d", (int)opt.ordering);
+    if (opt.quaternion_blocks && opt.block_size != 4)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "cholesky create: quaternion blocks need block size 4, not %d",
+                         opt.block_size);
 
     double t0 = cfi_now_seconds();
     cholmod_common *c = NULL;
@@ -199,6 +208,11 @@ cf_status cf_cholesky_create(cf_context *ctx, const cf_sparse *a, const cf_chole
 
     cholmod_sparse view;
     cfi_cholmod_view(a, 1, &view);
+    if (opt.quaternion_blocks) {
+        /* analyse the complex form's pattern (2 unknowns per block) */
+        if ((st = cfi_quat_map_create(ctx, a, &chol->quat)) != CF_OK) goto fail;
+        cfi_quat_map_view(chol->quat, 0, &view);
+    }
     if (opt.ordering == CF_ORDERING_NATURAL) {
         cfi_cholmod_reset_parameters(c);
         c->nmethods = 1;
@@ -209,6 +223,14 @@ cf_status cf_cholesky_create(cf_context *ctx, const cf_sparse *a, const cf_chole
         perm = CFI_ALLOC(ctx, int32_t, (size_t)chol->n);
         if (!perm) { st = CF_ERR_NOMEM; goto fail; }
         if ((st = block_ordering(chol, a, opt.block_size, opt.ordering, perm)) != CF_OK) goto fail;
+        if (chol->quat) {
+            /* the block order, expanded to 2 complex unknowns per block
+             * (in place: the first pass reads ahead of what it writes, the
+             * second behind) */
+            int32_t nb = chol->n / 4;
+            for (int32_t K = 0; K < nb; ++K) perm[K] = perm[4 * K] / 4;
+            for (int32_t k = 2 * nb - 1; k >= 0; --k) perm[k] = 2 * perm[k / 2] + k % 2;
+        }
         cfi_cholmod_reset_parameters(c);
         c->nmethods = 1;
         c->method[0].ordering = CHOLMOD_GIVEN;
@@ -249,7 +271,14 @@ static cf_status factorize(cf_cholesky *chol, const cf_sparse *a, double shift)
     c->status = CHOLMOD_OK;
     cfi_cholmod_clear_message();
     cholmod_sparse view;
-    cfi_cholmod_view(a, 1, &view);
+    if (chol->quat) {
+        /* the Dirac matrices are exact left-multiplication blocks; allow
+         * rounding from a caller's own assembly */
+        if ((st = cfi_quat_map_fill(ctx, chol->quat, a, 1e-12)) != CF_OK) return st;
+        cfi_quat_map_view(chol->quat, 1, &view);
+    } else {
+        cfi_cholmod_view(a, 1, &view);
+    }
     double beta[2] = {shift, 0.0};
     int ok = cholmod_factorize_p(&view, beta, NULL, 0, chol->factor, c);
     chol->timings.factorize_seconds = cfi_now_seconds() - t0;
@@ -259,6 +288,11 @@ static cf_status factorize(cf_cholesky *chol, const cf_sparse *a, double shift)
         size_t minor = chol->factor->minor;
         const int *p = chol->factor->Perm;
         int32_t col = (p && minor < chol->factor->n) ? p[minor] : (int32_t)minor;
+        if (chol->quat) {
+            /* complex unknown k of block K = k / 2: real columns 4 K + 2 (k % 2) .. + 1 */
+            col = 4 * (col / 2) + 2 * (col % 2);
+            minor *= 2;
+        }
         c->status = CHOLMOD_OK;
         return cfi_error(ctx, CF_ERR_NOT_POSDEF,
                          "cholesky factorise: matrix not positive definite at column %d (pivot %zu of %d)", col, minor,
@@ -302,11 +336,28 @@ cf_status cf_cholesky_solve(cf_cholesky *chol, int32_t nrhs, const double *b, do
     bd.x = (void *)b;
     bd.xtype = CHOLMOD_REAL;
     bd.dtype = CHOLMOD_DOUBLE;
+    if (chol->quat) {
+        if (nrhs > chol->zwork_cols) {
+            double *w = CFI_ALLOC(ctx, double, (size_t)total);
+            if (!w) return CF_ERR_NOMEM;
+            CFI_FREE(ctx, chol->zwork, (size_t)chol->n * chol->zwork_cols);
+            chol->zwork = w;
+            chol->zwork_cols = nrhs;
+        }
+        cfi_quat_to_complex(chol->n, nrhs, b, chol->zwork);
+        bd.nrow = bd.d = (size_t)chol->n / 2;
+        bd.nzmax = (size_t)total / 2;
+        bd.x = chol->zwork;
+        bd.xtype = CHOLMOD_COMPLEX;
+    }
     /* x, y, e keep their storage between calls (reallocated only when nrhs grows) */
     int ok = cholmod_solve2(CHOLMOD_A, chol->factor, &bd, NULL, &chol->x, NULL, &chol->y, &chol->e, c);
     cf_status st = cfi_cholmod_check(ctx, c, ok, "cholesky solve");
     if (st != CF_OK) return st;
-    memcpy(x, chol->x->x, (size_t)total * sizeof *x);
+    if (chol->quat)
+        cfi_quat_from_complex(chol->n, nrhs, chol->x->x, x);
+    else
+        memcpy(x, chol->x->x, (size_t)total * sizeof *x);
     chol->timings.solve_seconds = cfi_now_seconds() - t0;
     bad = cfi_first_nonfinite(x, total);
     if (bad >= 0)

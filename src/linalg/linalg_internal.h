@@ -54,4 +54,21 @@ cf_status cfi_sparse_alloc(cf_context *ctx, int32_t nrows, int32_t ncols, int64_
  * upper_only (a full symmetric matrix). */
 cf_status cfi_sparse_copy(cf_context *ctx, const cf_sparse *a, cf_sparse **out);
 
+/* Quaternion blocks (quaternion_blocks.c): a real symmetric 4 nb x 4 nb
+ * matrix of left-multiplication blocks seen as the complex Hermitian
+ * 2 nb x 2 nb matrix of the same operator. create checks that the blocks
+ * are stored whole (both triangles) and builds the complex upper-triangle
+ * pattern; fill converts the values, failing with CF_ERR_INVALID_ARG naming
+ * the block when one deviates from a quaternion's matrix by more than
+ * tolerance times the largest entry (or a diagonal block is not real). */
+typedef struct cfi_quat_map cfi_quat_map;
+cf_status cfi_quat_map_create(cf_context *ctx, const cf_sparse *a, cfi_quat_map **out);
+void cfi_quat_map_destroy(cf_context *ctx, cfi_quat_map **map);
+void cfi_quat_map_view(const cfi_quat_map *map, int with_values, cholmod_sparse *view);
+cf_status cfi_quat_map_fill(cf_context *ctx, cfi_quat_map *map, const cf_sparse *a, double tolerance);
+/* Real n x nrhs (4 entries per quaternion) <-> complex n/2 x nrhs
+ * interleaved; real and cplx may be the same array. */
+void cfi_quat_to_complex(int32_t n, int32_t nrhs, const double *real, double *cplx);
+void cfi_quat_from_complex(int32_t n, int32_t nrhs, const double *cplx, double *real);
+
 #endif /* CF_LINALG_LINALG_INTERNAL_H */

@@ -95,6 +95,7 @@ void cf_spin_willmore_options_default(cf_spin_willmore_options *o)
     o->normalize = 1;
     o->tolerance = 1e-6;
     o->blowup_factor = 10.0;
+    o->complex_factorization = 1;
 }
 
 static void options_default(void *options) { cf_spin_willmore_options_default(options); }
@@ -128,6 +129,8 @@ static const cf_param_desc spin_params[] = {
     {"tolerance", CF_PARAM_DOUBLE, OPT(tolerance), 0.0, 1.0, NULL, "converged below this relative energy decrease"},
     {"blowup_factor", CF_PARAM_DOUBLE, OPT(blowup_factor), 0.0, 1e12, NULL,
      "fail a step whose energy grows more than this factor (0: never)"},
+    {"complex_factorization", CF_PARAM_BOOL, OPT(complex_factorization), 0, 1, NULL,
+     "factorise X as its complex Hermitian form of half the size (0: real 4n x 4n form)"},
 };
 #undef OPT
 
@@ -505,7 +508,13 @@ static cf_status spin_create(cf_flow *flow, const void *options)
     cf_cholesky_options co;
     cf_cholesky_options_default(&co);
     co.block_size = 4;
+    /* X(rho) is a Hermitian quaternionic matrix; its complex form halves the
+     * factorisation (docs/linalg.md). The boundary frames of prescribed/cmc
+     * boundaries mix the quaternion components, so those keep the real form;
+     * X(0) of the exactness constraint never has them. */
+    co.quaternion_blocks = o->complex_factorization && !s->restricted_boundary;
     st = cf_cholesky_create(ctx, s->dirac->x, &co, &s->chol);
+    co.quaternion_blocks = o->complex_factorization != 0;
     if (st == CF_OK && dim) st = cf_cholesky_create(ctx, s->dirac->x, &co, &s->chol0);
     if (st == CF_OK && o->sigma > 0.0) st = build_filter(flow, s);
     if (st != CF_OK) goto fail;

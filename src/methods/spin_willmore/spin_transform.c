@@ -88,6 +88,7 @@ cf_status cf_spin_transform(cf_context *ctx, const cf_mesh *mesh, const double *
     cf_cholesky_options co;
     cf_cholesky_options_default(&co);
     co.block_size = 4;
+    co.quaternion_blocks = 1; /* X(rho) is Hermitian quaternionic: factorised in complex form */
     st = cf_cholesky_create(ctx, dirac->x, &co, &chol);
     if (st == CF_OK) st = cf_cholesky_factorize(chol, dirac->x);
     if (st != CF_OK) goto done;

@@ -200,13 +200,14 @@ cf_status cfi_quat_map_fill(cf_context *ctx, cfi_quat_map *m, const cf_sparse *a
         double qd = 0.25 * (c0[3] - c3[0] + c1[2] - c2[1]);
         const double expect[16] = {qa, qb, qc, qd, -qb, qa, qd, -qc, -qc, -qd, qa, qb, -qd, qc, -qb, qa};
         const double *cols[4] = {c0, c1, c2, c3};
-        double dev = 0.0;
+        double dev = 0.0, big = 0.0; /* plain comparisons: fmax is a library call here */
         for (int c = 0; c < 4; ++c)
             for (int r = 0; r < 4; ++r) {
-                double v = cols[c][r];
-                largest = fmax(largest, fabs(v));
-                dev = fmax(dev, fabs(v - expect[4 * c + r]));
+                double v = cols[c][r], mag = fabs(v), e = fabs(v - expect[4 * c + r]);
+                big = mag > big ? mag : big;
+                dev = e > dev ? e : dev;
             }
+        if (big > largest) largest = big;
         if (m->block_row[b] == m->block_col[b]) dev = fmax(dev, fmax(fabs(qb), fmax(fabs(qc), fabs(qd))));
         if (dev > worst || dev != dev) {
             worst = dev;

@@ -73,14 +73,21 @@ static double residual(const cf_sparse *a, const double *x, const double *b)
     return sqrt(num / den);
 }
 
-static cf_status factor_and_solve(cf_context *ctx, const cf_sparse *a, int quaternion, cf_ordering ordering, double shift,
-                                  int32_t nrhs, const double *b, double *x)
+/* Options for 4 x 4 blocks with or without the complex form. */
+static cf_cholesky_options block_options(int quaternion, cf_ordering ordering)
 {
     cf_cholesky_options o;
     cf_cholesky_options_default(&o);
     o.block_size = 4;
     o.ordering = ordering;
     o.quaternion_blocks = quaternion;
+    return o;
+}
+
+static cf_status factor_and_solve(cf_context *ctx, const cf_sparse *a, int quaternion, cf_ordering ordering, double shift,
+                                  int32_t nrhs, const double *b, double *x)
+{
+    cf_cholesky_options o = block_options(quaternion, ordering);
     cf_cholesky *chol = NULL;
     cf_status st = cf_cholesky_create(ctx, a, &o, &chol);
     if (st == CF_OK) st = cf_cholesky_factorize_shifted(chol, a, shift);
@@ -133,10 +140,7 @@ static void test_refactorise_and_workspace(void)
     CHECK(a && a2);
     if (!a || !a2) return;
     int32_t n = a->nrows;
-    cf_cholesky_options o;
-    cf_cholesky_options_default(&o);
-    o.block_size = 4;
-    o.quaternion_blocks = 1;
+    cf_cholesky_options o = block_options(1, CF_ORDERING_AUTO);
     cf_cholesky *chol = NULL;
     CHECK_OK(ctx, cf_cholesky_create(ctx, a, &o, &chol));
     double *b = malloc((size_t)n * 4 * sizeof *b), *x = malloc((size_t)n * 4 * sizeof *x);
@@ -168,10 +172,7 @@ static void test_refuses_non_quaternion_input(void)
     cf_sparse *bad = quaternion_grid(ctx, 5, 4, 0.1, 1e-3);
     CHECK(bad != NULL);
     if (!bad) return;
-    cf_cholesky_options o;
-    cf_cholesky_options_default(&o);
-    o.block_size = 4;
-    o.quaternion_blocks = 1;
+    cf_cholesky_options o = block_options(1, CF_ORDERING_AUTO);
     cf_cholesky *chol = NULL;
     /* symmetric but one off-diagonal block is not a left multiplication
      * (the first edge joins vertices 0 and 1) */
@@ -234,10 +235,7 @@ typedef struct {
 static cf_status sweep_call(cf_context *ctx, void *user)
 {
     sweep_data *d = user;
-    cf_cholesky_options o;
-    cf_cholesky_options_default(&o);
-    o.block_size = 4;
-    o.quaternion_blocks = 1;
+    cf_cholesky_options o = block_options(1, CF_ORDERING_AUTO);
     cf_cholesky *chol = NULL;
     cf_status st = cf_cholesky_create(ctx, d->a, &o, &chol);
     if (st == CF_OK) st = cf_cholesky_factorize(chol, d->a);

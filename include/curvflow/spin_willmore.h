@@ -82,6 +82,11 @@ typedef struct cf_spin_willmore_options {
                                 * result to rounding); 0 uses the real 4 nv x 4 nv form.
                                 * Prescribed/cmc boundaries always use the real form (their
                                 * boundary frames are not quaternion blocks). Default 1 */
+    int32_t harmonic_update;   /* exactness on closed surfaces (App. C.1): re-project the harmonic
+                                * 1-forms of the input onto the harmonic forms of the current
+                                * surface every step (one Laplacian solve per form, reusing the
+                                * step's Poisson factorisation); 0 keeps the input's forms, as
+                                * the paper. Default 1 */
 } cf_spin_willmore_options;
 
 CF_API void cf_spin_willmore_options_default(cf_spin_willmore_options *options);

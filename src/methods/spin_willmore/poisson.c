@@ -22,6 +22,7 @@ cf_status cfi_poisson_create(cf_context *ctx, const cf_mesh *mesh, const double 
     if (!p) return CF_ERR_NOMEM;
     p->nv = mesh->nv;
     p->ne = mesh->ne;
+    p->factored = 0;
     p->slot_count = cfi_cotan_laplacian_triplet_count(mesh);
     p->slot_map = CFI_ALLOC(ctx, int64_t, p->slot_count);
     p->edge_slot = CFI_ALLOC(ctx, int64_t, mesh->ne);
@@ -78,7 +79,36 @@ void cfi_poisson_destroy(cf_context *ctx, cfi_poisson **pp)
 
 cf_status cfi_poisson_refill(cfi_poisson *p, const cf_mesh *mesh, const double *positions)
 {
+    p->factored = 0;
     return cfi_cotan_laplacian_refill(p->l, mesh, positions, p->slot_map);
+}
+
+/* Factorises L + shift I (shift relative to the mean diagonal) and leaves
+ * L's values as they were. */
+static cf_status factorize_shifted(cfi_poisson *p, double *factor_seconds)
+{
+    cf_sparse *l = p->l;
+    double mean_diag = 0.0;
+    for (int32_t v = 0; v < p->nv; ++v) mean_diag += l->values[p->diag_slot[v]];
+    double shift = CFI_POISSON_SHIFT * mean_diag / p->nv;
+    for (int32_t v = 0; v < p->nv; ++v) l->values[p->diag_slot[v]] += shift;
+    double t0 = cfi_now_seconds();
+    cf_status st = cf_cholesky_factorize(p->chol, l);
+    if (factor_seconds) *factor_seconds += cfi_now_seconds() - t0;
+    for (int32_t v = 0; v < p->nv; ++v) l->values[p->diag_slot[v]] -= shift;
+    p->factored = st == CF_OK;
+    return st;
+}
+
+cf_status cfi_poisson_solve_scalar(cfi_poisson *p, int32_t ncols, const double *b, double *u, double *factor_seconds,
+                                   double *solve_seconds)
+{
+    cf_status st = p->factored ? CF_OK : factorize_shifted(p, factor_seconds);
+    if (st != CF_OK) return st;
+    double t0 = cfi_now_seconds();
+    st = cf_cholesky_solve(p->chol, ncols, b, u);
+    if (solve_seconds) *solve_seconds += cfi_now_seconds() - t0;
+    return st;
 }
 
 cf_status cfi_poisson_solve(cfi_poisson *p, const cf_mesh *mesh, const double *edges, int fixed_boundary,
@@ -96,7 +126,7 @@ cf_status cfi_poisson_solve(cfi_poisson *p, const cf_mesh *mesh, const double *e
             rhs[c * nv + j] += w * edges[3 * e + c];
         }
     }
-    double saved_diag = 0.0;
+    cf_status st = CF_OK;
     if (fixed_boundary) {
         const uint8_t *onb = mesh->vertex_on_boundary;
         /* move boundary columns to the right-hand side, then identity rows/columns */
@@ -117,21 +147,18 @@ cf_status cfi_poisson_solve(cfi_poisson *p, const cf_mesh *mesh, const double *e
         for (int32_t j = 0; j < nv; ++j)
             if (onb[j])
                 for (int c = 0; c < 3; ++c) rhs[c * nv + j] = fixed[3 * j + c];
-    } else {
-        double mean_diag = 0.0;
-        for (int32_t v = 0; v < nv; ++v) mean_diag += l->values[p->diag_slot[v]];
-        saved_diag = CFI_POISSON_SHIFT * mean_diag / nv;
-        for (int32_t v = 0; v < nv; ++v) l->values[p->diag_slot[v]] += saved_diag;
+        /* L's values now hold the Dirichlet rows: refactorise, and let the
+         * next user refill first */
+        p->factored = 0;
+        double t0 = cfi_now_seconds();
+        st = cf_cholesky_factorize(p->chol, l);
+        if (factor_seconds) *factor_seconds += cfi_now_seconds() - t0;
+    } else if (!p->factored) {
+        st = factorize_shifted(p, factor_seconds);
     }
-    double t0 = cfi_now_seconds();
-    cf_status st = cf_cholesky_factorize(p->chol, l);
     double t1 = cfi_now_seconds();
-    if (!fixed_boundary)
-        for (int32_t v = 0; v < nv; ++v) l->values[p->diag_slot[v]] -= saved_diag;
     if (st == CF_OK) st = cf_cholesky_solve(p->chol, 3, rhs, p->sol);
-    double t2 = cfi_now_seconds();
-    if (factor_seconds) *factor_seconds += t1 - t0;
-    if (solve_seconds) *solve_seconds += t2 - t1;
+    if (solve_seconds) *solve_seconds += cfi_now_seconds() - t1;
     if (st != CF_OK) return st;
     for (int32_t v = 0; v < nv; ++v)
         for (int c = 0; c < 3; ++c) out[3 * v + c] = p->sol[c * nv + v];

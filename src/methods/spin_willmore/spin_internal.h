@@ -86,6 +86,7 @@ typedef struct cfi_poisson {
     double *rhs;           /* 3 nv, column-major */
     double *sol;           /* 3 nv */
     int32_t nv, ne;
+    int32_t factored;      /* chol holds the shifted factorisation of l's current values */
 } cfi_poisson;
 
 cf_status cfi_poisson_create(cf_context *ctx, const cf_mesh *mesh, const double *positions, cfi_poisson **out);
@@ -100,6 +101,11 @@ cf_status cfi_poisson_refill(cfi_poisson *p, const cf_mesh *mesh, const double *
  * out: 3 nv interleaved. */
 cf_status cfi_poisson_solve(cfi_poisson *p, const cf_mesh *mesh, const double *edges, int fixed_boundary,
                             const double *fixed, double *out, double *factor_seconds, double *solve_seconds);
+/* Solves (L + shift I) u = b for ncols columns (nv each, column-major) with
+ * the current L, factorising it unless that was already done since the last
+ * refill (the free-boundary position solve of the same step reuses it). */
+cf_status cfi_poisson_solve_scalar(cfi_poisson *p, int32_t ncols, const double *b, double *u, double *factor_seconds,
+                                   double *solve_seconds);
 
 /* Diagnostics of the last step of a spin-willmore flow (test hook). */
 typedef struct cfi_spin_diagnostics {
@@ -119,5 +125,8 @@ cf_status cfi_spin_willmore_diagnostics(const cf_flow *flow, cfi_spin_diagnostic
 /* The flow direction rhodot (nv) and the prescribed rho (nv) of the last
  * step, for tests; NULL if the flow is not spin-willmore. */
 const double *cfi_spin_willmore_last_rhodot(const cf_flow *flow);
+/* The harmonic 1-forms the exactness constraint uses (ne x *dimension,
+ * column-major), as of the last step (test hook). */
+const double *cfi_spin_willmore_harmonic_forms(const cf_flow *flow, int32_t *dimension);
 
 #endif /* CF_METHODS_SPIN_WILLMORE_SPIN_INTERNAL_H */

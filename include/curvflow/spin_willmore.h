@@ -82,11 +82,17 @@ typedef struct cf_spin_willmore_options {
                                 * result to rounding); 0 uses the real 4 nv x 4 nv form.
                                 * Prescribed/cmc boundaries always use the real form (their
                                 * boundary frames are not quaternion blocks). Default 1 */
-    int32_t harmonic_update;   /* exactness on closed surfaces (App. C.1): re-project the harmonic
-                                * 1-forms of the input onto the harmonic forms of the current
+    int32_t exactness_linearized; /* exactness constraint (genus > 0, or holes with a free
+                                * boundary) as the discrete linearisation of "the transformed edges
+                                * have no periods" through one step (exact to first order in tau);
+                                * 0 uses App. C.1's Z_i on closed surfaces, which remove the periods
+                                * only approximately (docs/spin.md). Surfaces with boundary always
+                                * use the linearisation. Default 1 */
+    int32_t harmonic_update;   /* with App. C's Z_i (exactness_linearized = 0): re-project the
+                                * input's harmonic 1-forms onto the harmonic forms of the current
                                 * surface every step (one Laplacian solve per form, reusing the
-                                * step's Poisson factorisation); 0 keeps the input's forms, as
-                                * the paper. Default 1 */
+                                * step's Poisson factorisation); 0 keeps the input's forms, as the
+                                * paper. Default 1 */
 } cf_spin_willmore_options;
 
 CF_API void cf_spin_willmore_options_default(cf_spin_willmore_options *options);

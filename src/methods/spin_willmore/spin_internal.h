@@ -128,5 +128,7 @@ const double *cfi_spin_willmore_last_rhodot(const cf_flow *flow);
 /* The harmonic 1-forms the exactness constraint uses (ne x *dimension,
  * column-major), as of the last step (test hook). */
 const double *cfi_spin_willmore_harmonic_forms(const cf_flow *flow, int32_t *dimension);
+/* Transformed edge vectors e~ of the last step (3 ne, interleaved; test hook). */
+const double *cfi_spin_willmore_last_edges(const cf_flow *flow);
 
 #endif /* CF_METHODS_SPIN_WILLMORE_SPIN_INTERNAL_H */

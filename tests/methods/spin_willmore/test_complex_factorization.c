@@ -9,6 +9,7 @@
  * known to reach the solver.
  */
 #include "test.h"
+#include "spin_test_util.h"
 
 #include "curvflow/flow.h"
 #include "curvflow/generate.h"
@@ -86,15 +87,7 @@ static void test_paths_agree(void)
         wavy[3 * i + 1] *= f;
     }
     /* a bumped torus (a torus of revolution is a critical point: nothing moves) */
-    int32_t ntor = cases[1].mesh ? cf_mesh_vertex_count(cases[1].mesh) : 0;
-    double *bumped = malloc(3 * (size_t)ntor * sizeof *bumped);
-    if (ntor) memcpy(bumped, cf_mesh_positions(cases[1].mesh), 3 * (size_t)ntor * sizeof *bumped);
-    for (int32_t i = 0; i < ntor; ++i) {
-        double a = atan2(bumped[3 * i + 1], bumped[3 * i]);
-        bumped[3 * i] *= 1.0 + 0.1 * cos(3.0 * a);
-        bumped[3 * i + 1] *= 1.0 + 0.1 * cos(3.0 * a);
-        bumped[3 * i + 2] *= 1.0 + 0.2 * sin(2.0 * a);
-    }
+    double *bumped = cases[1].mesh ? bumped_torus_positions(cases[1].mesh) : NULL;
     for (int c = 0; c < 4; ++c) {
         if (!cases[c].mesh) continue;
         int bytes_differ = 0;

@@ -19,6 +19,7 @@
  *    drifted out of it.
  */
 #include "test.h"
+#include "spin_test_util.h"
 
 #include "curvflow/flow.h"
 #include "curvflow/generate.h"
@@ -430,15 +431,8 @@ static void test_harmonic_update(void)
     cf_mesh *mesh = NULL;
     CHECK_OK(ctx, cf_generate_torus(ctx, 1.0, 0.4, 48, 24, &mesh));
     if (!mesh) return;
-    int32_t nv = cf_mesh_vertex_count(mesh), ne = cf_mesh_edge_count(mesh);
-    double *start = malloc(3 * (size_t)nv * sizeof(double));
-    memcpy(start, cf_mesh_positions(mesh), 3 * (size_t)nv * sizeof(double));
-    for (int32_t i = 0; i < nv; ++i) {
-        double a = atan2(start[3 * i + 1], start[3 * i]);
-        start[3 * i] *= 1.0 + 0.1 * cos(3.0 * a);
-        start[3 * i + 1] *= 1.0 + 0.1 * cos(3.0 * a);
-        start[3 * i + 2] *= 1.0 + 0.2 * sin(2.0 * a);
-    }
+    int32_t ne = cf_mesh_edge_count(mesh);
+    double *start = bumped_torus_positions(mesh);
     double *weights = malloc((size_t)ne * sizeof(double)), *basis = malloc(2 * (size_t)ne * sizeof(double));
     double outside[2] = {0, 0}, w_end[2] = {0, 0};
     for (int update = 0; update < 2; ++update) {
@@ -491,15 +485,7 @@ static void test_torus_long_run(void)
     cf_mesh *mesh = NULL;
     CHECK_OK(ctx, cf_generate_torus(ctx, 1.0, 0.4, 48, 24, &mesh));
     if (!mesh) return;
-    int32_t nv = cf_mesh_vertex_count(mesh);
-    double *start = malloc(3 * (size_t)nv * sizeof(double));
-    memcpy(start, cf_mesh_positions(mesh), 3 * (size_t)nv * sizeof(double));
-    for (int32_t i = 0; i < nv; ++i) {
-        double a = atan2(start[3 * i + 1], start[3 * i]);
-        start[3 * i] *= 1.0 + 0.1 * cos(3.0 * a);
-        start[3 * i + 1] *= 1.0 + 0.1 * cos(3.0 * a);
-        start[3 * i + 2] *= 1.0 + 0.2 * sin(2.0 * a);
-    }
+    double *start = bumped_torus_positions(mesh);
     const double four_pi = 4.0 * 3.14159265358979323846;
     double w_first = 0, w_min[2] = {1e300, 1e300}, w_last[2] = {0, 0};
     int rises[2] = {0, 0};

@@ -82,6 +82,12 @@ typedef struct cf_spin_willmore_options {
                                 * result to rounding); 0 uses the real 4 nv x 4 nv form.
                                 * Prescribed/cmc boundaries always use the real form (their
                                 * boundary frames are not quaternion blocks). Default 1 */
+    int32_t adaptive;          /* adaptive time steps (the paper is silent): a step that would raise W
+                                * or fails numerically is redone from the same state with tau
+                                * halved (at most 10 times; then the state is kept and the flow
+                                * reports convergence: W stopped decreasing); after a step taken
+                                * without halving tau doubles again up to time_step. The log's
+                                * time_step and residual time_step_halvings show it. Default 0 */
     int32_t exactness_linearized; /* exactness constraint (genus > 0, or holes with a free
                                 * boundary) as the discrete linearisation of "the transformed edges
                                 * have no periods" through one step (exact to first order in tau);

@@ -71,6 +71,8 @@ typedef struct spin_state {
     int32_t max_cols;
     double *edges;           /* 3 ne */
     double *newpos;          /* 3 nv */
+    double *xsave;           /* 3 nv: positions before the step (adaptive only) */
+    double tau;              /* time step of the next step (adaptive: may be below opt.time_step) */
     double *vtmp, *vtmp2;    /* nv */
     double energy;
     cfi_spin_diagnostics diag;
@@ -98,6 +100,7 @@ void cf_spin_willmore_options_default(cf_spin_willmore_options *o)
     o->complex_factorization = 1;
     o->harmonic_update = 1;
     o->exactness_linearized = 1;
+    o->adaptive = 0;
 }
 
 static void options_default(void *options) { cf_spin_willmore_options_default(options); }
@@ -133,6 +136,8 @@ static const cf_param_desc spin_params[] = {
      "fail a step whose energy grows more than this factor (0: never)"},
     {"complex_factorization", CF_PARAM_BOOL, OPT(complex_factorization), 0, 1, NULL,
      "factorise X as its complex Hermitian form of half the size (0: real 4n x 4n form)"},
+    {"adaptive", CF_PARAM_BOOL, OPT(adaptive), 0, 1, NULL,
+     "halve tau while a step would raise W (up to 10 times; then stop as converged), grow it back after"},
     {"exactness_linearized", CF_PARAM_BOOL, OPT(exactness_linearized), 0, 1, NULL,
      "exactness as the discrete linearisation of 'no periods' (0: App. C's Z_i on closed surfaces)"},
     {"harmonic_update", CF_PARAM_BOOL, OPT(harmonic_update), 0, 1, NULL,
@@ -290,6 +295,7 @@ static void spin_destroy(cf_flow *flow)
     CFI_FREE(ctx, s->basis, nv * s->max_cols);
     CFI_FREE(ctx, s->edges, 3 * (int64_t)s->ne);
     CFI_FREE(ctx, s->newpos, 3 * nv);
+    CFI_FREE(ctx, s->xsave, 3 * nv);
     CFI_FREE(ctx, s->vtmp, nv);
     CFI_FREE(ctx, s->vtmp2, nv);
     CFI_FREE(ctx, s->filter_mass, nv);
@@ -410,6 +416,7 @@ static cf_status spin_create(cf_flow *flow, const void *options)
     if (!s) return CF_ERR_NOMEM;
     flow->impl = s;
     s->opt = *o;
+    s->tau = o->time_step;
     s->nv = mesh->nv;
     s->ne = mesh->ne;
     s->nf = mesh->nf;
@@ -458,6 +465,13 @@ static cf_status spin_create(cf_flow *flow, const void *options)
     s->basis = CFI_ALLOC(ctx, double, nv * s->max_cols);
     s->edges = CFI_ALLOC(ctx, double, 3 * (int64_t)s->ne);
     s->newpos = CFI_ALLOC(ctx, double, 3 * nv);
+    if (o->adaptive) {
+        s->xsave = CFI_ALLOC(ctx, double, 3 * nv);
+        if (!s->xsave) {
+            st = CF_ERR_NOMEM;
+            goto fail;
+        }
+    }
     s->vtmp = CFI_ALLOC(ctx, double, nv);
     s->vtmp2 = CFI_ALLOC(ctx, double, nv);
     if (s->restricted_boundary) {
@@ -810,10 +824,115 @@ static int32_t project(spin_state *s, int32_t ncols)
 
 /* ---- step -------------------------------------------------------------- */
 
+/* Steps IV-VI for the time step tau from the current state (rhodot and its
+ * constraints computed): rho, lambda, edges, positions (x in place) and the
+ * geometry of the new surface (s->energy). */
+static cf_status realise_step(cf_flow *flow, spin_state *s, double tau, double *t_asm, double *t_fac, double *t_sol)
+{
+    const cf_mesh *mesh = flow->mesh;
+    cf_context *ctx = flow->ctx;
+    int32_t nv = s->nv;
+    double *x = flow->positions;
+    cf_status st = CF_OK;
+    /* IV. rho = tau rhodot */
+    for (int32_t i = 0; i < nv; ++i) s->rho[i] = tau * s->rhodot[i];
+
+    /* V. lambda from X(rho) */
+    double ta = cfi_now_seconds();
+    /* The shift eps M only makes the eigenproblem definite (X(0) 1 = 0). With a
+     * fixed boundary the interior block is definite already and the problem is a
+     * linear solve, where a shift would bias lambda away from 1: at tau -> 0 it
+     * shrank the mushroom cap by 0.8 % and blade_slivers_8k by 47 % per step. */
+    st = cfi_dirac_fill(s->dirac, mesh, x, s->rho, s->fixed_boundary ? 0.0 : s->eps);
+    if (st != CF_OK) return st;
+    if (s->fixed_boundary) cfi_dirac_fix_boundary(s->dirac, mesh, s->qrhs);
+    if (s->restricted_boundary) {
+        st = boundary_binormals(flow, s, x, s->binormal);
+        if (st != CF_OK) return st;
+        boundary_frames(flow, s);
+        cfi_dirac_restrict_boundary(s->dirac, mesh, s->frames);
+    }
+    double tb = cfi_now_seconds();
+    *t_asm += tb - ta;
+    st = cf_cholesky_factorize(s->chol, s->dirac->x);
+    double tc = cfi_now_seconds();
+    *t_fac += tc - tb;
+    if (st != CF_OK) return st;
+    if (s->fixed_boundary) {
+        st = cf_cholesky_solve(s->chol, 1, s->qrhs, s->lambda);
+    } else {
+        for (int32_t i = 0; i < nv; ++i) {
+            s->lambda[4 * i] = 1.0;
+            s->lambda[4 * i + 1] = s->lambda[4 * i + 2] = s->lambda[4 * i + 3] = 0.0;
+            if (s->restricted_boundary && mesh->vertex_on_boundary[i]) {
+                /* start from Q_i^T 1 restricted to the admissible components */
+                const double *q = s->frames + 16 * (int64_t)i;
+                s->lambda[4 * i] = q[0];
+                s->lambda[4 * i + 1] = q[1];
+                s->lambda[4 * i + 2] = s->lambda[4 * i + 3] = 0.0;
+            }
+        }
+        st = cfi_spin_power_iteration(s->chol, s->area, nv, s->opt.power_iterations, s->lambda, s->qwork);
+    }
+    *t_sol += cfi_now_seconds() - tc;
+    if (st != CF_OK) return cfi_error(ctx, st, "spin-willmore: eigenvector solve failed");
+    s->diag.eigenvalue = cfi_spin_rayleigh(s->dirac->x, s->area, nv, s->eps, s->lambda, s->qwork);
+    if (s->restricted_boundary) {
+        /* back to lambda = Q mu on the boundary */
+        for (int32_t i = 0; i < nv; ++i) {
+            if (!mesh->vertex_on_boundary[i]) continue;
+            const double *q = s->frames + 16 * (int64_t)i;
+            double mu[4];
+            memcpy(mu, s->lambda + 4 * i, sizeof mu);
+            for (int r = 0; r < 4; ++r)
+                s->lambda[4 * i + r] = q[4 * r] * mu[0] + q[4 * r + 1] * mu[1] + q[4 * r + 2] * mu[2] + q[4 * r + 3] * mu[3];
+        }
+    }
+
+    /* VI. edges and positions */
+    ta = cfi_now_seconds();
+    cfi_spin_transform_edges(mesh, x, s->lambda, s->edges);
+    *t_asm += cfi_now_seconds() - ta;
+    st = cfi_poisson_solve(s->poisson, mesh, s->edges, s->fixed_boundary, x, s->newpos, t_fac, t_sol);
+    if (st != CF_OK) return st;
+    s->diag.integrability_error = cfi_spin_integrability_error(mesh, s->newpos, s->edges);
+    if (!s->fixed_boundary) {
+        /* fix translation (and the scale, if asked): Willmore energy is invariant under both */
+        double c_old[3] = {0, 0, 0}, c_new[3] = {0, 0, 0}, atot = 0.0;
+        for (int32_t i = 0; i < nv; ++i) {
+            atot += s->area[i];
+            for (int c = 0; c < 3; ++c) {
+                c_old[c] += s->area[i] * x[3 * i + c];
+                c_new[c] += s->area[i] * s->newpos[3 * i + c];
+            }
+        }
+        double scale = 1.0;
+        if (s->opt.normalize) {
+            double a_new = 0.0;
+            st = cf_total_area(ctx, mesh, s->newpos, &a_new);
+            if (st != CF_OK) return st;
+            if (!(a_new > 0.0)) return cfi_error(ctx, CF_ERR_NUMERICAL, "spin-willmore: recovered surface has no area");
+            scale = sqrt(flow->initial_area / a_new);
+        }
+        for (int32_t i = 0; i < nv; ++i)
+            for (int c = 0; c < 3; ++c)
+                x[3 * i + c] = c_old[c] / atot + scale * (s->newpos[3 * i + c] - c_new[c] / atot);
+    } else {
+        memcpy(x, s->newpos, 3 * (size_t)nv * sizeof(double));
+    }
+    for (int32_t i = 0; i < 3 * nv; ++i)
+        if (!isfinite(x[i])) return cfi_error(ctx, CF_ERR_NUMERICAL, "vertex %d: position is not finite", i / 3);
+
+    ta = cfi_now_seconds();
+    st = update_geometry(flow, s, x);
+    *t_asm += cfi_now_seconds() - ta;
+    if (st != CF_OK) return st;
+    return CF_OK;
+}
+
 static cf_status spin_step(cf_flow *flow, cf_flow_info *info)
 {
     spin_state *s = flow->impl;
-    const cf_mesh *mesh = flow->mesh;
     cf_context *ctx = flow->ctx;
     int32_t nv = s->nv;
     double *x = flow->positions;
@@ -882,99 +1001,36 @@ static cf_status spin_step(cf_flow *flow, cf_flow_info *info)
         s->diag.total_curvature_change = rn > 0.0 ? fabs(one) / sqrt(rn * atot) : 0.0;
     }
 
-    /* IV. rho = tau rhodot */
-    for (int32_t i = 0; i < nv; ++i) s->rho[i] = s->opt.time_step * s->rhodot[i];
-
-    /* V. lambda from X(rho) */
-    double ta = cfi_now_seconds();
-    /* The shift eps M only makes the eigenproblem definite (X(0) 1 = 0). With a
-     * fixed boundary the interior block is definite already and the problem is a
-     * linear solve, where a shift would bias lambda away from 1: at tau -> 0 it
-     * shrank the mushroom cap by 0.8 % and blade_slivers_8k by 47 % per step. */
-    st = cfi_dirac_fill(s->dirac, mesh, x, s->rho, s->fixed_boundary ? 0.0 : s->eps);
-    if (st != CF_OK) return st;
-    if (s->fixed_boundary) cfi_dirac_fix_boundary(s->dirac, mesh, s->qrhs);
-    if (s->restricted_boundary) {
-        st = boundary_binormals(flow, s, x, s->binormal);
-        if (st != CF_OK) return st;
-        boundary_frames(flow, s);
-        cfi_dirac_restrict_boundary(s->dirac, mesh, s->frames);
-    }
-    double tb = cfi_now_seconds();
-    t_asm += tb - ta;
-    st = cf_cholesky_factorize(s->chol, s->dirac->x);
-    double tc = cfi_now_seconds();
-    t_fac += tc - tb;
-    if (st != CF_OK) return st;
-    if (s->fixed_boundary) {
-        st = cf_cholesky_solve(s->chol, 1, s->qrhs, s->lambda);
-    } else {
-        for (int32_t i = 0; i < nv; ++i) {
-            s->lambda[4 * i] = 1.0;
-            s->lambda[4 * i + 1] = s->lambda[4 * i + 2] = s->lambda[4 * i + 3] = 0.0;
-            if (s->restricted_boundary && mesh->vertex_on_boundary[i]) {
-                /* start from Q_i^T 1 restricted to the admissible components */
-                const double *q = s->frames + 16 * (int64_t)i;
-                s->lambda[4 * i] = q[0];
-                s->lambda[4 * i + 1] = q[1];
-                s->lambda[4 * i + 2] = s->lambda[4 * i + 3] = 0.0;
-            }
+    /* IV-VI, and with adaptive time steps the step is redone from the same
+     * rhodot with tau halved while W would rise (or the step fails
+     * numerically); when no halving helps, the state is kept and the flow
+     * reports convergence (W stopped decreasing). */
+    double tau = s->opt.adaptive ? s->tau : s->opt.time_step;
+    int32_t halvings = 0;
+    int stalled = 0;
+    for (;;) {
+        if (s->opt.adaptive) memcpy(s->xsave, x, 3 * (size_t)nv * sizeof(double));
+        st = realise_step(flow, s, tau, &t_asm, &t_fac, &t_sol);
+        if (!s->opt.adaptive) break;
+        if (st == CF_OK && s->energy <= energy_before) break;
+        if (st != CF_OK && st != CF_ERR_NUMERICAL && st != CF_ERR_NOT_POSDEF && st != CF_ERR_DEGENERATE_FACE)
+            return st;
+        memcpy(x, s->xsave, 3 * (size_t)nv * sizeof(double));
+        cf_status sg = update_geometry(flow, s, x);
+        if (sg != CF_OK) return sg;
+        if (halvings == CFI_SPIN_MAX_HALVINGS) {
+            stalled = 1;
+            st = CF_OK;
+            cfi_log(ctx, CF_LOG_INFO,
+                    "spin-willmore: W does not decrease for any time step down to %g; stopping at W/4pi = %.6g", tau,
+                    s->energy / (4.0 * CFI_PI));
+            break;
         }
-        st = cfi_spin_power_iteration(s->chol, s->area, nv, s->opt.power_iterations, s->lambda, s->qwork);
+        ++halvings;
+        tau *= 0.5;
     }
-    t_sol += cfi_now_seconds() - tc;
-    if (st != CF_OK) return cfi_error(ctx, st, "spin-willmore: eigenvector solve failed");
-    s->diag.eigenvalue = cfi_spin_rayleigh(s->dirac->x, s->area, nv, s->eps, s->lambda, s->qwork);
-    if (s->restricted_boundary) {
-        /* back to lambda = Q mu on the boundary */
-        for (int32_t i = 0; i < nv; ++i) {
-            if (!mesh->vertex_on_boundary[i]) continue;
-            const double *q = s->frames + 16 * (int64_t)i;
-            double mu[4];
-            memcpy(mu, s->lambda + 4 * i, sizeof mu);
-            for (int r = 0; r < 4; ++r)
-                s->lambda[4 * i + r] = q[4 * r] * mu[0] + q[4 * r + 1] * mu[1] + q[4 * r + 2] * mu[2] + q[4 * r + 3] * mu[3];
-        }
-    }
-
-    /* VI. edges and positions */
-    ta = cfi_now_seconds();
-    cfi_spin_transform_edges(mesh, x, s->lambda, s->edges);
-    t_asm += cfi_now_seconds() - ta;
-    st = cfi_poisson_solve(s->poisson, mesh, s->edges, s->fixed_boundary, x, s->newpos, &t_fac, &t_sol);
     if (st != CF_OK) return st;
-    s->diag.integrability_error = cfi_spin_integrability_error(mesh, s->newpos, s->edges);
-    if (!s->fixed_boundary) {
-        /* fix translation (and the scale, if asked): Willmore energy is invariant under both */
-        double c_old[3] = {0, 0, 0}, c_new[3] = {0, 0, 0}, atot = 0.0;
-        for (int32_t i = 0; i < nv; ++i) {
-            atot += s->area[i];
-            for (int c = 0; c < 3; ++c) {
-                c_old[c] += s->area[i] * x[3 * i + c];
-                c_new[c] += s->area[i] * s->newpos[3 * i + c];
-            }
-        }
-        double scale = 1.0;
-        if (s->opt.normalize) {
-            double a_new = 0.0;
-            st = cf_total_area(ctx, mesh, s->newpos, &a_new);
-            if (st != CF_OK) return st;
-            if (!(a_new > 0.0)) return cfi_error(ctx, CF_ERR_NUMERICAL, "spin-willmore: recovered surface has no area");
-            scale = sqrt(flow->initial_area / a_new);
-        }
-        for (int32_t i = 0; i < nv; ++i)
-            for (int c = 0; c < 3; ++c)
-                x[3 * i + c] = c_old[c] / atot + scale * (s->newpos[3 * i + c] - c_new[c] / atot);
-    } else {
-        memcpy(x, s->newpos, 3 * (size_t)nv * sizeof(double));
-    }
-    for (int32_t i = 0; i < 3 * nv; ++i)
-        if (!isfinite(x[i])) return cfi_error(ctx, CF_ERR_NUMERICAL, "vertex %d: position is not finite", i / 3);
-
-    ta = cfi_now_seconds();
-    st = update_geometry(flow, s, x);
-    t_asm += cfi_now_seconds() - ta;
-    if (st != CF_OK) return st;
+    if (s->opt.adaptive && !stalled) s->tau = halvings ? tau : fmin(s->opt.time_step, 2.0 * tau);
     /* An explicit step on rho can overshoot where the realised curvature
      * change is far from the prescribed one (thin cone tips, slivers;
      * docs/spin.md): a jump of the energy by more than blowup_factor is
@@ -985,7 +1041,7 @@ static cf_status spin_step(cf_flow *flow, cf_flow_info *info)
                          "up; try a smaller time_step",
                          energy_before, s->energy, s->opt.blowup_factor);
 
-    info->time_step = s->opt.time_step;
+    info->time_step = stalled ? 0.0 : tau;
     info->energy = s->energy;
     info->energy_terms[0] = s->energy / (4.0 * CFI_PI);
     info->term_names[0] = "W/4pi";
@@ -995,12 +1051,16 @@ static cf_status spin_step(cf_flow *flow, cf_flow_info *info)
     info->residual_names[1] = "integrability";
     info->residuals[2] = s->diag.eigenvalue;
     info->residual_names[2] = "eigenvalue";
+    if (s->opt.adaptive) {
+        info->residuals[3] = halvings;
+        info->residual_names[3] = "time_step_halvings";
+    }
     info->assemble_seconds = t_asm;
     info->factorize_seconds = t_fac;
     info->solve_seconds = t_sol;
     info->total_seconds = cfi_now_seconds() - t0;
     double decrease = energy_before - s->energy;
-    flow->converged = decrease >= 0.0 && decrease <= s->opt.tolerance * energy_before;
+    flow->converged = stalled || (decrease >= 0.0 && decrease <= s->opt.tolerance * energy_before);
     return CF_OK;
 }
 
@@ -1008,6 +1068,7 @@ static cf_status spin_reset(cf_flow *flow)
 {
     spin_state *s = flow->impl;
     if (!s) return CF_OK;
+    s->tau = s->opt.time_step;
     flow->converged = 0;
     return update_geometry(flow, s, flow->positions);
 }

@@ -63,6 +63,8 @@ double cfi_spin_integrability_error(const cf_mesh *mesh, const double *positions
  * blows up after 6 steps, 1e-3 lowers W for 8 steps, then stalls); on closed meshes
  * the results agree with 1e-6 to 1e-5 relative in W (spot, bunny, bob). */
 #define CFI_SPIN_SHIFT 1e-3
+/* adaptive time steps: at most this many halvings of tau within a step */
+#define CFI_SPIN_MAX_HALVINGS 10
 
 /* Inverse power iteration (Crane 2013, Sec. 6.4.2) on a factorisation of
  * X + eps M: lambda <- (X + eps M)^-1 M lambda, normalised to

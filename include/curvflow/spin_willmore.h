@@ -82,6 +82,12 @@ typedef struct cf_spin_willmore_options {
                                 * result to rounding); 0 uses the real 4 nv x 4 nv form.
                                 * Prescribed/cmc boundaries always use the real form (their
                                 * boundary frames are not quaternion blocks). Default 1 */
+    int32_t input_metric;      /* recover positions (Eq. 6) with the cotan Laplacian of the starting
+                                * surface, factorised once, instead of the current surface's each
+                                * step: the Dirichlet energy is conformally invariant, so for a
+                                * conformal flow both pose the same problem (as cMCF; the paper is
+                                * silent). Measured: far less conformal drift on long flows
+                                * (docs/spin.md). Not with a fixed boundary. Default 1 */
     int32_t adaptive;          /* adaptive time steps (the paper is silent): a step that would raise W
                                 * or fails numerically is redone from the same state with tau
                                 * halved (at most 10 times; then the state is kept and the flow

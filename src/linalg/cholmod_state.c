@@ -91,6 +91,14 @@ void cfi_cholmod_reset_parameters(cholmod_common *c)
     c->final_monotonic = 1;
     c->final_resymbol = 0;
     c->quick_return_if_not_posdef = 0;
+    /* CHOLMOD's default supernode amalgamation (the quaternion-block path
+     * widens it for its own analysis) */
+    c->nrelax[0] = 4;
+    c->nrelax[1] = 16;
+    c->nrelax[2] = 48;
+    c->zrelax[0] = 0.8;
+    c->zrelax[1] = 0.1;
+    c->zrelax[2] = 0.05;
 }
 
 cf_status cfi_cholmod_common(cf_context *ctx, cholmod_common **out)

@@ -16,9 +16,12 @@
  *        r (a - b V~) on the boundary for prescribed binormals / CMC
  *        (Sec. 6.3.1), or the Dirichlet solve of Sec. 6.3.2 for a fixed
  *        boundary;
- *   VI.  transformed edges and the cotan Poisson problem (Eq. (6)).
- * The symbolic factorisations of X (block size 4) and L are computed once at
- * creation; each step only refills values and refactorises.
+ *   VI.  transformed edges and the cotan Poisson problem (Eq. (6)), by
+ *        default in the metric of the starting surface (input_metric).
+ * With `adaptive`, IV-VI are redone with tau halved while W would rise.
+ * The symbolic factorisations of X (block size 4, complex form by default)
+ * and L are computed once at creation; each step only refills values and
+ * refactorises (X; X(0) for exactness; L only with the current metric).
  */
 #include "methods/flow_internal.h"
 #include "methods/spin_willmore/spin_internal.h"

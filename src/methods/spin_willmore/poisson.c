@@ -3,8 +3,9 @@
  * Eq. (6) and Sec. 6.3.2): least-squares fit of vertex positions to the
  * transformed edge vectors, i.e. the cotan Poisson problem L f~ = div e~ with
  * (div e~)_i = -sum_j w_ij e~_ij (so that e~ = e gives back L f), either with
- * a tiny diagonal shift (closed surfaces, free boundary) or with the boundary
- * vertices fixed (Dirichlet rows).
+ * a tiny diagonal shift (closed surfaces, free boundary; the factorisation is
+ * kept until the next refill, so a flow that never refills factorises once)
+ * or with the boundary vertices fixed (Dirichlet rows).
  */
 #include "methods/spin_willmore/spin_internal.h"
 #include "ops/cotan_laplacian.h"

@@ -127,6 +127,62 @@ static void test_residuals_and_total_curvature(void)
     cf_context_destroy(&ctx);
 }
 
+/* App. B: what a step conserves is the total of the curvature half-density,
+ * sum_i H~_i sqrt(A~_i A_i) against the surface the step started from, not
+ * the total mean curvature sum_i H~_i A~_i. Measured on spot_3k (one step):
+ * relative change -1.26e-3 / -4.8e-4 at tau 0.02 / 0.01 for the half-density
+ * total against ~-3.8e-2 at tau 0.02 for the plain total (scale-free form).
+ * The half-density total is not exactly conserved (the discrete transform
+ * realises about 0.98 of rho), but 30x better than the plain one and
+ * shrinking with tau. */
+static double half_density_total(cf_context *ctx, const cf_mesh *mesh, const double *x0, const double *x)
+{
+    int32_t nv = cf_mesh_vertex_count(mesh);
+    double *h = malloc((size_t)nv * sizeof(double)), *a = malloc((size_t)nv * sizeof(double)),
+           *a0 = malloc((size_t)nv * sizeof(double)), t = 0.0;
+    CHECK_OK(ctx, cf_mean_curvature(ctx, mesh, x, h));
+    CHECK_OK(ctx, cf_vertex_areas(ctx, mesh, x, CF_DUAL_AREA_BARYCENTRIC, a));
+    CHECK_OK(ctx, cf_vertex_areas(ctx, mesh, x0, CF_DUAL_AREA_BARYCENTRIC, a0));
+    for (int32_t i = 0; i < nv; ++i) t += h[i] * sqrt(a[i] * a0[i]);
+    free(h);
+    free(a);
+    free(a0);
+    return t;
+}
+
+static void test_total_curvature_half_density(void)
+{
+    const char *path = cft_shared_mesh_path("spot_3k.obj");
+    if (!path) {
+        fprintf(stderr, "SKIP: spot_3k.obj (../shared/meshes absent)\n");
+        return;
+    }
+    cf_context *ctx = cft_context();
+    cf_mesh *mesh = NULL;
+    CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
+    const double *x0 = cf_mesh_positions(mesh);
+    double half[2], plain[2];
+    const double taus[2] = {0.02, 0.01};
+    for (int k = 0; k < 2; ++k) {
+        cf_flow *flow = make_flow(ctx, mesh, taus[k], 1, 1, 1, 0);
+        if (!flow) break;
+        double h0 = half_density_total(ctx, mesh, x0, x0), p0 = total_curvature(ctx, mesh, x0);
+        CHECK_OK(ctx, cf_flow_step(flow, NULL));
+        const double *x = cf_flow_positions(flow);
+        half[k] = fabs(half_density_total(ctx, mesh, x0, x) - h0) / fabs(h0);
+        plain[k] = fabs(total_curvature(ctx, mesh, x) - p0) / fabs(p0);
+        cf_flow_destroy(&flow);
+    }
+    fprintf(stderr, "   spot one step: relative change of the half-density total %.3g / %.3g at tau 0.02 / 0.01, "
+                    "of the total mean curvature %.3g / %.3g\n", half[0], half[1], plain[0], plain[1]);
+    CHECK_LE(half[0], 0.1 * plain[0]);
+    CHECK_LE(half[1], 0.6 * half[0]);
+    CHECK_LE(half[0], 3e-3);
+    cf_mesh_destroy(&mesh);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 /* Fig. 12: genus 1 (bob_5k). */
 static void test_exactness_genus_one(void)
 {
@@ -527,6 +583,7 @@ static void test_torus_long_run(void)
 int main(void)
 {
     CFT_RUN(test_residuals_and_total_curvature);
+    CFT_RUN(test_total_curvature_half_density);
     CFT_RUN(test_exactness_genus_one);
     CFT_RUN(test_exactness_genus_three);
     CFT_RUN(test_exactness_annulus);

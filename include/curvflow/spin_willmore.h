@@ -102,9 +102,9 @@ typedef struct cf_spin_willmore_options {
                                 * use the linearisation. Default 1 */
     int32_t harmonic_update;   /* with App. C's Z_i (exactness_linearized = 0): re-project the
                                 * input's harmonic 1-forms onto the harmonic forms of the current
-                                * surface every step (one Laplacian solve per form, reusing the
-                                * step's Poisson factorisation); 0 keeps the input's forms, as the
-                                * paper. Default 1 */
+                                * surface every step (one Laplacian solve per form with the current
+                                * surface's Laplacian); 0 keeps the input's forms, as the paper.
+                                * Default 1 */
 } cf_spin_willmore_options;
 
 CF_API void cf_spin_willmore_options_default(cf_spin_willmore_options *options);

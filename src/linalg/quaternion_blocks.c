@@ -17,7 +17,6 @@
 #include <string.h>
 
 struct cfi_quat_map {
-    int32_t n;            /* real size 4 nb */
     int32_t nb;           /* quaternion blocks per side */
     int32_t *zcolptr;     /* complex upper-triangle pattern, 2 nb columns */
     int32_t *zrowind;
@@ -103,7 +102,6 @@ cf_status cfi_quat_map_create(cf_context *ctx, const cf_sparse *a, cfi_quat_map 
     cfi_quat_map *m = CFI_ALLOC(ctx, cfi_quat_map, 1);
     if (!m) return CF_ERR_NOMEM;
     memset(m, 0, sizeof *m);
-    m->n = a->ncols;
     m->nb = nb;
     m->znnz = znnz;
     m->nblocks = nblocks;

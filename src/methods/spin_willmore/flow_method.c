@@ -519,10 +519,8 @@ static cf_status spin_create(cf_flow *flow, const void *options)
      * once. Measured (docs/spin.md): armadillo mean Q 1.81 -> 1.24, max Q 12.0
      * -> 2.9; bunny max Q 7.1 -> 3.7; spot W/4pi 1.0488 -> 1.0472. A fixed
      * boundary rewrites the matrix every step and keeps the current metric. */
-    if (st == CF_OK && o->input_metric && !s->fixed_boundary) {
-        st = cfi_poisson_create(ctx, mesh, flow->positions, &s->poisson_input);
-        if (st == CF_OK) st = cfi_poisson_refill(s->poisson_input, mesh, flow->positions);
-    }
+    if (st == CF_OK && o->input_metric && !s->fixed_boundary)
+        st = cfi_poisson_create(ctx, mesh, flow->positions, &s->poisson_input); /* filled with these positions */
     if (st == CF_OK) st = update_geometry(flow, s, flow->positions);
     if (st != CF_OK) goto fail;
     /* desired vertex areas of Moebius balancing: the mesh's rest shape */
@@ -581,8 +579,9 @@ fail:
  * harmonic forms of the current cotan metric within its cohomology class:
  * omega <- omega - d u with L u = -div omega, (div omega)_i = sum_j w_ij
  * omega_ij, so that the result is co-closed and still closed with the same
- * periods. L is factorised anyway for this step's position solve, which
- * reuses the factorisation. */
+ * periods. The current L is refilled every step for H; its factorisation is
+ * shared with the position solve only when that uses the current metric
+ * (input_metric = 0). */
 static cf_status update_harmonic_forms(cf_flow *flow, spin_state *s, double *factor_seconds, double *solve_seconds)
 {
     const cf_mesh *mesh = flow->mesh;
@@ -946,8 +945,7 @@ static cf_status realise_step(cf_flow *flow, spin_state *s, double tau, double *
     ta = cfi_now_seconds();
     st = update_geometry(flow, s, x);
     *t_asm += cfi_now_seconds() - ta;
-    if (st != CF_OK) return st;
-    return CF_OK;
+    return st;
 }
 
 static cf_status spin_step(cf_flow *flow, cf_flow_info *info)
@@ -1025,7 +1023,7 @@ static cf_status spin_step(cf_flow *flow, cf_flow_info *info)
      * rhodot with tau halved while W would rise (or the step fails
      * numerically); when no halving helps, the state is kept and the flow
      * reports convergence (W stopped decreasing). */
-    double tau = s->opt.adaptive ? s->tau : s->opt.time_step;
+    double tau = s->tau; /* opt.time_step unless adaptive steps changed it */
     int32_t halvings = 0;
     int stalled = 0;
     for (;;) {

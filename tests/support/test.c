@@ -53,6 +53,13 @@ const char *cft_shared_mesh_path(const char *name)
     return path;
 }
 
+const char *cft_optional_shared_mesh(const char *name)
+{
+    const char *p = cft_shared_mesh_path(name);
+    if (!p) fprintf(stderr, "SKIP: %s (../shared/meshes absent)\n", name);
+    return p;
+}
+
 const char *cft_require_shared_mesh(const char *name)
 {
     const char *p = cft_shared_mesh_path(name);

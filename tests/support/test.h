@@ -30,6 +30,10 @@ _Noreturn void cft_skip(const char *why);
 /* Full path of ../shared/meshes/<name> (static buffer), or NULL if the
  * shared folder is absent. */
 const char *cft_shared_mesh_path(const char *name);
+/* Like cft_shared_mesh_path, but when the mesh is absent prints the visible
+ * line "SKIP: <name> (../shared/meshes absent)" so that the calling test can
+ * return while the rest of the program runs. */
+const char *cft_optional_shared_mesh(const char *name);
 /* Like cft_shared_mesh_path but skips the whole test program when absent. */
 const char *cft_require_shared_mesh(const char *name);
 /* Temporary file path in the build tree (static buffer, unique per call). */

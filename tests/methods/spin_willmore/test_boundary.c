@@ -69,11 +69,8 @@ static void test_bumpy_plane(void)
  * 3.9e-6 at tau 1e-6 (before: 8.0e-3 at both). */
 static void test_fixed_boundary_consistent(void)
 {
-    const char *path = cft_shared_mesh_path("mushroom_cap_2k.obj");
-    if (!path) {
-        fprintf(stderr, "SKIP: mushroom_cap_2k.obj (../shared/meshes absent)\n");
-        return;
-    }
+    const char *path = cft_optional_shared_mesh("mushroom_cap_2k.obj");
+    if (!path) return;
     cf_context *ctx = cft_context();
     cf_mesh *mesh = NULL;
     CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
@@ -102,11 +99,8 @@ static void test_fixed_boundary_consistent(void)
 
 static void test_mushroom_cap(void)
 {
-    const char *path = cft_shared_mesh_path("mushroom_cap_2k.obj");
-    if (!path) {
-        fprintf(stderr, "SKIP: mushroom_cap_2k.obj (../shared/meshes absent)\n");
-        return;
-    }
+    const char *path = cft_optional_shared_mesh("mushroom_cap_2k.obj");
+    if (!path) return;
     cf_context *ctx = cft_context();
     cf_mesh *mesh = NULL;
     CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
@@ -200,11 +194,8 @@ static double h_spread(cf_context *ctx, const cf_mesh *mesh, const double *x)
  * constant-mean-curvature surface: the spread of H drops. */
 static void test_cmc(void)
 {
-    const char *path = cft_shared_mesh_path("mushroom_cap_2k.obj");
-    if (!path) {
-        fprintf(stderr, "SKIP: mushroom_cap_2k.obj (../shared/meshes absent)\n");
-        return;
-    }
+    const char *path = cft_optional_shared_mesh("mushroom_cap_2k.obj");
+    if (!path) return;
     cf_context *ctx = cft_context();
     cf_mesh *mesh = NULL;
     CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
@@ -233,11 +224,8 @@ static void test_cmc(void)
  * this needs the eigenproblem shift of spin_internal.h. */
 static void test_free_disk(void)
 {
-    const char *path = cft_shared_mesh_path("mushroom_cap_2k.obj");
-    if (!path) {
-        fprintf(stderr, "SKIP: mushroom_cap_2k.obj (../shared/meshes absent)\n");
-        return;
-    }
+    const char *path = cft_optional_shared_mesh("mushroom_cap_2k.obj");
+    if (!path) return;
     cf_context *ctx = cft_context();
     cf_mesh *mesh = NULL;
     CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));

@@ -152,11 +152,8 @@ static double half_density_total(cf_context *ctx, const cf_mesh *mesh, const dou
 
 static void test_total_curvature_half_density(void)
 {
-    const char *path = cft_shared_mesh_path("spot_3k.obj");
-    if (!path) {
-        fprintf(stderr, "SKIP: spot_3k.obj (../shared/meshes absent)\n");
-        return;
-    }
+    const char *path = cft_optional_shared_mesh("spot_3k.obj");
+    if (!path) return;
     cf_context *ctx = cft_context();
     cf_mesh *mesh = NULL;
     CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
@@ -383,11 +380,8 @@ static double period_part(cf_context *ctx, const cf_mesh *mesh, const double *x,
  * and falls only ~2x (docs/spin.md). */
 static void test_exactness_genus_three(void)
 {
-    const char *path = cft_shared_mesh_path("elephant_g3_3k.obj");
-    if (!path) {
-        fprintf(stderr, "SKIP: elephant_g3_3k.obj (../shared/meshes absent)\n");
-        return;
-    }
+    const char *path = cft_optional_shared_mesh("elephant_g3_3k.obj");
+    if (!path) return;
     cf_context *ctx = cft_context();
     cf_mesh *mesh = NULL;
     CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));

@@ -83,11 +83,8 @@ static void test_bumpy_sphere(void)
 
 static void shared_case(const char *name, double w_bound, double q_bound, double qmax_bound, double rms_bound)
 {
-    const char *path = cft_shared_mesh_path(name);
-    if (!path) {
-        fprintf(stderr, "SKIP: %s (../shared/meshes absent)\n", name);
-        return;
-    }
+    const char *path = cft_optional_shared_mesh(name);
+    if (!path) return;
     cf_context *ctx = cft_context();
     cf_mesh *mesh = NULL;
     CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));

@@ -69,11 +69,8 @@ static int energy_increases(cf_context *ctx, const cf_mesh *mesh, double tau, in
 
 static void test_threshold(void)
 {
-    const char *path = cft_shared_mesh_path("spot_3k.obj");
-    if (!path) {
-        fprintf(stderr, "SKIP: spot_3k.obj (../shared/meshes absent)\n");
-        return;
-    }
+    const char *path = cft_optional_shared_mesh("spot_3k.obj");
+    if (!path) return;
     cf_context *ctx = cft_context();
     cf_mesh *mesh = NULL;
     CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
@@ -87,11 +84,8 @@ static void test_threshold(void)
 
 static void test_time_step_convergence(void)
 {
-    const char *path = cft_shared_mesh_path("spot_3k.obj");
-    if (!path) {
-        fprintf(stderr, "SKIP: spot_3k.obj (../shared/meshes absent)\n");
-        return;
-    }
+    const char *path = cft_optional_shared_mesh("spot_3k.obj");
+    if (!path) return;
     cf_context *ctx = cft_context();
     cf_mesh *mesh = NULL;
     CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));

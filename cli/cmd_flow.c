@@ -2,12 +2,15 @@
  * curvflow flow IN -o OUT --method NAME [--steps N] [--time-step T]
  * [--param k=v]... [--log FILE.jsonl]: runs any method of the flow
  * interface (include/curvflow/flow.h) with a status line per step and an
- * optional JSONL log.
+ * optional JSONL log. --boundary-targets FILE gives spin-willmore's
+ * per-vertex boundary directions (boundary=prescribed).
  */
 #define _GNU_SOURCE
 #include "common.h"
 #include "curvflow/io.h"
+#include "curvflow/spin_willmore.h"
 
+#include <errno.h>
 #include <getopt.h>
 #include <stdlib.h>
 #include <string.h>
@@ -29,6 +32,11 @@ static void usage(FILE *out)
             "  -l, --log FILE        JSONL log: one object per step (iteration 0 = start) with iteration,\n"
             "                        time, time_step, energy, terms, residuals, area, volume, drifts, seconds\n"
             "  -q, --quiet           no status lines\n"
+            "      --boundary-targets FILE\n"
+            "                        spin-willmore with boundary=prescribed (Sec. 6.3.1): target direction of\n"
+            "                        the boundary vector V at each boundary vertex, one line 'VERTEX X Y Z'\n"
+            "                        per boundary vertex (0-based index, every boundary vertex once; '#'\n"
+            "                        starts a comment). Implies --param boundary=prescribed\n"
             "      --list-methods    list the methods and exit\n"
             "      --list-params     list the parameters of --method with their defaults and exit\n"
             "  -h, --help            show this help\n\n"
@@ -74,18 +82,79 @@ static int list_params(cf_flow_kind kind)
     return CLI_EXIT_OK;
 }
 
+/* Reads --boundary-targets: lines "VERTEX X Y Z", each boundary vertex of
+ * mesh exactly once; fills targets (3 nv, zero elsewhere). Returns an exit
+ * code; messages name the file and line. */
+static int read_boundary_targets(const char *path, const cf_mesh *mesh, double *targets)
+{
+    FILE *fp = fopen(path, "r");
+    if (!fp) {
+        fprintf(stderr, "curvflow: %s: cannot open (%s)\n", path, strerror(errno));
+        return CLI_EXIT_INPUT;
+    }
+    int32_t nv = cf_mesh_vertex_count(mesh);
+    const uint8_t *on_boundary = cf_mesh_vertex_on_boundary(mesh);
+    unsigned char *seen = calloc((size_t)nv, 1);
+    if (!seen) {
+        fclose(fp);
+        return CLI_EXIT_NUMERICAL;
+    }
+    int code = CLI_EXIT_OK;
+    char line[4096];
+    long lineno = 0;
+    while (code == CLI_EXIT_OK && fgets(line, sizeof line, fp)) {
+        ++lineno;
+        char *hash = strchr(line, '#');
+        if (hash) *hash = '\0';
+        char *p = line, *end;
+        while (*p == ' ' || *p == '\t' || *p == '\r' || *p == '\n') ++p;
+        if (!*p) continue;
+        long v = strtol(p, &end, 10);
+        double d[3];
+        int ok = end != p;
+        for (int c = 0; ok && c < 3; ++c) {
+            p = end;
+            d[c] = strtod(p, &end);
+            ok = end != p;
+        }
+        while (ok && (*end == ' ' || *end == '\t' || *end == '\r' || *end == '\n')) ++end;
+        if (!ok || *end) {
+            fprintf(stderr, "curvflow: %s:%ld: expected 'VERTEX X Y Z'\n", path, lineno);
+            code = CLI_EXIT_INPUT;
+        } else if (v < 0 || v >= nv || !on_boundary[v]) {
+            fprintf(stderr, "curvflow: %s:%ld: vertex %ld is not a boundary vertex of the mesh\n", path, lineno, v);
+            code = CLI_EXIT_INPUT;
+        } else if (seen[v]) {
+            fprintf(stderr, "curvflow: %s:%ld: vertex %ld is listed twice\n", path, lineno, v);
+            code = CLI_EXIT_INPUT;
+        } else {
+            seen[v] = 1;
+            for (int c = 0; c < 3; ++c) targets[3 * v + c] = d[c];
+        }
+    }
+    fclose(fp);
+    for (int32_t i = 0; code == CLI_EXIT_OK && i < nv; ++i)
+        if (on_boundary[i] && !seen[i]) {
+            fprintf(stderr, "curvflow: %s: boundary vertex %d has no target (every boundary vertex needs one)\n", path, i);
+            code = CLI_EXIT_INPUT;
+        }
+    free(seen);
+    return code;
+}
+
 int cli_flow(int argc, char **argv)
 {
-    enum { OPT_LIST_METHODS = 256, OPT_LIST_PARAMS };
+    enum { OPT_LIST_METHODS = 256, OPT_LIST_PARAMS, OPT_BOUNDARY_TARGETS };
     static const struct option longopts[] = {
         {"method", required_argument, NULL, 'm'}, {"steps", required_argument, NULL, 'n'},
         {"time-step", required_argument, NULL, 't'}, {"param", required_argument, NULL, 'p'},
         {"output", required_argument, NULL, 'o'}, {"log", required_argument, NULL, 'l'},
         {"quiet", no_argument, NULL, 'q'}, {"list-methods", no_argument, NULL, OPT_LIST_METHODS},
         {"list-params", no_argument, NULL, OPT_LIST_PARAMS}, {"help", no_argument, NULL, 'h'},
+        {"boundary-targets", required_argument, NULL, OPT_BOUNDARY_TARGETS},
         {NULL, 0, NULL, 0}};
     const char *cmd = "flow";
-    const char *method = NULL, *output = NULL, *log_path = NULL, *time_step = NULL;
+    const char *method = NULL, *output = NULL, *log_path = NULL, *time_step = NULL, *targets_path = NULL;
     long long steps = 10;
     bool quiet = false, want_methods = false, want_params = false;
     /* --param values are applied after the method is known */
@@ -107,6 +176,7 @@ int cli_flow(int argc, char **argv)
         case 'q': quiet = true; break;
         case OPT_LIST_METHODS: want_methods = true; break;
         case OPT_LIST_PARAMS: want_params = true; break;
+        case OPT_BOUNDARY_TARGETS: targets_path = optarg; break;
         case 'h': usage(stdout); free(param_args); return CLI_EXIT_OK;
         default: free(param_args); return cli_option_error(cmd, c, argv);
         }
@@ -128,6 +198,10 @@ int cli_flow(int argc, char **argv)
     }
     if (optind + 1 != argc) { free(param_args); return cli_usage_error(cmd, "expected one input mesh"); }
     if (!output) { free(param_args); return cli_usage_error(cmd, "missing -o OUT"); }
+    if (targets_path && kind != CF_FLOW_SPIN_WILLMORE) {
+        free(param_args);
+        return cli_usage_error(cmd, "--boundary-targets is an option of --method spin-willmore");
+    }
     const char *input = argv[optind];
 
     cf_context *ctx = cli_context(false);
@@ -136,6 +210,11 @@ int cli_flow(int argc, char **argv)
     cf_flow_options_default(kind, &options);
     int code = CLI_EXIT_OK;
     cf_status st;
+    double *targets = NULL;
+    if (targets_path && (st = cf_flow_options_set(ctx, &options, "boundary", "prescribed")) != CF_OK) {
+        code = cli_fail(ctx, "--boundary-targets", st);
+        goto early;
+    }
     if (time_step && (st = cf_flow_options_set(ctx, &options, "time_step", time_step)) != CF_OK) {
         code = cli_fail(ctx, "--time-step", st);
         goto early;
@@ -154,6 +233,11 @@ int cli_flow(int argc, char **argv)
             goto early;
         }
     }
+    if (targets_path &&
+        ((const cf_spin_willmore_options *)cf_flow_options_method(&options))->boundary_mode != CF_SPIN_BOUNDARY_PRESCRIBED) {
+        code = cli_usage_error(cmd, "--boundary-targets needs boundary=prescribed");
+        goto early;
+    }
 
     cf_mesh *mesh = NULL;
     cf_flow *flow = NULL;
@@ -161,6 +245,17 @@ int cli_flow(int argc, char **argv)
     cli_progress_init(&progress, method, steps, quiet);
     code = cli_load_mesh(ctx, input, &mesh);
     if (code != CLI_EXIT_OK) goto done;
+    if (targets_path) {
+        targets = calloc(3 * (size_t)cf_mesh_vertex_count(mesh), sizeof(double));
+        if (!targets) {
+            fprintf(stderr, "curvflow: out of memory\n");
+            code = CLI_EXIT_NUMERICAL;
+            goto done;
+        }
+        code = read_boundary_targets(targets_path, mesh, targets);
+        if (code != CLI_EXIT_OK) goto done;
+        ((cf_spin_willmore_options *)cf_flow_options_method(&options))->boundary_targets = targets;
+    }
     st = cf_flow_create(ctx, mesh, NULL, &options, &flow);
     if (st != CF_OK) {
         code = cli_fail(ctx, input, st);
@@ -180,6 +275,7 @@ done:
     cf_mesh_destroy(&mesh);
 early:
     cf_context_destroy(&ctx);
+    free(targets);
     free(param_args);
     return code;
 }

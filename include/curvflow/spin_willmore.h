@@ -43,7 +43,8 @@ typedef enum cf_spin_boundary_mode {
      * boundary tangent, N: vertex normal made orthogonal to T, phi =
      * boundary_vector_angle) must map to a target direction V~: lambda is
      * restricted to r (a - b V~) with r the rotation V -> V~. Targets are fixed
-     * at creation: V~ = V on boundary loop 0 and V rotated by boundary_angle
+     * at creation: the per-vertex directions of boundary_targets if given,
+     * otherwise V~ = V on boundary loop 0 and V rotated by boundary_angle
      * about boundary_axis on every other loop (Fig. 14: a cylinder bends). */
     CF_SPIN_BOUNDARY_PRESCRIBED = 2,
     /* Sec. 6.3.1 with V~ = V (= B by default) at every step: the boundary
@@ -105,6 +106,11 @@ typedef struct cf_spin_willmore_options {
                                 * surface every step (one Laplacian solve per form with the current
                                 * surface's Laplacian); 0 keeps the input's forms, as the paper.
                                 * Default 1 */
+    const double *boundary_targets; /* PRESCRIBED: target directions V~ per vertex (3 nv doubles,
+                                * x y z; only boundary vertices' entries are read, each must be
+                                * finite and nonzero, and is normalised). Read once by
+                                * cf_flow_create, not kept. NULL (default): the boundary_angle /
+                                * boundary_axis rule above */
 } cf_spin_willmore_options;
 
 CF_API void cf_spin_willmore_options_default(cf_spin_willmore_options *options);

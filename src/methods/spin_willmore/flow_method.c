@@ -249,6 +249,14 @@ static void boundary_frames(const cf_flow *flow, spin_state *s)
         double cs = v[0] * vt[0] + v[1] * vt[1] + v[2] * vt[2];
         double theta = atan2(sn, cs);
         double r[4] = {cos(0.5 * theta), 0.0, 0.0, 0.0};
+        if (!(sn > 1e-12 * fabs(cs)) && cs < 0.0) {
+            /* V~ = -V (a user's target): the half turn about the boundary
+             * tangent, which keeps V in the N-B plane (V x N is parallel to
+             * T for V = cos(phi) B + sin(phi) N, |phi| < pi / 2) */
+            const double *n = s->normal + 3 * i;
+            w[0] = v[1] * n[2] - v[2] * n[1], w[1] = v[2] * n[0] - v[0] * n[2], w[2] = v[0] * n[1] - v[1] * n[0];
+            sn = sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+        }
         if (sn > 0.0)
             for (int c = 0; c < 3; ++c) r[1 + c] = -sin(0.5 * theta) * w[c] / sn;
         /* u1, u2 orthogonal to V~ */
@@ -415,6 +423,18 @@ static cf_status spin_create(cf_flow *flow, const void *options)
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: boundary_axis must be a nonzero finite vector");
     if (!(o->mobius_weight >= 0.0) || !isfinite(o->mobius_weight))
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: mobius_weight must be >= 0");
+    if (o->boundary_targets && o->boundary_mode != CF_SPIN_BOUNDARY_PRESCRIBED)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: boundary targets are given but boundary=%s "
+                         "(they need boundary=prescribed)", boundary_choices[o->boundary_mode]);
+    if (o->boundary_targets)
+        for (int32_t i = 0; i < mesh->nv; ++i) {
+            if (!mesh->vertex_on_boundary[i]) continue;
+            const double *t = o->boundary_targets + 3 * (int64_t)i;
+            double len = sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
+            if (!isfinite(len) || !(len > 0.0))
+                return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: vertex %d: boundary target (%g, %g, %g) is %s",
+                                 i, t[0], t[1], t[2], isfinite(len) ? "zero" : "not finite");
+        }
     int32_t has_boundary = mesh->boundary_loop_count > 0;
     if (o->boundary_mode != CF_SPIN_BOUNDARY_FREE && !has_boundary)
         return cfi_error(ctx, CF_ERR_BAD_MESH, "spin-willmore: boundary=%s needs a mesh with boundary",
@@ -424,6 +444,7 @@ static cf_status spin_create(cf_flow *flow, const void *options)
     if (!s) return CF_ERR_NOMEM;
     flow->impl = s;
     s->opt = *o;
+    s->opt.boundary_targets = NULL; /* the caller's array is read below, not kept */
     s->tau = o->time_step;
     s->nv = mesh->nv;
     s->ne = mesh->ne;
@@ -527,7 +548,14 @@ static cf_status spin_create(cf_flow *flow, const void *options)
     st = cf_vertex_areas(ctx, mesh, mesh->positions, CF_DUAL_AREA_BARYCENTRIC, s->rest_area);
     if (st != CF_OK) goto fail;
     s->eps = CFI_SPIN_SHIFT * 4.0 * CFI_PI / flow->initial_area;
-    if (o->boundary_mode == CF_SPIN_BOUNDARY_PRESCRIBED) {
+    if (o->boundary_mode == CF_SPIN_BOUNDARY_PRESCRIBED && o->boundary_targets) {
+        for (int32_t i = 0; i < mesh->nv; ++i) {
+            if (!mesh->vertex_on_boundary[i]) continue;
+            const double *t = o->boundary_targets + 3 * (int64_t)i;
+            double len = sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
+            for (int c = 0; c < 3; ++c) s->target[3 * i + c] = t[c] / len;
+        }
+    } else if (o->boundary_mode == CF_SPIN_BOUNDARY_PRESCRIBED) {
         st = boundary_binormals(flow, s, flow->positions, s->target);
         if (st != CF_OK) goto fail;
         /* loops 1, 2, ... : rotate the binormals by the angle about the axis */

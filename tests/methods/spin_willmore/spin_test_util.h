@@ -1,13 +1,15 @@
 /*
- * Shared fixture of the spin-Willmore tests: the bumped torus, a torus of
+ * Shared fixtures of the spin-Willmore tests: the bumped torus, a torus of
  * revolution (which would be a critical point of W in its conformal class)
  * with a three-fold radial bump and a two-fold vertical stretch, so that
- * the flow and its exactness constraint have something to do.
+ * the flow and its exactness constraint have something to do; the boundary
+ * vectors of Sec. 6.3.1 as the flow builds them.
  */
 #ifndef CF_TESTS_SPIN_TEST_UTIL_H
 #define CF_TESTS_SPIN_TEST_UTIL_H
 
 #include "curvflow/mesh.h"
+#include "curvflow/ops.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -28,6 +30,49 @@ static inline double *bumped_torus_positions(const cf_mesh *torus)
         x[3 * i + 2] *= 1.0 + 0.2 * sin(2.0 * a);
     }
     return x;
+}
+
+/* Boundary vectors V = cos(phi) B + sin(phi) N at every boundary vertex of x
+ * (3 nv, other entries zero), built as the flow builds them (Sec. 6.3.1): T
+ * the chord between the boundary neighbours, N the vertex normal made
+ * orthogonal to T, B = T x N. NULL on failure; the caller frees. */
+static inline double *boundary_vectors(cf_context *ctx, const cf_mesh *mesh, const double *x, double phi)
+{
+    int32_t nv = cf_mesh_vertex_count(mesh), nb = cf_mesh_boundary_loop_count(mesh);
+    const int32_t *off = cf_mesh_boundary_loop_offsets(mesh), *lv = cf_mesh_boundary_loop_vertices(mesh);
+    double *nrm = malloc(3 * (size_t)nv * sizeof(double)), *out = calloc(3 * (size_t)nv, sizeof(double));
+    if (!nrm || !out || cf_vertex_normals(ctx, mesh, x, nrm) != CF_OK) {
+        free(nrm);
+        free(out);
+        return NULL;
+    }
+    for (int32_t b = 0; b < nb; ++b) {
+        int32_t n = off[b + 1] - off[b];
+        for (int32_t k = 0; k < n; ++k) {
+            int32_t v = lv[off[b] + k], pv = lv[off[b] + (k + n - 1) % n], nx = lv[off[b] + (k + 1) % n];
+            double t[3], nn[3];
+            for (int c = 0; c < 3; ++c) t[c] = x[3 * nx + c] - x[3 * pv + c];
+            double tl = sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
+            for (int c = 0; c < 3; ++c) t[c] /= tl;
+            const double *n0 = nrm + 3 * v;
+            double d = n0[0] * t[0] + n0[1] * t[1] + n0[2] * t[2];
+            for (int c = 0; c < 3; ++c) nn[c] = n0[c] - d * t[c];
+            double nl = sqrt(nn[0] * nn[0] + nn[1] * nn[1] + nn[2] * nn[2]);
+            for (int c = 0; c < 3; ++c) nn[c] /= nl;
+            double bb[3] = {t[1] * nn[2] - t[2] * nn[1], t[2] * nn[0] - t[0] * nn[2], t[0] * nn[1] - t[1] * nn[0]};
+            for (int c = 0; c < 3; ++c) out[3 * v + c] = cos(phi) * bb[c] + sin(phi) * nn[c];
+        }
+    }
+    free(nrm);
+    return out;
+}
+
+/* Rotates v (3 doubles) by angle a about the unit axis u (Rodrigues). */
+static inline void rotate(double *v, const double *u, double a)
+{
+    double c = cos(a), s = sin(a), d = u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
+    double x[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+    for (int k = 0; k < 3; ++k) v[k] = c * v[k] + s * x[k] + (1.0 - c) * d * u[k];
 }
 
 #endif /* CF_TESTS_SPIN_TEST_UTIL_H */

@@ -1,15 +1,19 @@
 /*
  * The command-line front ends of this method: `curvflow spin` (SpinXForm
  * from a rho file or a PLY vertex property), `curvflow curve` (CSV / SVG
- * polylines) and `curvflow flow --method spin-willmore`. Exit codes as in
+ * polylines) and `curvflow flow --method spin-willmore` (with per-vertex
+ * boundary targets from a file). Exit codes as in
  * cli/cli.h: 0 ok, 1 usage, 2 input.
  */
 #include "test.h"
+#include "spin_test_util.h"
 
 #include "curvflow/curve_flow.h"
+#include "curvflow/flow.h"
 #include "curvflow/generate.h"
 #include "curvflow/io.h"
 #include "curvflow/metrics.h"
+#include "curvflow/spin_willmore.h"
 
 #include <stdlib.h>
 #include <sys/wait.h>
@@ -82,6 +86,86 @@ static void test_spin_cli(void)
     cf_context_destroy(&ctx);
 }
 
+/* `curvflow flow --boundary-targets FILE` (Sec. 6.3.1): targets that rotate
+ * the binormals of the cylinder's rim 1 by 0.4 rad about x give the same
+ * surface as the library's boundary_angle rule; bad files are input errors
+ * that name the line or vertex. */
+static void test_boundary_targets_cli(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *mesh = NULL;
+    CHECK_OK(ctx, cf_generate_cylinder(ctx, 24, 12, 1.0, 2.0, &mesh));
+    int32_t nv = cf_mesh_vertex_count(mesh);
+    const int32_t *off = cf_mesh_boundary_loop_offsets(mesh), *lv = cf_mesh_boundary_loop_vertices(mesh);
+    const double xaxis[3] = {1.0, 0.0, 0.0};
+    double *targets = boundary_vectors(ctx, mesh, cf_mesh_positions(mesh), 0.0);
+    CHECK(targets != NULL);
+    if (!targets) return;
+    for (int32_t k = off[1]; k < off[2]; ++k) rotate(targets + 3 * lv[k], xaxis, 0.4);
+    char in[512], tf[512], out[512], args[2048];
+    snprintf(in, sizeof in, "%s", cft_temp_path(".obj"));
+    snprintf(tf, sizeof tf, "%s", cft_temp_path(".txt"));
+    snprintf(out, sizeof out, "%s", cft_temp_path(".obj"));
+    CHECK_OK(ctx, cf_write_mesh_file(ctx, in, mesh, NULL, NULL, 0));
+    FILE *fp = fopen(tf, "w");
+    fprintf(fp, "# vertex x y z: rim 1 rotated by 0.4 rad about x\n");
+    for (int32_t k = 0; k < off[2]; ++k) {
+        const double *t = targets + 3 * lv[k];
+        fprintf(fp, "%d %.17g %.17g %.17g\n", lv[k], t[0], t[1], t[2]);
+    }
+    fclose(fp);
+    snprintf(args, sizeof args, "flow '%s' -o '%s' --method spin-willmore --steps 3 --boundary-targets '%s' -q", in, out, tf);
+    CHECK(run_cli(args) == 0);
+    cf_flow_options o;
+    CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o));
+    cf_spin_willmore_options *so = cf_flow_options_method(&o);
+    so->boundary_mode = CF_SPIN_BOUNDARY_PRESCRIBED;
+    so->boundary_angle = 0.4;
+    cf_flow *flow = NULL;
+    CHECK_OK(ctx, cf_flow_create(ctx, mesh, NULL, &o, &flow));
+    if (flow) CHECK_OK(ctx, cf_flow_run(flow, 3, NULL));
+    cf_mesh *res = NULL;
+    CHECK_OK(ctx, cf_load_mesh(ctx, out, &res));
+    if (res && flow) {
+        double diff = 0.0, moved = 0.0;
+        for (int32_t i = 0; i < 3 * nv; ++i) {
+            diff = fmax(diff, fabs(cf_mesh_positions(res)[i] - cf_flow_positions(flow)[i]));
+            moved = fmax(moved, fabs(cf_mesh_positions(res)[i] - cf_mesh_positions(mesh)[i]));
+        }
+        fprintf(stderr, "   --boundary-targets vs boundary_angle 0.4: max |dx| %.2g (moved %.3f)\n", diff, moved);
+        CHECK_LE(diff, 1e-9);
+        CHECK(moved > 0.05);
+    }
+    cf_mesh_destroy(&res);
+    cf_flow_destroy(&flow);
+    /* a boundary vertex left out, an interior vertex, a malformed line: input errors */
+    static const char *const bad[] = {"missing", "interior", "malformed", "twice"};
+    for (int b = 0; b < 4; ++b) {
+        fp = fopen(tf, "w");
+        for (int32_t k = b == 0 ? 1 : 0; k < off[2]; ++k) {
+            const double *t = targets + 3 * lv[k];
+            fprintf(fp, "%d %.17g %.17g %.17g\n", lv[k], t[0], t[1], t[2]);
+        }
+        if (b == 1) fprintf(fp, "%d 1 0 0\n", lv[off[0]] + 24); /* the next ring up is interior */
+        if (b == 2) fprintf(fp, "%d 1 0\n", lv[0]);
+        if (b == 3) fprintf(fp, "%d 1 0 0\n", lv[0]);
+        fclose(fp);
+        snprintf(args, sizeof args, "flow '%s' -o '%s' --method spin-willmore --boundary-targets '%s' -q", in, out, tf);
+        int code = run_cli(args);
+        if (code != 2) fprintf(stderr, "   %s targets: exit %d, expected 2\n", bad[b], code);
+        CHECK(code == 2);
+    }
+    /* targets with another method or another boundary mode: usage errors */
+    snprintf(args, sizeof args, "flow '%s' -o '%s' --method implicit-mcf --boundary-targets '%s' -q", in, out, tf);
+    CHECK(run_cli(args) == 1);
+    snprintf(args, sizeof args, "flow '%s' -o '%s' --method spin-willmore -p boundary=fixed --boundary-targets '%s' -q", in, out, tf);
+    CHECK(run_cli(args) == 1);
+    free(targets);
+    cf_mesh_destroy(&mesh);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 static void test_curve_cli(void)
 {
     cf_context *ctx = cft_context();
@@ -112,6 +196,7 @@ static void test_curve_cli(void)
 int main(void)
 {
     CFT_RUN(test_spin_cli);
+    CFT_RUN(test_boundary_targets_cli);
     CFT_RUN(test_curve_cli);
     return cft_finish();
 }

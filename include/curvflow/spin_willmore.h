@@ -106,6 +106,14 @@ typedef struct cf_spin_willmore_options {
                                 * surface every step (one Laplacian solve per form with the current
                                 * surface's Laplacian); 0 keeps the input's forms, as the paper.
                                 * Default 1 */
+    double regularization;     /* weight alpha of |lambda - 1|^2 in the step's eigenproblem, in units
+                                * of 4 pi / area (the paper is silent): one inverse iteration from
+                                * lambda = 1 on X(rho) + alpha M minimises |(D - rho) lambda|^2 +
+                                * alpha |lambda - 1|^2, so alpha damps the modes of X whose
+                                * eigenvalue is below it. Default 1e-3 (just enough to factorise
+                                * the singular X(0)); 1-100 keeps long thin shapes with a near-kernel
+                                * of X (blade_slivers_8k) stable at small tau, at the price of a
+                                * slower flow on ordinary shapes (docs/spin.md) */
     const double *boundary_targets; /* PRESCRIBED: target directions V~ per vertex (3 nv doubles,
                                 * x y z; only boundary vertices' entries are read, each must be
                                 * finite and nonzero, and is normalised). Read once by

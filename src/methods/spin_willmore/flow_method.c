@@ -106,6 +106,7 @@ void cf_spin_willmore_options_default(cf_spin_willmore_options *o)
     o->exactness_linearized = 1;
     o->adaptive = 0;
     o->input_metric = 1;
+    o->regularization = CFI_SPIN_SHIFT;
 }
 
 static void options_default(void *options) { cf_spin_willmore_options_default(options); }
@@ -147,6 +148,8 @@ static const cf_param_desc spin_params[] = {
      "halve tau while a step would raise W (up to 10 times; then stop as converged), grow it back after"},
     {"exactness_linearized", CF_PARAM_BOOL, OPT(exactness_linearized), 0, 1, NULL,
      "exactness as the discrete linearisation of 'no periods' (0: App. C's Z_i on closed surfaces)"},
+    {"regularization", CF_PARAM_DOUBLE, OPT(regularization), 1e-9, 1e6, NULL,
+     "weight of |lambda - 1|^2 in units of 4pi/area: damps near-kernel modes of thin shapes"},
     {"harmonic_update", CF_PARAM_BOOL, OPT(harmonic_update), 0, 1, NULL,
      "with App. C's Z_i: re-project the harmonic 1-forms onto the current metric each step"},
 };
@@ -410,6 +413,8 @@ static cf_status spin_create(cf_flow *flow, const void *options)
     if (!(o->blowup_factor == 0.0 || o->blowup_factor > 1.0) || !isfinite(o->blowup_factor))
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: blowup_factor must be 0 (off) or > 1, got %g",
                          o->blowup_factor);
+    if (!(o->regularization > 0.0) || !isfinite(o->regularization))
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: regularization must be > 0, got %g", o->regularization);
     if (o->power_iterations < 1)
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: power_iterations must be >= 1, got %d",
                          o->power_iterations);
@@ -547,7 +552,7 @@ static cf_status spin_create(cf_flow *flow, const void *options)
     /* desired vertex areas of Moebius balancing: the mesh's rest shape */
     st = cf_vertex_areas(ctx, mesh, mesh->positions, CF_DUAL_AREA_BARYCENTRIC, s->rest_area);
     if (st != CF_OK) goto fail;
-    s->eps = CFI_SPIN_SHIFT * 4.0 * CFI_PI / flow->initial_area;
+    s->eps = o->regularization * 4.0 * CFI_PI / flow->initial_area;
     if (o->boundary_mode == CF_SPIN_BOUNDARY_PRESCRIBED && o->boundary_targets) {
         for (int32_t i = 0; i < mesh->nv; ++i) {
             if (!mesh->vertex_on_boundary[i]) continue;
@@ -885,13 +890,19 @@ static cf_status realise_step(cf_flow *flow, spin_state *s, double tau, double *
 
     /* V. lambda from X(rho) */
     double ta = cfi_now_seconds();
-    /* The shift eps M only makes the eigenproblem definite (X(0) 1 = 0). With a
-     * fixed boundary the interior block is definite already and the problem is a
-     * linear solve, where a shift would bias lambda away from 1: at tau -> 0 it
-     * shrank the mushroom cap by 0.8 % and blade_slivers_8k by 47 % per step. */
-    st = cfi_dirac_fill(s->dirac, mesh, x, s->rho, s->fixed_boundary ? 0.0 : s->eps);
+    /* The shift eps M is the regularisation alpha |lambda - 1|^2_M (option
+     * `regularization`); it also makes the eigenproblem definite (X(0) 1 = 0).
+     * With a fixed boundary the problem is the linear least-squares solve
+     * (X_II + eps M) lambda_I = -X_IB 1 + eps M 1: without the eps M 1 on the
+     * right the shift would bias lambda toward 0 (at tau -> 0 it shrank the
+     * mushroom cap by 0.8 % and blade_slivers_8k by 47 % per step). */
+    st = cfi_dirac_fill(s->dirac, mesh, x, s->rho, s->eps);
     if (st != CF_OK) return st;
-    if (s->fixed_boundary) cfi_dirac_fix_boundary(s->dirac, mesh, s->qrhs);
+    if (s->fixed_boundary) {
+        cfi_dirac_fix_boundary(s->dirac, mesh, s->qrhs);
+        for (int32_t i = 0; i < nv; ++i)
+            if (!mesh->vertex_on_boundary[i]) s->qrhs[4 * i] += s->eps * s->area[i];
+    }
     if (s->restricted_boundary) {
         st = boundary_binormals(flow, s, x, s->binormal);
         if (st != CF_OK) return st;

@@ -61,7 +61,8 @@ double cfi_spin_integrability_error(const cf_mesh *mesh, const double *positions
  * a tiny value: with a free boundary X has a large near-kernel, and one
  * inverse iteration from lambda = 1 must not amplify it (mushroom cap: 1e-6
  * blows up after 6 steps, 1e-3 lowers W for 8 steps, then stalls); on closed meshes
- * the results agree with 1e-6 to 1e-5 relative in W (spot, bunny, bob). */
+ * the results agree with 1e-6 to 1e-5 relative in W (spot, bunny, bob).
+ * The flow's default; its option `regularization` changes it. */
 #define CFI_SPIN_SHIFT 1e-3
 /* adaptive time steps: at most this many halvings of tau within a step */
 #define CFI_SPIN_MAX_HALVINGS 10

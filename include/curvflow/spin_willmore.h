@@ -41,7 +41,8 @@ typedef enum cf_spin_boundary_mode {
     /* Sec. 6.3.1: prescribed boundary vectors. At each boundary vertex the
      * vector V = cos(phi) B + sin(phi) N of the N-B plane (B = T x N, T:
      * boundary tangent, N: vertex normal made orthogonal to T, phi =
-     * boundary_vector_angle) must map to a target direction V~: lambda is
+     * boundary_vector_angle; tilted toward T by boundary_tangent_angle)
+     * must map to a target direction V~: lambda is
      * restricted to r (a - b V~) with r the rotation V -> V~. Targets are fixed
      * at creation: the per-vertex directions of boundary_targets if given,
      * otherwise V~ = V on boundary loop 0 and V rotated by boundary_angle
@@ -69,6 +70,11 @@ typedef struct cf_spin_willmore_options {
     double boundary_angle;     /* PRESCRIBED: rotation of the target vectors, radians. Default 0 */
     double boundary_vector_angle; /* PRESCRIBED/CMC: V = cos(phi) B + sin(phi) N, |phi| <= 1.5
                                    * (V = +-N excluded, Sec. 6.3.1). Default 0 (V = B) */
+    double boundary_tangent_angle; /* PRESCRIBED/CMC: V is tilted toward the boundary tangent T,
+                                * V = cos(psi) (cos(phi) B + sin(phi) N) + sin(psi) T, |psi| <= pi/2
+                                * (pi/2: prescribed tangents, Fig. 15 centre; Sec. 6.3.1 allows any
+                                * combination of N, T, B, and the problem is elliptic and self-adjoint
+                                * only for psi = 0). Default 0 */
     double boundary_axis[3];   /* PRESCRIBED: rotation axis. Default (1, 0, 0) */
     int32_t power_iterations;  /* inverse power iterations per step, default 1 (Sec. 6.4.2) */
     int32_t normalize;         /* keep total area and area-weighted centroid (Willmore energy is

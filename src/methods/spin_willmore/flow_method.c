@@ -132,6 +132,8 @@ static const cf_param_desc spin_params[] = {
      "prescribed: rotation (radians) of the target binormals of boundary loops 1, 2, ..."},
     {"boundary_vector_angle", CF_PARAM_DOUBLE, OPT(boundary_vector_angle), -1.5, 1.5, NULL,
      "prescribed/cmc: V = cos(phi) B + sin(phi) N in the N-B plane (0: binormal; not +-N)"},
+    {"boundary_tangent_angle", CF_PARAM_DOUBLE, OPT(boundary_tangent_angle), -1.5707963267948966, 1.5707963267948966, NULL,
+     "prescribed/cmc: tilt psi of V toward the boundary tangent T (pi/2: V = T, Fig. 15 centre)"},
     {"boundary_axis_x", CF_PARAM_DOUBLE, OPT(boundary_axis[0]), -1e9, 1e9, NULL, "prescribed: rotation axis x"},
     {"boundary_axis_y", CF_PARAM_DOUBLE, OPT(boundary_axis[1]), -1e9, 1e9, NULL, "prescribed: rotation axis y"},
     {"boundary_axis_z", CF_PARAM_DOUBLE, OPT(boundary_axis[2]), -1e9, 1e9, NULL, "prescribed: rotation axis z"},
@@ -202,6 +204,7 @@ static cf_status boundary_binormals(const cf_flow *flow, const spin_state *s, co
     const cf_mesh *mesh = flow->mesh;
     const int32_t *off = mesh->boundary_loop_offsets, *lv = mesh->boundary_loop_vertices;
     double cp = cos(s->opt.boundary_vector_angle), sp = sin(s->opt.boundary_vector_angle);
+    double ct = cos(s->opt.boundary_tangent_angle), stn = sin(s->opt.boundary_tangent_angle);
     for (int32_t b = 0; b < mesh->boundary_loop_count; ++b) {
         int32_t n = off[b + 1] - off[b];
         for (int32_t k = 0; k < n; ++k) {
@@ -219,8 +222,9 @@ static cf_status boundary_binormals(const cf_flow *flow, const spin_state *s, co
             bb[0] = (t[1] * nn[2] - t[2] * nn[1]) / nl;
             bb[1] = (t[2] * nn[0] - t[0] * nn[2]) / nl;
             bb[2] = (t[0] * nn[1] - t[1] * nn[0]) / nl;
-            /* V = cos(phi) B + sin(phi) N, a vector of the N-B plane */
-            for (int c = 0; c < 3; ++c) out[3 * v + c] = cp * bb[c] + sp * nn[c] / nl;
+            /* V = cos(psi) (cos(phi) B + sin(phi) N) + sin(psi) T: the N-B plane
+             * for psi = 0, the tangent for psi = pi / 2 */
+            for (int c = 0; c < 3; ++c) out[3 * v + c] = ct * (cp * bb[c] + sp * nn[c] / nl) + stn * t[c];
         }
     }
     return CF_OK;
@@ -422,6 +426,8 @@ static cf_status spin_create(cf_flow *flow, const void *options)
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: unknown boundary mode %d", o->boundary_mode);
     double axis_len = sqrt(o->boundary_axis[0] * o->boundary_axis[0] + o->boundary_axis[1] * o->boundary_axis[1] +
                            o->boundary_axis[2] * o->boundary_axis[2]);
+    if (!(fabs(o->boundary_tangent_angle) <= 0.5 * CFI_PI + 1e-12))
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: boundary_tangent_angle must be in [-pi/2, pi/2]");
     if (!(fabs(o->boundary_vector_angle) <= 1.5))
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: boundary_vector_angle must be in [-1.5, 1.5] (V = +-N is excluded)");
     if (o->boundary_mode == CF_SPIN_BOUNDARY_PRESCRIBED && (!(axis_len > 0.0) || !isfinite(axis_len) || !isfinite(o->boundary_angle)))

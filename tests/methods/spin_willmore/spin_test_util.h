@@ -35,8 +35,10 @@ static inline double *bumped_torus_positions(const cf_mesh *torus)
 /* Boundary vectors V = cos(phi) B + sin(phi) N at every boundary vertex of x
  * (3 nv, other entries zero), built as the flow builds them (Sec. 6.3.1): T
  * the chord between the boundary neighbours, N the vertex normal made
- * orthogonal to T, B = T x N. NULL on failure; the caller frees. */
-static inline double *boundary_vectors(cf_context *ctx, const cf_mesh *mesh, const double *x, double phi)
+ * orthogonal to T, B = T x N; tilted by psi toward T (option
+ * boundary_tangent_angle). NULL on failure; the caller frees. */
+static inline double *boundary_vectors_tilted(cf_context *ctx, const cf_mesh *mesh, const double *x, double phi,
+                                              double psi)
 {
     int32_t nv = cf_mesh_vertex_count(mesh), nb = cf_mesh_boundary_loop_count(mesh);
     const int32_t *off = cf_mesh_boundary_loop_offsets(mesh), *lv = cf_mesh_boundary_loop_vertices(mesh);
@@ -60,11 +62,16 @@ static inline double *boundary_vectors(cf_context *ctx, const cf_mesh *mesh, con
             double nl = sqrt(nn[0] * nn[0] + nn[1] * nn[1] + nn[2] * nn[2]);
             for (int c = 0; c < 3; ++c) nn[c] /= nl;
             double bb[3] = {t[1] * nn[2] - t[2] * nn[1], t[2] * nn[0] - t[0] * nn[2], t[0] * nn[1] - t[1] * nn[0]};
-            for (int c = 0; c < 3; ++c) out[3 * v + c] = cos(phi) * bb[c] + sin(phi) * nn[c];
+            for (int c = 0; c < 3; ++c) out[3 * v + c] = cos(psi) * (cos(phi) * bb[c] + sin(phi) * nn[c]) + sin(psi) * t[c];
         }
     }
     free(nrm);
     return out;
+}
+
+static inline double *boundary_vectors(cf_context *ctx, const cf_mesh *mesh, const double *x, double phi)
+{
+    return boundary_vectors_tilted(ctx, mesh, x, phi, 0.0);
 }
 
 /* Rotates v (3 doubles) by angle a about the unit axis u (Rodrigues). */

@@ -82,4 +82,27 @@ static inline void rotate(double *v, const double *u, double a)
     for (int k = 0; k < 3; ++k) v[k] = c * v[k] + s * x[k] + (1.0 - c) * d * u[k];
 }
 
+/* Smallest interior angle of face f of x, in degrees. */
+static inline double face_smallest_angle(const cf_mesh *mesh, const double *x, int32_t f)
+{
+    const int32_t *tri = cf_mesh_triangles(mesh) + 3 * (int64_t)f;
+    double smallest = 180.0;
+    for (int k = 0; k < 3; ++k) {
+        const double *a = x + 3 * tri[k], *b = x + 3 * tri[(k + 1) % 3], *c = x + 3 * tri[(k + 2) % 3];
+        double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+        double cr[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+        double ang = atan2(sqrt(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]), u[0] * v[0] + u[1] * v[1] + u[2] * v[2]);
+        smallest = fmin(smallest, ang * 180.0 / 3.14159265358979323846);
+    }
+    return smallest;
+}
+
+/* Smallest angle of any face of x, in degrees. */
+static inline double smallest_angle(const cf_mesh *mesh, const double *x)
+{
+    double smallest = 180.0;
+    for (int32_t f = 0; f < cf_mesh_face_count(mesh); ++f) smallest = fmin(smallest, face_smallest_angle(mesh, x, f));
+    return smallest;
+}
+
 #endif /* CF_TESTS_SPIN_TEST_UTIL_H */

@@ -25,6 +25,7 @@
  * successive differences Q(tau) - Q(tau/2).
  */
 #include "test.h"
+#include "spin_test_util.h"
 
 #include "curvflow/flow.h"
 #include "curvflow/generate.h"
@@ -105,20 +106,7 @@ static void test_threshold_blade(void)
     if (!mesh) return;
     /* the mesh is what Fig. 18 asks for: every triangle has an angle < 10 degrees */
     int32_t nf = cf_mesh_face_count(mesh), slivers = 0;
-    const int32_t *tri = cf_mesh_triangles(mesh);
-    const double *x = cf_mesh_positions(mesh);
-    for (int32_t f = 0; f < nf; ++f) {
-        double smallest = 180.0;
-        for (int k = 0; k < 3; ++k) {
-            const double *a = x + 3 * tri[3 * f + k], *b = x + 3 * tri[3 * f + (k + 1) % 3],
-                         *c = x + 3 * tri[3 * f + (k + 2) % 3];
-            double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-            double cr[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
-            double ang = atan2(sqrt(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]), u[0] * v[0] + u[1] * v[1] + u[2] * v[2]);
-            smallest = fmin(smallest, ang * 180.0 / 3.14159265358979323846);
-        }
-        slivers += smallest < 10.0;
-    }
+    for (int32_t f = 0; f < nf; ++f) slivers += face_smallest_angle(mesh, cf_mesh_positions(mesh), f) < 10.0;
     CHECK(slivers == nf);
     int changes = 0;
     /* below the threshold: monotone for 20 steps (measured W/4pi 424.1 -> 107.1) */

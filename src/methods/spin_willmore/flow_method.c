@@ -1071,8 +1071,9 @@ static cf_status spin_step(cf_flow *flow, cf_flow_info *info)
     double tau = s->tau; /* opt.time_step unless adaptive steps changed it */
     int32_t halvings = 0;
     int stalled = 0;
+    /* a failed attempt restores x from xsave, so one copy serves every retry */
+    if (s->opt.adaptive) memcpy(s->xsave, x, 3 * (size_t)nv * sizeof(double));
     for (;;) {
-        if (s->opt.adaptive) memcpy(s->xsave, x, 3 * (size_t)nv * sizeof(double));
         st = realise_step(flow, s, tau, &t_asm, &t_fac, &t_sol);
         if (!s->opt.adaptive) break;
         if (st == CF_OK && s->energy <= energy_before) break;

@@ -51,6 +51,21 @@ static cf_flow *make_flow(cf_context *ctx, const cf_mesh *mesh, double tau, int 
 
 static double period_part(cf_context *ctx, const cf_mesh *mesh, const double *x, const double *edges);
 
+/* Takes `steps` steps, each of which must succeed without raising W;
+ * returns the final energy (the start energy if flow is NULL). */
+static double monotone_steps(cf_context *ctx, cf_flow *flow, int steps)
+{
+    if (!flow) return 0.0;
+    double w = cf_flow_energy(flow);
+    for (int s = 0; s < steps; ++s) {
+        cf_flow_info info;
+        CHECK_OK(ctx, cf_flow_step(flow, &info));
+        CHECK_LE(info.energy, w);
+        w = info.energy;
+    }
+    return w;
+}
+
 /* Total mean curvature sum_i A_i H_i. */
 static double total_curvature(cf_context *ctx, const cf_mesh *mesh, const double *x)
 {
@@ -208,13 +223,7 @@ static void test_exactness_genus_one(void)
     CHECK(period[0] >= 10.0 * period[1]);
     /* the default flow lowers W monotonically with triangles kept healthy */
     cf_flow *flow = make_flow(ctx, mesh, 0.5, 1, 1, 1, 0);
-    double w = cf_flow_energy(flow), w0 = w;
-    cf_flow_info info = {0};
-    for (int s = 0; s < 10; ++s) {
-        CHECK_OK(ctx, cf_flow_step(flow, &info));
-        CHECK_LE(info.energy, w);
-        w = info.energy;
-    }
+    double w0 = cf_flow_energy(flow), w = monotone_steps(ctx, flow, 10);
     cf_stats q;
     CHECK_OK(ctx, cf_quasi_conformal_error(ctx, mesh, cf_mesh_positions(mesh), cf_flow_positions(flow), NULL, &q));
     int32_t nf = cf_mesh_face_count(mesh);
@@ -419,13 +428,7 @@ static void test_exactness_genus_three(void)
      * 12.75; 15.2 with the paper's Z_i) with the smallest angle 18.8 degrees;
      * after about 16 steps (W/4pi 9.1) the cone tips collapse (test blowup) */
     cf_flow *flow = make_flow(ctx, mesh, 0.05, 1, 1, 1, 0);
-    double w = cf_flow_energy(flow), w0 = w;
-    cf_flow_info info = {0};
-    for (int s = 0; s < 8; ++s) {
-        CHECK_OK(ctx, cf_flow_step(flow, &info));
-        CHECK_LE(info.energy, w);
-        w = info.energy;
-    }
+    double w0 = cf_flow_energy(flow), w = monotone_steps(ctx, flow, 8);
     CHECK_LE(w, 0.55 * w0);
     double min_angle = smallest_angle(mesh, cf_flow_positions(flow));
     fprintf(stderr, "   elephant 8 steps at tau 0.05: W/4pi %.3f -> %.3f, smallest angle %.2f deg\n",
@@ -444,12 +447,7 @@ static void test_exactness_genus_three(void)
         so->tolerance = 0.0;
         so->regularization = 100.0;
         CHECK_OK(ctx, cf_flow_create(ctx, mesh, NULL, &o, &flow));
-        w = w0;
-        for (int s = 0; s < 20 && flow; ++s) {
-            CHECK_OK(ctx, cf_flow_step(flow, &info));
-            CHECK_LE(info.energy, w);
-            w = info.energy;
-        }
+        w = monotone_steps(ctx, flow, 20);
         double angle = flow ? smallest_angle(mesh, cf_flow_positions(flow)) : 0.0;
         fprintf(stderr, "   elephant 20 steps at tau 0.1, regularization 100: W/4pi %.3f -> %.3f, smallest angle %.2f deg\n",
                 w0 / (4 * 3.14159265358979323846), w / (4 * 3.14159265358979323846), angle);

@@ -18,6 +18,16 @@
 #include <stdio.h>
 #include <string.h>
 
+/* The range of geometry the library computes with. Volumes are cubes of
+ * coordinates, and the eigenproblem of the Willmore flow and the Gram matrices
+ * of its constraints multiply areas: a 1e60 (or 1e-60) copy of spot_3k fails
+ * in the Willmore flow, 1e90 already in implicit MCF (areas squared overflow),
+ * while every flow gives the unit result, scaled, at 1e+-45
+ * (tests/methods/test_flow.c). Coordinates beyond 1e50 and faces whose edges
+ * are all shorter than 1e-50 are therefore rejected with "rescale the mesh". */
+#define CFI_MESH_MAX_COORDINATE 1e50
+#define CFI_MESH_MIN_EDGE 1e-50
+
 /* ------------------------------------------------------------------------ */
 /* Defect recording: strict mode stops at the first defect, report mode
  * counts them all and keeps the first message. */
@@ -255,6 +265,17 @@ static double face_area_ratio(const double *p, const int32_t *t, double *longest
     return 0.5 * sqrt(x * x + y * y + z * z);
 }
 
+/* Largest |component| of the face's edge vectors (no squares: no underflow). */
+static double face_longest_component(const double *p, const int32_t *t)
+{
+    double m = 0.0;
+    for (int e = 0; e < 3; ++e) {
+        const double *a = p + 3 * (size_t)t[e], *b = p + 3 * (size_t)t[(e + 1) % 3];
+        for (int k = 0; k < 3; ++k) m = fmax(m, fabs(b[k] - a[k]));
+    }
+    return m;
+}
+
 /* Runs every check; fills s (sorted halfedges, face_ok). */
 static cf_status run_checks(checker *c, const cf_mesh_desc *d, scratch *s)
 {
@@ -307,6 +328,16 @@ static cf_status run_checks(checker *c, const cf_mesh_desc *d, scratch *s)
                     return c->first;
                 break;
             }
+            if (fabs(x) > CFI_MESH_MAX_COORDINATE) {
+                /* finite, but cubes of lengths (volumes) and squares of areas
+                 * would overflow: every later result would be Inf or NaN */
+                if (defect(c, &r->nonfinite_coordinates, CF_ERR_NONFINITE,
+                           "vertex %d: coordinate %c = %.3g is out of range (|x| > %.0e, volumes would overflow); "
+                           "rescale the mesh",
+                           v, axis[k], x, CFI_MESH_MAX_COORDINATE))
+                    return c->first;
+                break;
+            }
         }
     /* 3b. texture coordinates */
     if (d->uv) {
@@ -337,7 +368,17 @@ static cf_status run_checks(checker *c, const cf_mesh_desc *d, scratch *s)
         if (!s->face_ok[f]) continue;
         double l2;
         double area = face_area_ratio(p, tri + 3 * (size_t)f, &l2);
-        if (!isfinite(area) || !isfinite(l2)) continue; /* already reported as non-finite */
+        if (!isfinite(area) || !isfinite(l2)) continue; /* already reported as non-finite or out of range */
+        double longest = face_longest_component(p, tri + 3 * (size_t)f);
+        if (longest > 0.0 && longest < CFI_MESH_MIN_EDGE) {
+            /* squared lengths underflow: the face is not degenerate, only too small to measure */
+            if (defect(c, &r->degenerate_faces, CF_ERR_DEGENERATE_FACE,
+                       "face %d: its edges are shorter than %.0e (longest component %.3g), below the range of "
+                       "lengths this library computes with; rescale the mesh",
+                       f, CFI_MESH_MIN_EDGE, longest))
+                return c->first;
+            continue;
+        }
         if (area <= 1e-14 * l2) {
             if (defect(c, &r->degenerate_faces, CF_ERR_DEGENERATE_FACE, "face %d: zero area", f)) return c->first;
         }

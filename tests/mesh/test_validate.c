@@ -75,6 +75,43 @@ static void test_nonfinite(void)
     expect(pos, 4, tet_tri, 4, CF_ERR_NONFINITE, "vertex 3: coordinate z is infinite");
 }
 
+/* Finite coordinates outside the range the library computes with: beyond
+ * 1e50 areas squared and volumes overflow (a 1e90 copy of spot_3k made the
+ * Willmore flow fail with "eigenvector solve failed" and implicit MCF with
+ * "initial energy is not finite"); edges below 1e-50 underflow when squared.
+ * Both are rejected with a message that says to rescale; 1e45 and 1e-45
+ * copies are accepted (and flow like the unit one: tests/methods/test_flow.c). */
+static void test_out_of_range_coordinates(void)
+{
+    double pos[12];
+    for (int i = 0; i < 12; ++i) pos[i] = 1e60 * tet_pos[i];
+    expect(pos, 4, tet_tri, 4, CF_ERR_NONFINITE,
+           "vertex 1: coordinate x = 1e+60 is out of range (|x| > 1e+50, volumes would overflow); rescale the mesh");
+    for (int i = 0; i < 12; ++i) pos[i] = 1e-60 * tet_pos[i];
+    expect(pos, 4, tet_tri, 4, CF_ERR_DEGENERATE_FACE,
+           "face 0: its edges are shorter than 1e-50 (longest component 1e-60), below the range of lengths this "
+           "library computes with; rescale the mesh");
+    const double inside[] = {1e45, 1e-45};
+    for (int t = 0; t < 2; ++t) {
+        for (int i = 0; i < 12; ++i) pos[i] = inside[t] * tet_pos[i];
+        cf_context *ctx = cft_context();
+        cf_mesh_desc d = {4, pos, 4, tet_tri, 0, NULL, NULL};
+        cf_mesh *m = NULL;
+        CHECK_OK(ctx, cf_mesh_create(ctx, &d, &m));
+        cf_mesh_destroy(&m);
+        cf_context_destroy(&ctx);
+    }
+    /* the report counts them with the non-finite coordinates and the degenerate faces */
+    for (int i = 0; i < 12; ++i) pos[i] = 1e60 * tet_pos[i];
+    cf_context *ctx = cft_context();
+    cf_mesh_desc d = {4, pos, 4, tet_tri, 0, NULL, NULL};
+    cf_mesh_report r;
+    CHECK_OK(ctx, cf_mesh_validate(ctx, &d, &r));
+    CHECK(r.nonfinite_coordinates == 3);
+    CHECK(r.degenerate_faces == 0);
+    cf_context_destroy(&ctx);
+}
+
 static void test_zero_area(void)
 {
     /* vertex 3 moved onto the segment 1-2: face 3 (1, 2, 3) is collinear */
@@ -236,6 +273,7 @@ int main(void)
     CFT_RUN(test_index_out_of_range);
     CFT_RUN(test_repeated_index);
     CFT_RUN(test_nonfinite);
+    CFT_RUN(test_out_of_range_coordinates);
     CFT_RUN(test_zero_area);
     CFT_RUN(test_nonmanifold_edge);
     CFT_RUN(test_nonmanifold_vertex);

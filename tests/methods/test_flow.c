@@ -11,6 +11,7 @@
 #include "curvflow/ops.h"
 #include "test.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -157,6 +158,58 @@ static void test_step_info_and_no_allocation(void)
         cf_flow_destroy(&flow);
         CHECK(flow == NULL);
     }
+    free(x0);
+    cf_mesh_destroy(&mesh);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+/* Every flow is scale-free (time steps in units of the mesh's own size):
+ * across the range of coordinates the mesh check accepts (1e-50 .. 1e50) the
+ * scaled result is the unscaled one, scaled, and the energy scales by a
+ * fixed power (area s^2; bi-Laplacian and Willmore energies s^0). At 1e60
+ * areas squared would overflow, so cf_mesh_create rejects such meshes
+ * (tests/mesh/test_validate.c). */
+static void test_scale_invariance(void)
+{
+    cf_context *ctx = cft_context();
+    double *x0 = NULL;
+    cf_mesh *mesh = noisy_sphere(ctx, 2, &x0);
+    if (!mesh) { cf_context_destroy(&ctx); return; }
+    int32_t nv = cf_mesh_vertex_count(mesh);
+    double *xs = malloc(3 * (size_t)nv * sizeof *xs);
+    double *ref = malloc(3 * (size_t)nv * sizeof *ref);
+    const double scales[] = {1e45, 1e-45};
+    for (int k = CF_FLOW_EXPLICIT_MCF; k <= CF_FLOW_SPIN_WILLMORE; ++k) {
+        cf_flow_options o;
+        CHECK_OK(ctx, cf_flow_options_default((cf_flow_kind)k, &o));
+        cf_flow *flow = NULL;
+        CHECK_OK(ctx, cf_flow_create(ctx, mesh, x0, &o, &flow));
+        if (!flow) continue;
+        for (int s = 0; s < 2; ++s) CHECK_OK(ctx, cf_flow_step(flow, NULL));
+        double e_ref = cf_flow_energy(flow);
+        memcpy(ref, cf_flow_positions(flow), 3 * (size_t)nv * sizeof *ref);
+        cf_flow_destroy(&flow);
+        for (size_t t = 0; t < sizeof scales / sizeof scales[0]; ++t) {
+            double scale = scales[t];
+            for (int32_t i = 0; i < 3 * nv; ++i) xs[i] = scale * x0[i];
+            CHECK_OK(ctx, cf_flow_create(ctx, mesh, xs, &o, &flow));
+            if (!flow) continue;
+            for (int s = 0; s < 2; ++s) CHECK_OK(ctx, cf_flow_step(flow, NULL));
+            double worst = 0.0;
+            for (int32_t i = 0; i < 3 * nv; ++i) worst = fmax(worst, fabs(cf_flow_positions(flow)[i] / scale - ref[i]));
+            if (worst > 1e-9) printf("  %s at scale %g: positions differ by %g\n", cf_flow_kind_name((cf_flow_kind)k), scale, worst);
+            CHECK_LE(worst, 1e-9);
+            /* energy = scale^p e_ref with an integer p */
+            double p = log(cf_flow_energy(flow) / e_ref) / log(scale);
+            CHECK(isfinite(p));
+            CHECK_NEAR(p, round(p), 0.0, 1e-9);
+            CHECK(round(p) == (k <= CF_FLOW_CONFORMAL_MCF ? 2.0 : 0.0));
+            cf_flow_destroy(&flow);
+        }
+    }
+    free(xs);
+    free(ref);
     free(x0);
     cf_mesh_destroy(&mesh);
     CHECK(cf_context_bytes_in_use(ctx) == 0);
@@ -331,6 +384,7 @@ int main(void)
     CFT_RUN(test_registry);
     CFT_RUN(test_options_by_name);
     CFT_RUN(test_step_info_and_no_allocation);
+    CFT_RUN(test_scale_invariance);
     CFT_RUN(test_failed_step_keeps_state);
     CFT_RUN(test_cancel_and_run);
     CFT_RUN(test_allocation_failures);

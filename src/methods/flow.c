@@ -239,11 +239,22 @@ cf_status cf_flow_options_format(const cf_flow_options *options, const cf_param_
 
 /* ---- flow life cycle ---------------------------------------------------- */
 
-static int32_t first_nonfinite_vertex(const double *x, int32_t nv)
+/* CF_OK if every coordinate is finite and within the range the mesh check
+ * accepts (mesh_internal.h); else `status` with a message naming the first
+ * bad vertex, e.g. "vertex 7: starting position is not finite". */
+static cf_status check_positions(cf_context *ctx, const double *x, int32_t nv, cf_status status, const char *what)
 {
-    for (int32_t v = 0; v < nv; ++v)
-        if (!isfinite(x[3 * v]) || !isfinite(x[3 * v + 1]) || !isfinite(x[3 * v + 2])) return v;
-    return -1;
+    for (int32_t v = 0; v < nv; ++v) {
+        const double *p = x + 3 * (int64_t)v;
+        if (fabs(p[0]) <= CFI_MESH_MAX_COORDINATE && fabs(p[1]) <= CFI_MESH_MAX_COORDINATE &&
+            fabs(p[2]) <= CFI_MESH_MAX_COORDINATE)
+            continue;
+        if (isfinite(p[0]) && isfinite(p[1]) && isfinite(p[2]))
+            return cfi_error(ctx, status, "vertex %d: %s (%.3g, %.3g, %.3g) is out of range (|x| > %.0e)", v, what,
+                             p[0], p[1], p[2], CFI_MESH_MAX_COORDINATE);
+        return cfi_error(ctx, status, "vertex %d: %s is not finite", v, what);
+    }
+    return CF_OK;
 }
 
 /* Area and volume of the current positions into *info, with drifts. */
@@ -285,8 +296,8 @@ cf_status cf_flow_create(cf_context *ctx, const cf_mesh *mesh, const double *pos
     if (!m) return cfi_error(ctx, CF_ERR_INVALID_ARG, "unknown flow kind %d", (int)options->kind);
     int32_t nv = mesh->nv;
     const double *start = positions ? positions : mesh->positions;
-    int32_t bad = first_nonfinite_vertex(start, nv);
-    if (bad >= 0) return cfi_error(ctx, CF_ERR_NONFINITE, "vertex %d: starting position is not finite", bad);
+    cf_status bad = check_positions(ctx, start, nv, CF_ERR_NONFINITE, "starting position");
+    if (bad != CF_OK) return bad;
 
     cf_flow *flow = CFI_ALLOC(ctx, cf_flow, 1);
     if (!flow) return CF_ERR_NOMEM;
@@ -369,11 +380,8 @@ cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info)
         if (ctx->last_status == CF_OK) cfi_error(ctx, st, "%s step failed (%s)", flow->method->name, cf_status_name(st));
         return fail_step(flow, st, iteration);
     }
-    int32_t bad = first_nonfinite_vertex(flow->positions, nv);
-    if (bad >= 0) {
-        cfi_error(ctx, CF_ERR_NUMERICAL, "vertex %d: position is not finite", bad);
+    if (check_positions(ctx, flow->positions, nv, CF_ERR_NUMERICAL, "position") != CF_OK)
         return fail_step(flow, CF_ERR_NUMERICAL, iteration);
-    }
     if (!isfinite(step.energy)) {
         cfi_error(ctx, CF_ERR_NUMERICAL, "energy is %s", isnan(step.energy) ? "NaN" : "infinite");
         return fail_step(flow, CF_ERR_NUMERICAL, iteration);
@@ -423,8 +431,8 @@ cf_status cf_flow_set_positions(cf_flow *flow, const double *positions)
     cf_context *ctx = flow->ctx;
     if (!positions) return cfi_error(ctx, CF_ERR_INVALID_ARG, "positions are NULL");
     int32_t nv = flow->mesh->nv;
-    int32_t bad = first_nonfinite_vertex(positions, nv);
-    if (bad >= 0) return cfi_error(ctx, CF_ERR_NONFINITE, "vertex %d: position is not finite", bad);
+    cf_status bad = check_positions(ctx, positions, nv, CF_ERR_NONFINITE, "position");
+    if (bad != CF_OK) return bad;
     memcpy(flow->saved_positions, flow->positions, 3 * (size_t)nv * sizeof(double));
     memcpy(flow->positions, positions, 3 * (size_t)nv * sizeof(double));
     cf_status st = flow->method->reset ? flow->method->reset(flow) : CF_OK;

@@ -208,6 +208,15 @@ static void test_scale_invariance(void)
             cf_flow_destroy(&flow);
         }
     }
+    /* starting positions beyond the range are refused up front, naming the vertex */
+    for (int32_t i = 0; i < 3 * nv; ++i) xs[i] = 1e60 * x0[i];
+    cf_flow_options o;
+    CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o));
+    cf_flow *flow = NULL;
+    CHECK_STATUS(cf_flow_create(ctx, mesh, xs, &o, &flow), CF_ERR_NONFINITE);
+    CHECK(flow == NULL);
+    CHECK(strncmp(cf_context_message(ctx), "vertex 0: starting position (", 29) == 0);
+    CHECK(strstr(cf_context_message(ctx), "is out of range (|x| > 1e+50)") != NULL);
     free(xs);
     free(ref);
     free(x0);

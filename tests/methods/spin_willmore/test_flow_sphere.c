@@ -11,6 +11,9 @@
  * vertex-based spin transformation realises only slowly, and the conformal
  * map to the sphere has large area distortion. Those cases assert the
  * measured behaviour with a margin (regression bounds) and print it.
+ * test_conformality_reference shows that mean Q <= 1.10 is below what the
+ * converged conformalized MCF reaches on the same meshes (1.125 / 1.123),
+ * and that the spin flow at small tau matches that reference.
  */
 #include "test.h"
 
@@ -18,6 +21,7 @@
 #include "curvflow/generate.h"
 #include "curvflow/io.h"
 #include "curvflow/metrics.h"
+#include "curvflow/ops.h"
 #include "curvflow/spin_willmore.h"
 
 #include <stdlib.h>
@@ -114,6 +118,90 @@ static void shared_case(const char *name, double w_bound, double q_bound, double
 static void test_spot(void) { shared_case("spot_3k.obj", 1.07, 1.19, 1.65, 3e-3); }
 static void test_bunny(void) { shared_case("bunny_2k.obj", 1.22, 1.23, 3.8, 4e-3); }
 
+/* Mean Q of the fully converged conformalized mean curvature flow (Kazhdan,
+ * Solomon, Ben-Chen 2012, area rescaled every step), the usual conformal map
+ * to the sphere in libigl-style tools: an independent reference for how
+ * conformal a vertex-sampled map of this triangulation onto the round sphere
+ * can be. Returns its W/4pi in *w. */
+static double reference_q(cf_context *ctx, const cf_mesh *mesh, double *w)
+{
+    cf_flow_options o;
+    CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_CONFORMAL_MCF, &o));
+    CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "rescale", "true"));
+    cf_flow *flow = NULL;
+    CHECK_OK(ctx, cf_flow_create(ctx, mesh, NULL, &o, &flow));
+    if (!flow) return 0.0;
+    CHECK_OK(ctx, cf_flow_run(flow, 400, NULL));
+    cf_stats q;
+    CHECK_OK(ctx, cf_quasi_conformal_error(ctx, mesh, cf_mesh_positions(mesh), cf_flow_positions(flow), NULL, &q));
+    double wn = 0.0;
+    CHECK_OK(ctx, cf_willmore_energy(ctx, mesh, cf_flow_positions(flow), &wn));
+    *w = wn / (4.0 * PI);
+    cf_flow_destroy(&flow);
+    return q.weighted_mean;
+}
+
+/* Spin flow with time step tau for `steps` steps: mean Q against the input. */
+static double spin_q(cf_context *ctx, const cf_mesh *mesh, double tau, int steps, double *w)
+{
+    cf_flow_options o;
+    CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o));
+    ((cf_spin_willmore_options *)cf_flow_options_method(&o))->time_step = tau;
+    ((cf_spin_willmore_options *)cf_flow_options_method(&o))->tolerance = 0.0;
+    cf_flow *flow = NULL;
+    CHECK_OK(ctx, cf_flow_create(ctx, mesh, NULL, &o, &flow));
+    if (!flow) return 0.0;
+    CHECK_OK(ctx, cf_flow_run(flow, steps, NULL));
+    *w = cf_flow_energy(flow) / (4.0 * PI);
+    cf_stats q;
+    CHECK_OK(ctx, cf_quasi_conformal_error(ctx, mesh, cf_mesh_positions(mesh), cf_flow_positions(flow), NULL, &q));
+    cf_flow_destroy(&flow);
+    return q.weighted_mean;
+}
+
+/* Fig. 1's "quality of the triangulation almost perfectly preserved",
+ * measured against the best a conformal map of the same triangulation onto
+ * the sphere reaches. The converged conformalized MCF has mean Q 1.125 on
+ * spot_3k and 1.123 on bunny_2k, above the issue's bound of 1.10: that bound
+ * is below what a cotan-conformal map of these meshes achieves, so no
+ * conformal flow can meet it at this resolution (the built-in bumpy sphere,
+ * whose conformal factor varies less, meets it). The spin flow's own
+ * distortion is first order in tau (Fig. 16, test `constraints`) and at
+ * small tau it matches the reference: tau = 0.05 for 100 steps gives 1.125
+ * on spot and 1.144 on bunny. At the default tau = 0.5, 10 steps give 1.163
+ * and 1.200 (the price of reaching the sphere in 10 steps). */
+static void reference_case(const char *name, double small_tau_ratio_bound)
+{
+    const char *path = cft_optional_shared_mesh(name);
+    if (!path) return;
+    cf_context *ctx = cft_context();
+    cf_mesh *mesh = NULL;
+    CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
+    if (!mesh) { cf_context_destroy(&ctx); return; }
+    double w_ref = 0.0, w_small = 0.0, w_default = 0.0;
+    double q_ref = reference_q(ctx, mesh, &w_ref);
+    double q_small = spin_q(ctx, mesh, 0.05, 100, &w_small);
+    double q_default = spin_q(ctx, mesh, 0.5, 10, &w_default);
+    fprintf(stderr,
+            "   %s: converged conformalized MCF Q mean %.4f (W/4pi %.4f); spin tau 0.05 x 100: %.4f (W/4pi %.4f), "
+            "tau 0.5 x 10: %.4f (W/4pi %.4f); (Q - 1) ratios %.2f, %.2f\n",
+            name, q_ref, w_ref, q_small, w_small, q_default, w_default, (q_small - 1.0) / (q_ref - 1.0),
+            (q_default - 1.0) / (q_ref - 1.0));
+    CHECK_LE(w_ref, 1.0);      /* the reference did reach the sphere */
+    CHECK(q_ref > 1.11);       /* ... and its floor is above the 1.10 */
+    CHECK_LE(q_small - 1.0, small_tau_ratio_bound * (q_ref - 1.0));
+    CHECK_LE(q_small, q_default); /* distortion grows with tau */
+    cf_mesh_destroy(&mesh);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+static void test_conformality_reference(void)
+{
+    reference_case("spot_3k.obj", 1.05);
+    reference_case("bunny_2k.obj", 1.25);
+}
+
 /* Parameters by name through the common interface (curvflow flow --param). */
 static void test_params_by_name(void)
 {
@@ -189,6 +277,7 @@ int main(void)
     CFT_RUN(test_bumpy_sphere);
     CFT_RUN(test_spot);
     CFT_RUN(test_bunny);
+    CFT_RUN(test_conformality_reference);
     CFT_RUN(test_params_by_name);
     return cft_finish();
 }

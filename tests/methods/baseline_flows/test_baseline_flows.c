@@ -300,8 +300,55 @@ static void test_conformal_mcf_is_conformal(void)
     cf_context_destroy(&ctx);
 }
 
+/* Without rescaling the implicit flows shrink a closed surface to a point in
+ * finite time; the step that takes the area below 1e-6 of the start is
+ * refused with a message that says so (before: the next factorisation failed
+ * with "not positive definite at column ..."), the last good state is kept,
+ * and with rescale=true the same run goes on. */
+static void test_collapse_reported(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *mesh = NULL;
+    CHECK_OK(ctx, cf_generate_bumpy_sphere(ctx, 3, 0.2, 7u, &mesh));
+    if (!mesh) { cf_context_destroy(&ctx); return; }
+    const cf_flow_kind kinds[] = {CF_FLOW_IMPLICIT_MCF, CF_FLOW_CONFORMAL_MCF, CF_FLOW_IMPLICIT_BILAPLACIAN};
+    for (int k = 0; k < 3; ++k) {
+        cf_flow_options o;
+        CHECK_OK(ctx, cf_flow_options_default(kinds[k], &o)); /* default time steps */
+        cf_flow *flow = NULL;
+        CHECK_OK(ctx, cf_flow_create(ctx, mesh, NULL, &o, &flow));
+        if (!flow) continue;
+        double a0 = cf_flow_last_info(flow)->area;
+        cf_status st = cf_flow_run(flow, 300, NULL);
+        CHECK_STATUS(st, CF_ERR_NUMERICAL);
+        const char *msg = cf_context_message(ctx);
+        fprintf(stderr, "  %s\n", msg);
+        CHECK(strstr(msg, "iteration") == msg);
+        CHECK(strstr(msg, "collapsed") != NULL);
+        CHECK(strstr(msg, "rescale=true") != NULL);
+        /* the kept state is the last one above the threshold */
+        double area = 0.0;
+        CHECK_OK(ctx, cf_total_area(ctx, mesh, cf_flow_positions(flow), &area));
+        CHECK(area >= 1e-6 * a0);
+        CHECK(area < 0.05 * a0); /* ... and the flow did run to the end */
+        int64_t failed_at = cf_flow_last_info(flow)->iteration + 1;
+        cf_flow_destroy(&flow);
+
+        CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "rescale", "true"));
+        CHECK_OK(ctx, cf_flow_create(ctx, mesh, NULL, &o, &flow));
+        if (!flow) continue;
+        CHECK_OK(ctx, cf_flow_run(flow, failed_at + 10, NULL));
+        CHECK_NEAR(cf_flow_last_info(flow)->area, a0, 1e-9, 0.0);
+        cf_flow_destroy(&flow);
+    }
+    cf_mesh_destroy(&mesh);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 int main(void)
 {
+    CFT_RUN(test_collapse_reported);
     CFT_RUN(test_conformal_mcf_is_conformal);
     CFT_RUN(test_explicit_stability);
     CFT_RUN(test_rescale);

@@ -52,9 +52,15 @@ cf_status cf_handle_set_create(cf_context *ctx, int32_t count, const int32_t *ve
     for (int32_t k = 0; k < count; ++k) {
         if (vertices[k] < 0)
             return cfi_error(ctx, CF_ERR_INVALID_ARG, "handle %d: vertex index %d is negative", k, vertices[k]);
-        for (int d = 0; d < 3; ++d)
-            if (!isfinite(targets[3 * k + d]))
+        for (int d = 0; d < 3; ++d) {
+            double t = targets[3 * k + d];
+            if (!isfinite(t))
                 return cfi_error(ctx, CF_ERR_NONFINITE, "handle %d (vertex %d): target is not finite", k, vertices[k]);
+            if (fabs(t) > CFI_MESH_MAX_COORDINATE)
+                return cfi_error(ctx, CF_ERR_NONFINITE,
+                                 "handle %d (vertex %d): target coordinate %.3g is out of range (|x| > %.0e)", k,
+                                 vertices[k], t, CFI_MESH_MAX_COORDINATE);
+        }
     }
     cf_handle_set *h = alloc_set(ctx, count);
     if (!h) return CF_ERR_NOMEM;
@@ -114,6 +120,13 @@ static cf_status jerr(const json_reader *r, const char *set, const char *fmt, co
     if (set)
         return cfi_error(r->ctx, CF_ERR_PARSE, "%s: set '%s': %s%s", r->src, set, fmt, detail ? detail : "");
     return cfi_error(r->ctx, CF_ERR_PARSE, "%s: %s%s", r->src, fmt, detail ? detail : "");
+}
+
+/* Targets obey the mesh's coordinate range (mesh_internal.h). */
+static int target_in_range(const double *p)
+{
+    return fabs(p[0]) <= CFI_MESH_MAX_COORDINATE && fabs(p[1]) <= CFI_MESH_MAX_COORDINATE &&
+           fabs(p[2]) <= CFI_MESH_MAX_COORDINATE;
 }
 
 static int read_vec3(json_t *a, double out[3])
@@ -246,10 +259,14 @@ static cf_status read_set(json_reader *r, json_t *set, size_t index, char *name_
         if (!json_is_array(jt) || json_array_size(jt) != (size_t)n)
             return cfi_error(ctx, CF_ERR_PARSE, "%s: set '%s': \"targets\" must hold %d positions, one per vertex",
                              r->src, name, (int)n);
-        for (int32_t k = 0; k < n; ++k)
+        for (int32_t k = 0; k < n; ++k) {
             if (!read_vec3(json_array_get(jt, (size_t)k), r->target + 3 * r->members[k]))
                 return cfi_error(ctx, CF_ERR_PARSE, "%s: set '%s': targets[%d] is not 3 finite numbers", r->src, name,
                                  (int)k);
+            if (!target_in_range(r->target + 3 * r->members[k]))
+                return cfi_error(ctx, CF_ERR_PARSE, "%s: set '%s': targets[%d] is beyond the range of coordinates (|x| <= %.0e)",
+                                 r->src, name, (int)k, CFI_MESH_MAX_COORDINATE);
+        }
         return CF_OK;
     }
     /* Rigid transform (plus uniform scale): x -> c + s R (x - c) + t. */
@@ -288,6 +305,11 @@ static cf_status read_set(json_reader *r, json_t *set, size_t index, char *name_
         double *o = r->target + 3 * r->members[k];
         for (int d = 0; d < 3; ++d)
             o[d] = c[d] + s * (rot[3 * d] * q[0] + rot[3 * d + 1] * q[1] + rot[3 * d + 2] * q[2]) + t[d];
+        if (!target_in_range(o))
+            return cfi_error(ctx, CF_ERR_PARSE,
+                             "%s: set '%s': the transform moves vertex %d to (%.3g, %.3g, %.3g), beyond the range of "
+                             "coordinates (|x| <= %.0e)",
+                             r->src, name, r->members[k], o[0], o[1], o[2], CFI_MESH_MAX_COORDINATE);
     }
     return CF_OK;
 }

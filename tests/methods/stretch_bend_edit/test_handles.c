@@ -66,6 +66,23 @@ static void test_bad_files(void)
                  "{\"sets\": [{\"name\": \"r\", \"vertices\": [1], \"transform\": {\"rotate\": {\"axis\": [0,0,0], "
                  "\"angle_degrees\": 10}}}]}",
                  "zero vector", NULL);
+    /* targets beyond the mesh's coordinate range (1e50) are refused by the
+     * reader, naming the set (a 1e308 translation used to fail later as
+     * "energy is not finite") */
+    expect_error(ctx, mesh, "{\"sets\": [{\"name\": \"far\", \"vertices\": [1], \"targets\": [[1e60, 0, 0]]}]}",
+                 "set 'far': targets[0] is beyond the range of coordinates", NULL);
+    expect_error(ctx, mesh,
+                 "{\"sets\": [{\"name\": \"far\", \"vertices\": [1], \"transform\": {\"translate\": [1e308, 0, 0]}}]}",
+                 "set 'far': the transform moves vertex 1 to (1e+308", "beyond the range of coordinates");
+    {
+        /* ... and so is an array-built set */
+        cf_handle_set *far = NULL;
+        const int32_t v1 = 1;
+        const double t1[3] = {0.0, 2e50, 0.0};
+        CHECK_STATUS(cf_handle_set_create(ctx, 1, &v1, t1, &far), CF_ERR_NONFINITE);
+        CHECK(far == NULL);
+        CHECK(contains(cf_context_message(ctx), "handle 0 (vertex 1): target coordinate 2e+50 is out of range"));
+    }
     cf_handle_set *h = NULL;
     CHECK_STATUS(cf_handle_set_read_json(ctx, mesh, NULL, "/nonexistent/h.json", &h), CF_ERR_IO);
     CHECK(contains(cf_context_message(ctx), "/nonexistent/h.json"));

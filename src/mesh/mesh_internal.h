@@ -51,14 +51,5 @@ static inline int32_t cfi_he_prev(int32_t h) { return h - h % 3 + (h % 3 + 2) % 
  * all oriented like f. */
 void cfi_mesh_split4_triangles(const cf_mesh *mesh, int32_t *out);
 
-/* The range of geometry the library computes with. Volumes are cubes of
- * coordinates, and the eigenproblem of the Willmore flow and the Gram matrices
- * of its constraints multiply areas: a 1e60 (or 1e-60) copy of spot_3k fails
- * in the Willmore flow, 1e90 already in implicit MCF (areas squared overflow),
- * while every flow gives the unit result, scaled, at 1e+-45
- * (tests/methods/test_flow.c). Coordinates beyond 1e50 and faces whose edges
- * are all shorter than 1e-50 are therefore rejected with "rescale the mesh". */
-#define CFI_MESH_MAX_COORDINATE 1e50
-#define CFI_MESH_MIN_EDGE 1e-50
 
 #endif /* CF_MESH_MESH_INTERNAL_H */

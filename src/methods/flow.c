@@ -246,12 +246,12 @@ static cf_status check_positions(cf_context *ctx, const double *x, int32_t nv, c
 {
     for (int32_t v = 0; v < nv; ++v) {
         const double *p = x + 3 * (int64_t)v;
-        if (fabs(p[0]) <= CFI_MESH_MAX_COORDINATE && fabs(p[1]) <= CFI_MESH_MAX_COORDINATE &&
-            fabs(p[2]) <= CFI_MESH_MAX_COORDINATE)
+        if (fabs(p[0]) <= CFI_MAX_COORDINATE && fabs(p[1]) <= CFI_MAX_COORDINATE &&
+            fabs(p[2]) <= CFI_MAX_COORDINATE)
             continue;
         if (isfinite(p[0]) && isfinite(p[1]) && isfinite(p[2]))
             return cfi_error(ctx, status, "vertex %d: %s (%.3g, %.3g, %.3g) is out of range (|x| > %.0e)", v, what,
-                             p[0], p[1], p[2], CFI_MESH_MAX_COORDINATE);
+                             p[0], p[1], p[2], CFI_MAX_COORDINATE);
         return cfi_error(ctx, status, "vertex %d: %s is not finite", v, what);
     }
     return CF_OK;

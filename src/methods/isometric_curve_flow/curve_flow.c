@@ -99,8 +99,12 @@ cf_status cf_curve_flow_create(cf_context *ctx, int32_t n, const double *points,
     if (!options) options = &defaults;
     if (!(options->time_step > 0.0) || !isfinite(options->time_step))
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "curve_flow: time_step must be > 0, got %g", options->time_step);
-    for (int32_t i = 0; i < 2 * n; ++i)
+    for (int32_t i = 0; i < 2 * n; ++i) {
         if (!isfinite(points[i])) return cfi_error(ctx, CF_ERR_NONFINITE, "point %d: not finite", i / 2);
+        if (fabs(points[i]) > CFI_MAX_COORDINATE)
+            return cfi_error(ctx, CF_ERR_NONFINITE, "point %d: coordinate %.3g is out of range (|x| > %.0e)", i / 2,
+                             points[i], CFI_MAX_COORDINATE);
+    }
     cf_curve_flow *f = CFI_ALLOC(ctx, cf_curve_flow, 1);
     if (!f) return CF_ERR_NOMEM;
     f->ctx = ctx;
@@ -131,6 +135,13 @@ cf_status cf_curve_flow_create(cf_context *ctx, int32_t n, const double *points,
         f->len[i] = hypot(points[2 * j] - points[2 * i], points[2 * j + 1] - points[2 * i + 1]);
         if (!(f->len[i] > 0.0)) {
             st = cfi_error(ctx, CF_ERR_DEGENERATE_FACE, "edge %d (points %d, %d): zero length", i, i, j);
+            goto done;
+        }
+        if (f->len[i] < CFI_MIN_EDGE_LENGTH) {
+            st = cfi_error(ctx, CF_ERR_DEGENERATE_FACE,
+                           "edge %d (points %d, %d): length %.3g is below %.0e, the range of lengths this library "
+                           "computes with; rescale the curve",
+                           i, i, j, f->len[i], CFI_MIN_EDGE_LENGTH);
             goto done;
         }
         total += f->len[i];

@@ -56,10 +56,10 @@ cf_status cf_handle_set_create(cf_context *ctx, int32_t count, const int32_t *ve
             double t = targets[3 * k + d];
             if (!isfinite(t))
                 return cfi_error(ctx, CF_ERR_NONFINITE, "handle %d (vertex %d): target is not finite", k, vertices[k]);
-            if (fabs(t) > CFI_MESH_MAX_COORDINATE)
+            if (fabs(t) > CFI_MAX_COORDINATE)
                 return cfi_error(ctx, CF_ERR_NONFINITE,
                                  "handle %d (vertex %d): target coordinate %.3g is out of range (|x| > %.0e)", k,
-                                 vertices[k], t, CFI_MESH_MAX_COORDINATE);
+                                 vertices[k], t, CFI_MAX_COORDINATE);
         }
     }
     cf_handle_set *h = alloc_set(ctx, count);
@@ -125,8 +125,8 @@ static cf_status jerr(const json_reader *r, const char *set, const char *fmt, co
 /* Targets obey the mesh's coordinate range (mesh_internal.h). */
 static int target_in_range(const double *p)
 {
-    return fabs(p[0]) <= CFI_MESH_MAX_COORDINATE && fabs(p[1]) <= CFI_MESH_MAX_COORDINATE &&
-           fabs(p[2]) <= CFI_MESH_MAX_COORDINATE;
+    return fabs(p[0]) <= CFI_MAX_COORDINATE && fabs(p[1]) <= CFI_MAX_COORDINATE &&
+           fabs(p[2]) <= CFI_MAX_COORDINATE;
 }
 
 static int read_vec3(json_t *a, double out[3])
@@ -265,7 +265,7 @@ static cf_status read_set(json_reader *r, json_t *set, size_t index, char *name_
                                  (int)k);
             if (!target_in_range(r->target + 3 * r->members[k]))
                 return cfi_error(ctx, CF_ERR_PARSE, "%s: set '%s': targets[%d] is beyond the range of coordinates (|x| <= %.0e)",
-                                 r->src, name, (int)k, CFI_MESH_MAX_COORDINATE);
+                                 r->src, name, (int)k, CFI_MAX_COORDINATE);
         }
         return CF_OK;
     }
@@ -309,7 +309,7 @@ static cf_status read_set(json_reader *r, json_t *set, size_t index, char *name_
             return cfi_error(ctx, CF_ERR_PARSE,
                              "%s: set '%s': the transform moves vertex %d to (%.3g, %.3g, %.3g), beyond the range of "
                              "coordinates (|x| <= %.0e)",
-                             r->src, name, r->members[k], o[0], o[1], o[2], CFI_MESH_MAX_COORDINATE);
+                             r->src, name, r->members[k], o[0], o[1], o[2], CFI_MAX_COORDINATE);
     }
     return CF_OK;
 }

@@ -165,6 +165,40 @@ static void test_invalid_input(void)
     p[0] = NAN;
     CHECK_STATUS(cf_curve_flow_create(ctx, 3, p, NULL, &flow), CF_ERR_NONFINITE);
     CHECK(flow == NULL);
+    /* the library's range of lengths, 1e-50 .. 1e50 (core.h) */
+    double far[6] = {0, 0, 1e60, 0, 0, 1};
+    CHECK_STATUS(cf_curve_flow_create(ctx, 3, far, NULL, &flow), CF_ERR_NONFINITE);
+    CHECK(strstr(cf_context_message(ctx), "point 1: coordinate 1e+60 is out of range") != NULL);
+    double tiny[6] = {0, 0, 1e-60, 0, 0, 1e-60};
+    CHECK_STATUS(cf_curve_flow_create(ctx, 3, tiny, NULL, &flow), CF_ERR_DEGENERATE_FACE);
+    CHECK(strstr(cf_context_message(ctx), "edge 0 (points 0, 1): length 1e-60 is below 1e-50") != NULL);
+    CHECK(flow == NULL);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+/* Inside that range the flow is scale-free: a copy scaled by 1e+-45 flows to
+ * the unit result, scaled (to 1e-12 of the size). */
+static void test_scale_invariance(void)
+{
+    cf_context *ctx = cft_context();
+    enum { N = 64 };
+    double p[2 * N], q[2 * N], ref[2 * N];
+    noisy_circle(N, 0.05, p);
+    const double scales[] = {1.0, 1e45, 1e-45};
+    for (int t = 0; t < 3; ++t) {
+        for (int i = 0; i < 2 * N; ++i) q[i] = scales[t] * p[i];
+        cf_curve_flow *flow = NULL;
+        CHECK_OK(ctx, cf_curve_flow_create(ctx, N, q, NULL, &flow));
+        if (!flow) continue;
+        for (int s = 0; s < 10; ++s) CHECK_OK(ctx, cf_curve_flow_step(flow, NULL));
+        const double *x = cf_curve_flow_points(flow);
+        if (t == 0) memcpy(ref, x, sizeof ref);
+        double worst = 0.0;
+        for (int i = 0; i < 2 * N; ++i) worst = fmax(worst, fabs(x[i] / scales[t] - ref[i]));
+        CHECK_LE(worst, 1e-12);
+        cf_curve_flow_destroy(&flow);
+    }
     CHECK(cf_context_bytes_in_use(ctx) == 0);
     cf_context_destroy(&ctx);
 }
@@ -211,6 +245,7 @@ int main(void)
     CFT_RUN(test_closure_gap_quadratic);
     CFT_RUN(test_turning_number_kept);
     CFT_RUN(test_invalid_input);
+    CFT_RUN(test_scale_invariance);
     CFT_RUN(test_files);
     return cft_finish();
 }

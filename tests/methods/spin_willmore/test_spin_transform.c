@@ -169,6 +169,14 @@ static void test_invalid_input(void)
     rho[5] = NAN;
     CHECK_STATUS(cf_spin_transform(ctx, mesh, NULL, rho, x), CF_ERR_NONFINITE);
     CHECK(strstr(cf_context_message(ctx), "vertex 5") != NULL);
+    /* finite but far beyond any curvature of this unit sphere: refused up
+     * front (its square overflowed in App. G's matrix, failing as "cholesky
+     * factorise: entry (0, 0) is not finite") */
+    rho[5] = 1e308;
+    CHECK_STATUS(cf_spin_transform(ctx, mesh, NULL, rho, x), CF_ERR_NONFINITE);
+    CHECK(strstr(cf_context_message(ctx), "vertex 5: rho = 1e+308 is out of range") != NULL);
+    rho[5] = 1e40; /* large, yet inside the range: runs */
+    CHECK_OK(ctx, cf_spin_transform(ctx, mesh, NULL, rho, x));
     rho[5] = 0.0;
     /* allocation failures: every one must fail cleanly without leaks (the
      * mesh itself stays allocated: compare with the bytes in use before) */

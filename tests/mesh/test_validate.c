@@ -64,6 +64,19 @@ static void test_repeated_index(void)
     expect(tet_pos, 4, tri, 4, CF_ERR_REPEATED_INDEX, "face 2: vertex 3 repeated");
 }
 
+/* The tetrahedron scaled by `scale` is accepted. */
+static void expect_valid_scaled_tetrahedron(double scale)
+{
+    double pos[12];
+    for (int i = 0; i < 12; ++i) pos[i] = scale * tet_pos[i];
+    cf_context *ctx = cft_context();
+    cf_mesh_desc d = {4, pos, 4, tet_tri, 0, NULL, NULL};
+    cf_mesh *m = NULL;
+    CHECK_OK(ctx, cf_mesh_create(ctx, &d, &m));
+    cf_mesh_destroy(&m);
+    cf_context_destroy(&ctx);
+}
+
 static void test_nonfinite(void)
 {
     double pos[12];
@@ -91,16 +104,8 @@ static void test_out_of_range_coordinates(void)
     expect(pos, 4, tet_tri, 4, CF_ERR_DEGENERATE_FACE,
            "face 0: its edges are shorter than 1e-50 (longest component 1e-60), below the range of lengths this "
            "library computes with; rescale the mesh");
-    const double inside[] = {1e45, 1e-45};
-    for (int t = 0; t < 2; ++t) {
-        for (int i = 0; i < 12; ++i) pos[i] = inside[t] * tet_pos[i];
-        cf_context *ctx = cft_context();
-        cf_mesh_desc d = {4, pos, 4, tet_tri, 0, NULL, NULL};
-        cf_mesh *m = NULL;
-        CHECK_OK(ctx, cf_mesh_create(ctx, &d, &m));
-        cf_mesh_destroy(&m);
-        cf_context_destroy(&ctx);
-    }
+    expect_valid_scaled_tetrahedron(1e45);
+    expect_valid_scaled_tetrahedron(1e-45);
     /* the report counts them with the non-finite coordinates and the degenerate faces */
     for (int i = 0; i < 12; ++i) pos[i] = 1e60 * tet_pos[i];
     cf_context *ctx = cft_context();
@@ -118,14 +123,7 @@ static void test_zero_area(void)
     const double pos[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0.5, 0.5, 0};
     expect(pos, 4, tet_tri, 4, CF_ERR_DEGENERATE_FACE, "face 3: zero area");
     /* the threshold is relative: a tiny but well-shaped mesh is fine */
-    double tiny[12];
-    for (int i = 0; i < 12; ++i) tiny[i] = 1e-30 * tet_pos[i];
-    cf_context *ctx = cft_context();
-    cf_mesh_desc d = {4, tiny, 4, tet_tri, 0, NULL, NULL};
-    cf_mesh *m = NULL;
-    CHECK_OK(ctx, cf_mesh_create(ctx, &d, &m));
-    cf_mesh_destroy(&m);
-    cf_context_destroy(&ctx);
+    expect_valid_scaled_tetrahedron(1e-30);
 }
 
 static void test_nonmanifold_edge(void)

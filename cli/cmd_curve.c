@@ -58,7 +58,9 @@ int cli_curve(int argc, char **argv)
     int code = CLI_EXIT_OK;
     cf_curve *curve = NULL;
     cf_curve_flow *flow = NULL;
-    cf_status st = cf_curve_read(ctx, in, &curve);
+    cf_status st = CF_OK;
+    if ((code = cli_check_output(ctx, out, false)) != CLI_EXIT_OK) goto done;
+    st = cf_curve_read(ctx, in, &curve);
     if (st != CF_OK) {
         code = cli_fail(ctx, in, st);
         goto done;

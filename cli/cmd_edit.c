@@ -103,6 +103,11 @@ int cli_edit(int argc, char **argv)
 
     cf_context *ctx = cli_context(false);
     if (!ctx) return CLI_EXIT_NUMERICAL;
+    int out_code = cli_check_output(ctx, output, true);
+    if (out_code != CLI_EXIT_OK) {
+        cf_context_destroy(&ctx);
+        return out_code;
+    }
     cf_flow_options options;
     cf_flow_options_default(CF_FLOW_STRETCH_BEND_EDIT, &options);
     cf_stretch_bend_options *o = cf_flow_options_method(&options);

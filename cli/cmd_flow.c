@@ -211,6 +211,7 @@ int cli_flow(int argc, char **argv)
     int code = CLI_EXIT_OK;
     cf_status st;
     double *targets = NULL;
+    if ((code = cli_check_output(ctx, output, true)) != CLI_EXIT_OK) goto early;
     if (targets_path && (st = cf_flow_options_set(ctx, &options, "boundary", "prescribed")) != CF_OK) {
         code = cli_fail(ctx, "--boundary-targets", st);
         goto early;

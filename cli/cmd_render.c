@@ -110,7 +110,9 @@ int cli_render(int argc, char **argv)
     cf_mesh_data *data = NULL;
     cf_mesh *mesh = NULL;
     cf_mesh_desc desc;
-    cf_status st = cf_read_mesh_file(ctx, input, &data);
+    cf_status st = CF_OK;
+    if ((code = cli_check_output(ctx, output, false)) != CLI_EXIT_OK) goto done;
+    st = cf_read_mesh_file(ctx, input, &data);
     if (st == CF_OK) st = cf_mesh_data_desc(data, &desc);
     if (st == CF_OK) st = cf_mesh_create(ctx, &desc, &mesh);
     if (st != CF_OK) {

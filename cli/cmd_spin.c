@@ -98,6 +98,7 @@ int cli_spin(int argc, char **argv)
     cf_mesh_data *data = NULL;
     cf_mesh *mesh = NULL;
     double *rho = NULL, *x = NULL;
+    if ((code = cli_check_output(ctx, out, true)) != CLI_EXIT_OK) goto done;
     cf_status st = cf_read_mesh_file(ctx, in, &data);
     if (st != CF_OK) {
         code = cli_fail(ctx, in, st);

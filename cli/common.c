@@ -172,6 +172,51 @@ int cli_run_flow_and_write(cf_context *ctx, cf_flow *flow, cli_progress *progres
     return code;
 }
 
+int cli_check_output(cf_context *ctx, const char *path, bool mesh)
+{
+    if (!path || !*path) {
+        fprintf(stderr, "curvflow: the output path is empty\n");
+        return CLI_EXIT_INPUT;
+    }
+    if (mesh) {
+        cf_mesh_format format;
+        cf_status st = cf_mesh_format_from_path(ctx, path, &format);
+        if (st != CF_OK) {
+            int code = cli_fail(ctx, path, st);
+            return code == CLI_EXIT_USAGE ? CLI_EXIT_INPUT : code;
+        }
+    }
+    struct stat sb;
+    if (stat(path, &sb) == 0 && S_ISDIR(sb.st_mode)) {
+        fprintf(stderr, "curvflow: %s: is a directory\n", path);
+        return CLI_EXIT_INPUT;
+    }
+    /* the directory part ("." when there is none) must exist and be writable */
+    const char *slash = strrchr(path, '/');
+    char dir[4096];
+    if (!slash) {
+        strcpy(dir, ".");
+    } else {
+        size_t n = (size_t)(slash - path);
+        if (n == 0) n = 1; /* "/name" */
+        if (n >= sizeof dir) {
+            fprintf(stderr, "curvflow: %s: path too long\n", path);
+            return CLI_EXIT_INPUT;
+        }
+        memcpy(dir, path, n);
+        dir[n] = '\0';
+    }
+    if (stat(dir, &sb) != 0 || !S_ISDIR(sb.st_mode)) {
+        fprintf(stderr, "curvflow: %s: cannot write: directory %s does not exist\n", path, dir);
+        return CLI_EXIT_INPUT;
+    }
+    if (access(dir, W_OK) != 0) {
+        fprintf(stderr, "curvflow: %s: cannot write: %s\n", path, strerror(errno));
+        return CLI_EXIT_INPUT;
+    }
+    return CLI_EXIT_OK;
+}
+
 double cli_now(void)
 {
     struct timespec ts;

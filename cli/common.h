@@ -51,6 +51,13 @@ cf_context *cli_context(bool verbose);
  * exit code (2), else 0. */
 int cli_load_mesh(cf_context *ctx, const char *path, cf_mesh **out);
 
+/* Checks before a long run that OUT can be written: its directory exists and
+ * is writable, OUT is not a directory, and (mesh = true) its extension names a
+ * mesh format. Prints "curvflow: OUT: ..." and returns 2 if not, else 0. The
+ * write itself stays atomic; this only saves a run whose result could not be
+ * kept. */
+int cli_check_output(cf_context *ctx, const char *path, bool mesh);
+
 /* Creates the directory (one level) if it does not exist. Returns 0 or 2
  * (with a message). */
 int cli_make_dir(const char *path);

@@ -354,6 +354,19 @@ static void test_flow(void)
     CHECK_RUN("flow broken.obj -o x.obj --method implicit-mcf", 2);
     CHECK_RUN("flow bumpy.obj -o no_such_dir/x.obj --method implicit-mcf -n 1 -q", 2);
     CHECK(strstr(err_text, "no_such_dir/x.obj") != NULL);
+    /* an output that could not be written is refused before the run: no
+     * step is taken (the log is never opened) */
+    CHECK_RUN("flow bumpy.obj -o no_such_dir/x.obj --method implicit-mcf -n 1000 --log early.jsonl", 2);
+    CHECK(strstr(err_text, "no_such_dir/x.obj: cannot write: directory no_such_dir does not exist") != NULL);
+    CHECK(!exists("early.jsonl"));
+    CHECK_RUN("flow bumpy.obj -o x.xyz --method implicit-mcf -n 1000 --log early.jsonl", 2);
+    CHECK(strstr(err_text, "unknown mesh format") != NULL);
+    CHECK(!exists("early.jsonl"));
+    CHECK_RUN("flow bumpy.obj -o . --method implicit-mcf -n 1 -q", 2);
+    CHECK_RUN("spin bumpy.obj --rho no_rho.txt -o no_such_dir/x.obj", 2);
+    CHECK(strstr(err_text, "does not exist") != NULL);
+    CHECK_RUN("render bumpy.obj -o no_such_dir/x.png", 2);
+    CHECK(strstr(err_text, "does not exist") != NULL);
     CHECK_RUN("flow bumpy.obj -o x.obj --method implicit-mcf -n 1 --log no_such_dir/l.jsonl", 2);
     CHECK_RUN("flow bumpy.obj -o x.obj --method implicit-mcf --steps -3", 1);
     CHECK(!exists("x.obj"));

@@ -84,6 +84,13 @@ typedef struct cf_spin_willmore_options {
     double blowup_factor;      /* a step whose energy exceeds this factor times the energy before
                                 * it is a numerical failure (CF_ERR_NUMERICAL, the last good state
                                 * is kept). Default 10; 0 disables the check */
+    double divergence_factor;  /* a step that leaves W above this factor times the starting W is a
+                                * numerical failure (the last good state is kept): a Willmore descent
+                                * that ends above where it started has diverged, even when no single
+                                * step grows tenfold (elephant_g3_3k at tau 0.5: W/4pi 24.99 ->
+                                * 12.46 -> 26.9 -> 102 -> ... -> 133 in 10 steps). Prescribed and
+                                * cmc boundaries are exempt (they may raise W by design). Default 1;
+                                * 0 disables the check */
     int32_t complex_factorization; /* factorise the quaternionic matrices as their complex
                                 * Hermitian form of half the size (about 2x faster, same
                                 * result to rounding); 0 uses the real 4 nv x 4 nv form.

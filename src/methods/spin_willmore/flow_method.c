@@ -79,6 +79,7 @@ typedef struct spin_state {
     double tau;              /* time step of the next step (adaptive: may be below opt.time_step) */
     double *vtmp, *vtmp2;    /* nv */
     double energy;
+    double initial_energy;   /* W of the starting surface (divergence check) */
     cfi_spin_diagnostics diag;
 } spin_state;
 
@@ -101,6 +102,7 @@ void cf_spin_willmore_options_default(cf_spin_willmore_options *o)
     o->normalize = 1;
     o->tolerance = 1e-6;
     o->blowup_factor = 10.0;
+    o->divergence_factor = 1.0;
     o->complex_factorization = 1;
     o->harmonic_update = 1;
     o->exactness_linearized = 1;
@@ -142,6 +144,8 @@ static const cf_param_desc spin_params[] = {
     {"tolerance", CF_PARAM_DOUBLE, OPT(tolerance), 0.0, 1.0, NULL, "converged below this relative energy decrease"},
     {"blowup_factor", CF_PARAM_DOUBLE, OPT(blowup_factor), 0.0, 1e12, NULL,
      "fail a step whose energy grows more than this factor (0: never)"},
+    {"divergence_factor", CF_PARAM_DOUBLE, OPT(divergence_factor), 0.0, 1e12, NULL,
+     "fail a step that leaves W above this factor times the starting W (0: never; not for prescribed/cmc)"},
     {"complex_factorization", CF_PARAM_BOOL, OPT(complex_factorization), 0, 1, NULL,
      "factorise X as its complex Hermitian form of half the size (0: real 4n x 4n form)"},
     {"input_metric", CF_PARAM_BOOL, OPT(input_metric), 0, 1, NULL,
@@ -417,6 +421,9 @@ static cf_status spin_create(cf_flow *flow, const void *options)
     if (!(o->blowup_factor == 0.0 || o->blowup_factor > 1.0) || !isfinite(o->blowup_factor))
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: blowup_factor must be 0 (off) or > 1, got %g",
                          o->blowup_factor);
+    if (!(o->divergence_factor == 0.0 || o->divergence_factor >= 1.0) || !isfinite(o->divergence_factor))
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: divergence_factor must be 0 (off) or >= 1, got %g",
+                         o->divergence_factor);
     if (!(o->regularization > 0.0) || !isfinite(o->regularization))
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: regularization must be > 0, got %g", o->regularization);
     if (o->power_iterations < 1)
@@ -600,6 +607,7 @@ static cf_status spin_create(cf_flow *flow, const void *options)
     if (st != CF_OK) goto fail;
 
     flow->info.energy = s->energy;
+    s->initial_energy = s->energy;
     flow->info.energy_terms[0] = s->energy / (4.0 * CFI_PI);
     flow->info.term_names[0] = "W/4pi";
     return CF_OK;
@@ -1104,6 +1112,18 @@ static cf_status spin_step(cf_flow *flow, cf_flow_info *info)
                          "spin-willmore: energy grew from %.6g to %.6g in one step (more than %gx): the step blew "
                          "up; try a smaller time_step",
                          energy_before, s->energy, s->opt.blowup_factor);
+    /* A Willmore descent that ends above its start has diverged, even when
+     * it creeps up by less than blowup_factor per step (elephant_g3_3k at
+     * the default tau: 24.99 -> 12.46 -> 26.9 -> 102 -> ...). Prescribed and
+     * cmc boundaries may raise W by design. The slack absorbs rounding at an
+     * equilibrium start (a round sphere). */
+    if (s->opt.divergence_factor > 0.0 && !s->restricted_boundary &&
+        s->energy > s->opt.divergence_factor * s->initial_energy * (1.0 + 1e-9))
+        return cfi_error(ctx, CF_ERR_NUMERICAL,
+                         "spin-willmore: W/4pi rose to %.6g, above %g times its starting value %.6g: the flow "
+                         "diverges (time_step %g is above this mesh's stability limit); try a smaller time_step, "
+                         "adaptive=1 or a larger regularization (docs/spin.md)",
+                         s->energy / (4.0 * CFI_PI), s->opt.divergence_factor, s->initial_energy / (4.0 * CFI_PI), tau);
 
     info->time_step = stalled ? 0.0 : tau;
     info->energy = s->energy;
@@ -1134,7 +1154,9 @@ static cf_status spin_reset(cf_flow *flow)
     if (!s) return CF_OK;
     s->tau = s->opt.time_step;
     flow->converged = 0;
-    return update_geometry(flow, s, flow->positions);
+    cf_status st = update_geometry(flow, s, flow->positions);
+    s->initial_energy = s->energy; /* new positions: a new start for the divergence check */
+    return st;
 }
 
 cf_status cfi_spin_willmore_diagnostics(const cf_flow *flow, cfi_spin_diagnostics *out)

@@ -20,7 +20,11 @@ static void usage(FILE *out)
             "                 M L H V Z commands, absolute or relative)\n"
             "  --steps N      number of steps (default 10)\n"
             "  --time-step T  tau (default 0.5; stable for tau < 1)\n"
-            "  --quiet        no per-step lines\n");
+            "  --quiet        no per-step lines\n"
+            "A step that raises the energy above its starting value or changes the turning number\n"
+            "(tau above the stability limit) fails.\n"
+            "Exit status: 0 ok, 1 usage error, 2 invalid input or unwritable output, 3 numerical\n"
+            "failure (the last good state is still written).\n");
 }
 
 int cli_curve(int argc, char **argv)
@@ -75,8 +79,11 @@ int cli_curve(int argc, char **argv)
         cf_curve_flow_info info;
         st = cf_curve_flow_step(flow, &info);
         if (st != CF_OK) {
-            code = cli_fail(ctx, "curve", st);
-            goto done;
+            /* a failed step leaves the curve as it was: write that, as flow does */
+            code = cli_fail(ctx, in, st);
+            if (code == CLI_EXIT_USAGE) code = CLI_EXIT_NUMERICAL;
+            fprintf(stderr, "curvflow: writing the last good state (iteration %lld) to %s\n", k, out);
+            break;
         }
         if (!quiet)
             fprintf(stderr, "step %lld: energy %.6g, closure gap %.3g, max length error %.3g, turning number %d\n",
@@ -84,7 +91,10 @@ int cli_curve(int argc, char **argv)
                     info.turning_number);
     }
     st = cf_curve_write(ctx, out, cf_curve_flow_size(flow), cf_curve_flow_points(flow));
-    if (st != CF_OK) code = cli_fail(ctx, out, st);
+    if (st != CF_OK) {
+        int wcode = cli_fail(ctx, out, st);
+        if (code == CLI_EXIT_OK) code = wcode;
+    }
 done:
     cf_curve_flow_destroy(&flow);
     cf_curve_destroy(&curve);

@@ -468,7 +468,8 @@ static void test_no_temp_files(void)
     if (!d) return;
     const char *expected[] = {".", "..", "stdout.txt", "stderr.txt", "ico.obj", "bumpy.obj", "torus.ply", "grid.off",
                               "kind0.ply", "kind1.ply", "kind2.ply", "kind3.ply", "kind4.ply", "broken.obj", "fin.obj",
-                              "smooth.obj", "run.jsonl", "p.ply", "blown.obj", "same.ply", "demo", "b.png", "q.png", "neg.obj", "pos.obj"};
+                              "smooth.obj", "run.jsonl", "p.ply", "blown.obj", "same.ply", "demo", "b.png", "q.png", "neg.obj", "pos.obj",
+                              "wobbly.csv", "round.csv", "blown.csv"};
     struct dirent *e;
     while ((e = readdir(d)) != NULL) {
         int known = 0;
@@ -494,6 +495,29 @@ static void remove_dir(const char *path)
     rmdir(path);
 }
 
+/* curve: a run, a diverging run (exit 3, last good state written), and an
+ * output that cannot be written (exit 2, nothing run). */
+static void test_curve(void)
+{
+    FILE *f = fopen(in_dir("wobbly.csv"), "w");
+    CHECK(f != NULL);
+    if (!f) return;
+    for (int i = 0; i < 48; ++i) {
+        double t = 2.0 * 3.14159265358979323846 * i / 48;
+        double r = 1.0 + 0.2 * sin(5.0 * t);
+        fprintf(f, "%.17g,%.17g\n", r * cos(t), r * sin(t));
+    }
+    fclose(f);
+    CHECK_RUN("curve wobbly.csv -o round.csv --steps 5 --quiet", 0);
+    CHECK(exists("round.csv"));
+    CHECK_RUN("curve wobbly.csv -o blown.csv --steps 5 --time-step 1.5", 3);
+    CHECK(strstr(err_text, "iteration 1: ") != NULL);
+    CHECK(strstr(err_text, "writing the last good state (iteration 0)") != NULL);
+    CHECK(exists("blown.csv"));
+    CHECK_RUN("curve wobbly.csv -o no_such_dir/c.csv", 2);
+    CHECK(strstr(err_text, "does not exist") != NULL);
+}
+
 int main(void)
 {
     snprintf(dir, sizeof dir, "%s/cli_%ld", CF_TEST_BINARY_DIR, (long)getpid());
@@ -508,6 +532,7 @@ int main(void)
     CFT_RUN(test_compare);
     CFT_RUN(test_demo);
     CFT_RUN(test_render);
+    CFT_RUN(test_curve);
     CFT_RUN(test_no_temp_files);
     int rc = cft_finish();
     if (rc == 0) remove_dir(dir);

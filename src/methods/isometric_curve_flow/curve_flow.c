@@ -37,6 +37,8 @@ struct cf_curve_flow {
     cf_sparse *l;
     cf_cholesky *chol;
     int64_t iteration;
+    double energy0;        /* sum kappa^2 l* of the input (divergence check) */
+    int32_t turning0;      /* turning number of the input, kept by every step */
 };
 
 void cf_curve_flow_options_default(cf_curve_flow_options *o)
@@ -146,6 +148,18 @@ cf_status cf_curve_flow_create(cf_context *ctx, int32_t n, const double *points,
         }
         total += f->len[i];
     }
+    for (int32_t i = 0; i < n; ++i) {
+        /* a turn of exactly 180 degrees has no signed angle (+pi or -pi), so
+         * neither the curvature nor the turning number is defined there */
+        int32_t a = (i + n - 1) % n, b = (i + 1) % n;
+        double u[2] = {points[2 * i] - points[2 * a], points[2 * i + 1] - points[2 * a + 1]};
+        double v[2] = {points[2 * b] - points[2 * i], points[2 * b + 1] - points[2 * i + 1]};
+        if (u[0] * v[1] - u[1] * v[0] == 0.0 && u[0] * v[0] + u[1] * v[1] < 0.0) {
+            st = cfi_error(ctx, CF_ERR_DEGENERATE_FACE,
+                           "point %d: the curve turns back on itself (a 180 degree turn has no signed angle)", i);
+            goto done;
+        }
+    }
     for (int32_t i = 0; i < n; ++i) f->dual[i] = 0.5 * (f->len[(i + n - 1) % n] + f->len[i]);
     /* Sec. 5.2: L_ij = -1/l_ij, L_ii = 1/l_{i-1,i} + 1/l_{i,i+1}; a shift of
      * 1e-10 of the mean diagonal removes the constant null space (the
@@ -170,6 +184,12 @@ cf_status cf_curve_flow_create(cf_context *ctx, int32_t n, const double *points,
     st = cf_cholesky_create(ctx, f->l, &co, &f->chol);
     if (st == CF_OK) st = cf_cholesky_factorize(f->chol, f->l);
     (void)total;
+    if (st == CF_OK) {
+        f->energy0 = curvature(f);
+        double turn = 0.0;
+        for (int32_t i = 0; i < n; ++i) turn += turning(points, n, i);
+        f->turning0 = (int32_t)lround(turn / (2.0 * CFI_PI));
+    }
 done:
     CFI_FREE(ctx, ri, 4 * (int64_t)n);
     CFI_FREE(ctx, ci, 4 * (int64_t)n);
@@ -241,12 +261,39 @@ cf_status cf_curve_flow_step(cf_curve_flow *f, cf_curve_flow_info *info)
         c_new[0] += f->sol[i];
         c_new[1] += f->sol[n + i];
     }
+    /* the candidate goes to rhs (free after the solve); the state changes
+     * only if the step is good, so a failed step keeps the last good curve */
+    double *cand = f->rhs;
     for (int32_t i = 0; i < n; ++i) {
         double x = f->sol[i] + (c_old[0] - c_new[0]) / n, y = f->sol[n + i] + (c_old[1] - c_new[1]) / n;
-        if (!isfinite(x) || !isfinite(y)) return cfi_error(f->ctx, CF_ERR_NUMERICAL, "point %d: not finite", i);
-        p[2 * i] = x;
-        p[2 * i + 1] = y;
+        if (!isfinite(x) || !isfinite(y))
+            return cfi_error(f->ctx, CF_ERR_NUMERICAL, "iteration %lld: point %d: not finite",
+                             (long long)f->iteration + 1, i);
+        cand[2 * i] = x;
+        cand[2 * i + 1] = y;
     }
+    /* Above the stability limit (tau near 1 and beyond, Sec. 4) the explicit
+     * step on kappa overshoots: the energy climbs and the curve can wind
+     * differently. Both contradict the flow (energy descent, turning number
+     * kept), so they are failures rather than results. */
+    double e_new = 0.0, turn_new = 0.0;
+    for (int32_t i = 0; i < n; ++i) {
+        double phi = turning(cand, n, i);
+        e_new += phi * phi / f->dual[i];
+        turn_new += phi;
+    }
+    int32_t winding = (int32_t)lround(turn_new / (2.0 * CFI_PI));
+    if (winding != f->turning0)
+        return cfi_error(f->ctx, CF_ERR_NUMERICAL,
+                         "iteration %lld: the turning number changed from %d to %d: time_step %g is above the "
+                         "stability limit (about 1)",
+                         (long long)f->iteration + 1, f->turning0, winding, f->tau);
+    if (e_new > f->energy0 * (1.0 + 1e-9))
+        return cfi_error(f->ctx, CF_ERR_NUMERICAL,
+                         "iteration %lld: the energy rose to %.6g, above its starting value %.6g: the flow diverges "
+                         "(time_step %g is above the stability limit, about 1)",
+                         (long long)f->iteration + 1, e_new, f->energy0, f->tau);
+    memcpy(p, cand, 2 * (size_t)n * sizeof(double));
     ++f->iteration;
     if (info) {
         info->iteration = f->iteration;

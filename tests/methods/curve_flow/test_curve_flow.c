@@ -177,6 +177,52 @@ static void test_invalid_input(void)
     cf_context_destroy(&ctx);
 }
 
+/* Above the stability limit (tau ~ 1, Sec. 4) the explicit step on kappa
+ * overshoots: at tau 1.5 the energy of a noisy circle went 38 -> 134 -> 522
+ * -> ... and the turning number wandered (1, 0, 3, 2) while every step
+ * reported success. Now the first such step fails with CF_ERR_NUMERICAL,
+ * names the iteration and leaves the curve as it was; tau 0.99 still runs.
+ * A 180 degree turn (no signed angle) is refused at creation. */
+static void test_divergence_detected(void)
+{
+    cf_context *ctx = cft_context();
+    enum { N = 64 };
+    double p[2 * N], before[2 * N];
+    noisy_circle(N, 0.05, p);
+    cf_curve_flow_options o;
+    cf_curve_flow_options_default(&o);
+    o.time_step = 1.5;
+    cf_curve_flow *flow = NULL;
+    CHECK_OK(ctx, cf_curve_flow_create(ctx, N, p, &o, &flow));
+    if (!flow) return;
+    memcpy(before, cf_curve_flow_points(flow), sizeof before);
+    double e0 = cf_curve_flow_energy(flow);
+    CHECK_STATUS(cf_curve_flow_step(flow, NULL), CF_ERR_NUMERICAL);
+    fprintf(stderr, "   %s\n", cf_context_message(ctx));
+    CHECK(strstr(cf_context_message(ctx), "iteration 1: ") == cf_context_message(ctx));
+    CHECK(strstr(cf_context_message(ctx), "diverges") != NULL || strstr(cf_context_message(ctx), "turning number") != NULL);
+    CHECK(memcmp(before, cf_curve_flow_points(flow), sizeof before) == 0);
+    CHECK(cf_curve_flow_energy(flow) == e0);
+    cf_curve_flow_destroy(&flow);
+
+    o.time_step = 0.99;
+    CHECK_OK(ctx, cf_curve_flow_create(ctx, N, p, &o, &flow));
+    if (!flow) return;
+    for (int s = 0; s < 20; ++s) CHECK_OK(ctx, cf_curve_flow_step(flow, NULL));
+    CHECK(cf_curve_flow_energy(flow) < e0);
+    cf_curve_flow_destroy(&flow);
+
+    const double back[8] = {0, 0, 1, 0, 2, 0, 1, 1e-3}; /* sharp turns, none of exactly 180 degrees */
+    CHECK_OK(ctx, cf_curve_flow_create(ctx, 4, back, NULL, &flow));
+    cf_curve_flow_destroy(&flow);
+    const double reverse[6] = {0, 0, 1, 0, 2, 0}; /* out and back along a line */
+    CHECK_STATUS(cf_curve_flow_create(ctx, 3, reverse, NULL, &flow), CF_ERR_DEGENERATE_FACE);
+    CHECK(strstr(cf_context_message(ctx), "turns back on itself") != NULL);
+    CHECK(flow == NULL);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 /* Inside that range the flow is scale-free: a copy scaled by 1e+-45 flows to
  * the unit result, scaled (to 1e-12 of the size). */
 static void test_scale_invariance(void)
@@ -246,6 +292,7 @@ int main(void)
     CFT_RUN(test_turning_number_kept);
     CFT_RUN(test_invalid_input);
     CFT_RUN(test_scale_invariance);
+    CFT_RUN(test_divergence_detected);
     CFT_RUN(test_files);
     return cft_finish();
 }

@@ -216,7 +216,10 @@ static cf_status boundary_binormals(const cf_flow *flow, const spin_state *s, co
             double t[3], nn[3], bb[3];
             for (int c = 0; c < 3; ++c) t[c] = x[3 * next + c] - x[3 * prev + c];
             double tl = sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
-            if (!(tl > 0.0)) return cfi_error(flow->ctx, CF_ERR_NUMERICAL, "vertex %d: no boundary tangent", v);
+            if (!(tl > 0.0))
+                return cfi_error(flow->ctx, CF_ERR_NUMERICAL,
+                                 "vertex %d: no boundary tangent (its boundary neighbours %d and %d coincide)", v, prev,
+                                 next);
             for (int c = 0; c < 3; ++c) t[c] /= tl;
             const double *nv = s->normal + 3 * v;
             double d = nv[0] * t[0] + nv[1] * t[1] + nv[2] * t[2];

@@ -213,6 +213,67 @@ static cf_status build_full_matrix(sbe_state *s, cf_context *ctx)
  * factorises it and precomputes A_fc x_c (Sec. 4.1). */
 static cf_status build_system(sbe_state *s, cf_context *ctx, const cf_mesh *mesh, const cf_handle_set *h);
 
+/* Index of vertex v in the sorted handle list, or -1. */
+static int32_t handle_index(const cf_handle_set *h, int32_t v)
+{
+    int32_t lo = 0, hi = h->count - 1;
+    while (lo <= hi) {
+        int32_t mid = lo + (hi - lo) / 2;
+        if (h->vertices[mid] == v) return mid;
+        if (h->vertices[mid] < v) lo = mid + 1;
+        else hi = mid - 1;
+    }
+    return -1;
+}
+
+/* Targets that force a degenerate triangle: the two ends of an edge at the
+ * same point, or the three corners of a face on one line. Any edit would
+ * then have a zero-area face, which the mesh check (and every reader)
+ * rejects, so the request is refused instead of producing such a mesh. */
+static cf_status check_handle_geometry(cf_context *ctx, const cf_mesh *mesh, const cf_handle_set *h)
+{
+    const double *x = mesh->positions;
+    for (int32_t e = 0; e < mesh->ne; ++e) {
+        int32_t i = mesh->edge_vertices[2 * e], j = mesh->edge_vertices[2 * e + 1];
+        int32_t a = handle_index(h, i), b = a >= 0 ? handle_index(h, j) : -1;
+        if (b < 0) continue;
+        double d2 = 0.0, r2 = 0.0;
+        for (int c = 0; c < 3; ++c) {
+            double d = h->targets[3 * a + c] - h->targets[3 * b + c], r = x[3 * j + c] - x[3 * i + c];
+            d2 += d * d;
+            r2 += r * r;
+        }
+        if (d2 <= 1e-24 * r2)
+            return cfi_error(ctx, CF_ERR_INVALID_ARG,
+                             "stretch-bend-edit: vertices %d and %d share an edge but their handle targets coincide "
+                             "(every edit would have a zero-area face)",
+                             i, j);
+    }
+    for (int32_t f = 0; f < mesh->nf; ++f) {
+        const int32_t *t = mesh->triangles + 3 * (size_t)f;
+        int32_t k[3] = {handle_index(h, t[0]), -1, -1};
+        if (k[0] < 0 || (k[1] = handle_index(h, t[1])) < 0 || (k[2] = handle_index(h, t[2])) < 0) continue;
+        const double *p0 = h->targets + 3 * k[0], *p1 = h->targets + 3 * k[1], *p2 = h->targets + 3 * k[2];
+        double u[3], v[3], w[3];
+        for (int c = 0; c < 3; ++c) {
+            u[c] = p1[c] - p0[c];
+            v[c] = p2[c] - p0[c];
+            w[c] = p2[c] - p1[c];
+        }
+        double cr[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+        double area2 = cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2];
+        double l2 = fmax(u[0] * u[0] + u[1] * u[1] + u[2] * u[2],
+                         fmax(v[0] * v[0] + v[1] * v[1] + v[2] * v[2], w[0] * w[0] + w[1] * w[1] + w[2] * w[2]));
+        /* the mesh check's zero-area test: area <= 1e-14 (longest edge)^2 */
+        if (0.25 * area2 <= 1e-28 * l2 * l2)
+            return cfi_error(ctx, CF_ERR_INVALID_ARG,
+                             "stretch-bend-edit: face %d: its three vertices are handles with collinear targets "
+                             "(the edit would have a zero-area face)",
+                             f);
+    }
+    return CF_OK;
+}
+
 static cf_status setup_system(sbe_state *s, cf_context *ctx, const cf_mesh *mesh, const cf_handle_set *h)
 {
     int32_t nv = mesh->nv;
@@ -237,8 +298,10 @@ static cf_status setup_system(sbe_state *s, cf_context *ctx, const cf_mesh *mesh
     if (h->count >= nv)
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "stretch-bend-edit: all %d vertices are handles; nothing to solve",
                          nv);
+    cf_status st = check_handle_geometry(ctx, mesh, h);
+    if (st != CF_OK) return st;
 
-    cf_status st = build_system(s, ctx, mesh, h);
+    st = build_system(s, ctx, mesh, h);
     /* A half-built system is released entirely (steps then report it). */
     if (st != CF_OK) free_system(s, ctx);
     return st;

@@ -108,6 +108,33 @@ static void test_bad_files(void)
     double t[6] = {0};
     CHECK_STATUS(cf_handle_set_create(ctx, 2, dup, t, &h), CF_ERR_INVALID_ARG);
     CHECK(contains(cf_context_message(ctx), "vertex 3 is constrained twice"));
+    /* Targets that force a zero-area face: the ends of an edge at one point
+     * (before: every energy ran "successfully" to a mesh the reader rejects
+     * with "face 0: zero area"), or a face's three corners on one line. */
+    const int32_t *tri = cf_mesh_triangles(mesh);
+    int32_t corners[3] = {tri[0], tri[1], tri[2]};
+    for (int a = 0; a < 3; ++a) /* sorted, as the handle set stores them */
+        for (int b = a + 1; b < 3; ++b)
+            if (corners[b] < corners[a]) { int32_t tmp = corners[a]; corners[a] = corners[b]; corners[b] = tmp; }
+    const double same[6] = {0.5, 0.5, 1.0, 0.5, 0.5, 1.0};
+    CHECK_OK(ctx, cf_handle_set_create(ctx, 2, corners, same, &h));
+    ((cf_stretch_bend_options *)cf_flow_options_method(&fo))->handles = h;
+    CHECK_STATUS(cf_flow_create(ctx, mesh, NULL, &fo, &flow), CF_ERR_INVALID_ARG);
+    CHECK(contains(cf_context_message(ctx), "share an edge but their handle targets coincide"));
+    cf_handle_set_destroy(&h);
+    const double line[9] = {0, 0, 0, 1, 0, 0, 3, 0, 0};
+    CHECK_OK(ctx, cf_handle_set_create(ctx, 3, corners, line, &h));
+    ((cf_stretch_bend_options *)cf_flow_options_method(&fo))->handles = h;
+    CHECK_STATUS(cf_flow_create(ctx, mesh, NULL, &fo, &flow), CF_ERR_INVALID_ARG);
+    CHECK(contains(cf_context_message(ctx), "face 0: its three vertices are handles with collinear targets"));
+    cf_handle_set_destroy(&h);
+    /* the same corners at non-degenerate targets are fine */
+    const double moved[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    CHECK_OK(ctx, cf_handle_set_create(ctx, 3, corners, moved, &h));
+    ((cf_stretch_bend_options *)cf_flow_options_method(&fo))->handles = h;
+    CHECK_OK(ctx, cf_flow_create(ctx, mesh, NULL, &fo, &flow));
+    cf_flow_destroy(&flow);
+    cf_handle_set_destroy(&h);
 
     cf_mesh_destroy(&mesh);
     CHECK(cf_context_bytes_in_use(ctx) == 0);

@@ -179,6 +179,7 @@ int cli_edit(int argc, char **argv)
                 (long long)cf_flow_last_info(flow)->iteration, output);
     }
     st = cf_write_mesh_file(ctx, output, mesh, cf_flow_positions(flow), NULL, 0);
+    if (st == CF_OK) cli_warn_if_unreadable(ctx, mesh, cf_flow_positions(flow), output);
     if (st != CF_OK) {
         int wcode = cli_fail(ctx, output, st);
         if (code == CLI_EXIT_OK) code = wcode == CLI_EXIT_USAGE ? CLI_EXIT_INPUT : wcode;

@@ -137,6 +137,7 @@ int cli_spin(int argc, char **argv)
     int with_field = cf_mesh_format_from_path(ctx, out, &fmt) == CF_OK && fmt == CF_FORMAT_PLY;
     st = cf_write_mesh_file(ctx, out, mesh, x, with_field ? &field : NULL, with_field ? 1 : 0);
     if (st != CF_OK) code = cli_fail(ctx, out, st);
+    else cli_warn_if_unreadable(ctx, mesh, x, out);
 done:
     free(rho);
     free(x);

@@ -143,6 +143,18 @@ int cli_make_dir(const char *path)
     return CLI_EXIT_OK;
 }
 
+void cli_warn_if_unreadable(cf_context *ctx, const cf_mesh *mesh, const double *positions, const char *output)
+{
+    cf_mesh_desc d = {cf_mesh_vertex_count(mesh), positions, cf_mesh_face_count(mesh), cf_mesh_triangles(mesh), 0,
+                      NULL, NULL};
+    cf_mesh_report r;
+    if (cf_mesh_validate(ctx, &d, &r) != CF_OK || r.first_status == CF_OK) return;
+    fprintf(stderr,
+            "curvflow: warning: %s was written, but its triangles have degenerated (%s; %d such faces), so it "
+            "will not load as a valid mesh\n",
+            output, r.first_message, (int)r.degenerate_faces);
+}
+
 int cli_run_flow_and_write(cf_context *ctx, cf_flow *flow, cli_progress *progress, const char *log_path,
                            int64_t steps, const char *input, const cf_mesh *mesh, const char *output,
                            bool *completed)
@@ -165,8 +177,9 @@ int cli_run_flow_and_write(cf_context *ctx, cf_flow *flow, cli_progress *progres
     if (st != CF_OK) {
         int wcode = cli_fail(ctx, output, st);
         if (code == CLI_EXIT_OK) code = wcode == CLI_EXIT_USAGE ? CLI_EXIT_INPUT : wcode;
-    } else if (run == CF_OK) {
-        *completed = true;
+    } else {
+        if (run == CF_OK) *completed = true;
+        cli_warn_if_unreadable(ctx, mesh, cf_flow_positions(flow), output);
     }
     if (code == CLI_EXIT_OK) code = log_code;
     return code;

@@ -58,6 +58,11 @@ int cli_load_mesh(cf_context *ctx, const char *path, cf_mesh **out);
  * kept. */
 int cli_check_output(cf_context *ctx, const char *path, bool mesh);
 
+/* After writing a flow's result: if those positions would not pass the mesh
+ * check (a triangle degenerated to zero area), says so on stderr, so that
+ * the failure does not first show when the file is loaded again. */
+void cli_warn_if_unreadable(cf_context *ctx, const cf_mesh *mesh, const double *positions, const char *output);
+
 /* Creates the directory (one level) if it does not exist. Returns 0 or 2
  * (with a message). */
 int cli_make_dir(const char *path);

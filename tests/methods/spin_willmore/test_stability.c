@@ -61,7 +61,8 @@ static cf_flow *make_flow(cf_context *ctx, const cf_mesh *mesh, double tau)
     return make_flow_regularized(ctx, mesh, tau, 0.0, CF_SPIN_BOUNDARY_FREE);
 }
 
-/* Number of steps (out of `steps`) whose energy rose; a failed step counts.
+/* Number of steps (out of `steps`) whose energy rose (by more than 1e-12
+ * relative); a failed step counts.
  * *sign_changes (if not NULL): how often the energy switched between
  * falling and rising. */
 static int energy_increases_regularized(cf_context *ctx, const cf_mesh *mesh, double tau, int steps,
@@ -80,7 +81,8 @@ static int energy_increases_regularized(cf_context *ctx, const cf_mesh *mesh, do
             break;
         }
         fprintf(stderr, " %.4f", info.energy / (4 * 3.14159265358979323846));
-        int dir = info.energy > w ? 1 : -1;
+        /* a rise beyond rounding: near convergence W moves by ~1e-12 per step */
+        int dir = info.energy > w * (1.0 + 1e-12) ? 1 : -1;
         if (dir > 0) ++rises;
         if (last && dir != last) ++changes;
         last = dir;
@@ -139,6 +141,32 @@ static void test_threshold(void)
     CHECK(energy_increases(ctx, mesh, 1.1, 8) > 0);
     CHECK(energy_increases(ctx, mesh, 1.3, 8) > 0);
     cf_mesh_destroy(&mesh);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+/* Sec. 4: "setting tau just below 1 produces a stable flow, independent of
+ * mesh quality or resolution". On the bumpy sphere at 642 / 2562 / 10242
+ * vertices tau = 0.9 lowers W monotonically for 20 steps at every
+ * resolution and tau = 1.3 oscillates at every one. In between, the
+ * measured threshold approaches 1 from above as the mesh is refined (tau
+ * 1.2 is still monotone at 642 vertices, 1.1 already oscillates at 10242):
+ * the realised curvature change falls short of the prescribed one by a
+ * discretisation error that vanishes with the mesh size. */
+static void test_threshold_resolution(void)
+{
+    cf_context *ctx = cft_context();
+    for (int32_t sd = 3; sd <= 5; ++sd) {
+        cf_mesh *mesh = NULL;
+        CHECK_OK(ctx, cf_generate_bumpy_sphere(ctx, sd, 0.25, 1u, &mesh));
+        if (!mesh) continue;
+        fprintf(stderr, "   bumpy sphere, %d vertices:\n", cf_mesh_vertex_count(mesh));
+        CHECK(energy_increases(ctx, mesh, 0.9, 20) == 0);
+        CHECK(energy_increases(ctx, mesh, 1.3, 12) > 0);
+        if (sd == 3) CHECK(energy_increases(ctx, mesh, 1.2, 20) == 0);
+        if (sd == 5) CHECK(energy_increases(ctx, mesh, 1.1, 12) > 0);
+        cf_mesh_destroy(&mesh);
+    }
     CHECK(cf_context_bytes_in_use(ctx) == 0);
     cf_context_destroy(&ctx);
 }
@@ -249,6 +277,7 @@ int main(void)
 {
     CFT_RUN(test_threshold);
     CFT_RUN(test_threshold_blade);
+    CFT_RUN(test_threshold_resolution);
     CFT_RUN(test_time_step_convergence);
     CFT_RUN(test_adaptive_time_step);
     return cft_finish();

@@ -71,6 +71,10 @@ typedef struct cf_curve {
 /* Statuses: CF_OK, CF_ERR_INVALID_ARG, CF_ERR_IO, CF_ERR_PARSE (message
  * names line or offset), CF_ERR_NONFINITE, CF_ERR_NOMEM. */
 CF_API cf_status cf_curve_read(cf_context *ctx, const char *path, cf_curve **out);
+/* The same from memory: `size` bytes of CSV text (svg = 0) or SVG (svg = 1);
+ * `name` (may be NULL) stands for the file in messages. */
+CF_API cf_status cf_curve_read_memory(cf_context *ctx, const void *bytes, size_t size, int svg, const char *name,
+                                      cf_curve **out);
 /* Writes CSV or SVG (a <polygon>) by extension, atomically. */
 CF_API cf_status cf_curve_write(cf_context *ctx, const char *path, int32_t n, const double *points);
 CF_API void cf_curve_destroy(cf_curve **curve);

@@ -42,7 +42,7 @@ static cf_status push(pbuf *b, double x, double y)
     return CF_OK;
 }
 
-static cf_status read_file(cf_context *ctx, const char *path, char **text, size_t *size)
+static cf_status read_file(cf_context *ctx, const char *path, char **text, size_t *size, size_t *length)
 {
     FILE *fp = fopen(path, "rb");
     if (!fp) return cfi_error(ctx, CF_ERR_IO, "%s: cannot open (%s)", path, strerror(errno));
@@ -76,6 +76,7 @@ static cf_status read_file(cf_context *ctx, const char *path, char **text, size_
     buf[n] = '\0';
     *text = buf;
     *size = cap;
+    *length = n;
     return CF_OK;
 }
 
@@ -213,33 +214,27 @@ static int has_suffix(const char *path, const char *suffix)
     return 1;
 }
 
-cf_status cf_curve_read(cf_context *ctx, const char *path, cf_curve **out)
+/* Parses a NUL-terminated text (modified in place) named `name` in messages. */
+static cf_status parse_text(cf_context *ctx, char *text, const char *name, int svg, cf_curve **out)
 {
-    if (!ctx) return CF_ERR_INVALID_ARG;
-    if (!path || !out) return cfi_error(ctx, CF_ERR_INVALID_ARG, "curve_read: path and out are required");
-    *out = NULL;
-    char *text = NULL;
-    size_t cap = 0;
-    cf_status st = read_file(ctx, path, &text, &cap);
-    if (st != CF_OK) return st;
+    cf_status st = CF_OK;
     pbuf b = {ctx, NULL, 0, 0};
-    if (has_suffix(path, ".svg")) {
+    if (svg) {
         char *attr = svg_attribute(text, "polygon", "points");
         if (attr) {
-            st = parse_points(&b, path, attr);
+            st = parse_points(&b, name, attr);
         } else if ((attr = svg_attribute(text, "polyline", "points")) != NULL) {
-            st = parse_points(&b, path, attr);
+            st = parse_points(&b, name, attr);
         } else if ((attr = svg_attribute(text, "path", "d")) != NULL) {
-            st = parse_path(&b, path, attr);
+            st = parse_path(&b, name, attr);
         } else {
-            st = cfi_error(ctx, CF_ERR_PARSE, "%s: no <polygon>, <polyline> or <path> found", path);
+            st = cfi_error(ctx, CF_ERR_PARSE, "%s: no <polygon>, <polyline> or <path> found", name);
         }
     } else {
-        st = parse_csv(&b, path, text);
+        st = parse_csv(&b, name, text);
     }
-    cfi_free(ctx, text, cap);
     if (st == CF_OK && b.count >= 2 && b.xy[0] == b.xy[2 * b.count - 2] && b.xy[1] == b.xy[2 * b.count - 1]) --b.count;
-    if (st == CF_OK && b.count < 3) st = cfi_error(ctx, CF_ERR_PARSE, "%s: need at least 3 points, found %lld", path, (long long)b.count);
+    if (st == CF_OK && b.count < 3) st = cfi_error(ctx, CF_ERR_PARSE, "%s: need at least 3 points, found %lld", name, (long long)b.count);
     cf_curve *c = NULL;
     if (st == CF_OK) {
         c = CFI_ALLOC(ctx, cf_curve, 1);
@@ -261,6 +256,44 @@ cf_status cf_curve_read(cf_context *ctx, const char *path, cf_curve **out)
     c->ctx = ctx;
     *out = c;
     return CF_OK;
+}
+
+cf_status cf_curve_read(cf_context *ctx, const char *path, cf_curve **out)
+{
+    if (!ctx) return CF_ERR_INVALID_ARG;
+    if (!path || !out) return cfi_error(ctx, CF_ERR_INVALID_ARG, "curve_read: path and out are required");
+    *out = NULL;
+    char *text = NULL;
+    size_t cap = 0, length = 0;
+    cf_status st = read_file(ctx, path, &text, &cap, &length);
+    if (st != CF_OK) return st;
+    if (strlen(text) != length)
+        st = cfi_error(ctx, CF_ERR_PARSE, "%s: byte %zu is a NUL byte (not a text file?)", path, strlen(text));
+    else
+        st = parse_text(ctx, text, path, has_suffix(path, ".svg"), out);
+    cfi_free(ctx, text, cap);
+    return st;
+}
+
+cf_status cf_curve_read_memory(cf_context *ctx, const void *bytes, size_t size, int svg, const char *name,
+                               cf_curve **out)
+{
+    if (!ctx) return CF_ERR_INVALID_ARG;
+    if ((!bytes && size) || !out) return cfi_error(ctx, CF_ERR_INVALID_ARG, "curve_read_memory: bytes and out are required");
+    *out = NULL;
+    if (!name) name = svg ? "<memory>.svg" : "<memory>.csv";
+    if (size >= SIZE_MAX) return cfi_error(ctx, CF_ERR_INVALID_ARG, "%s: too large", name);
+    char *text = cfi_malloc(ctx, size + 1);
+    if (!text) return CF_ERR_NOMEM;
+    if (size) memcpy(text, bytes, size);
+    text[size] = '\0';
+    cf_status st;
+    if (strlen(text) != size)
+        st = cfi_error(ctx, CF_ERR_PARSE, "%s: byte %zu is a NUL byte (not a text file?)", name, strlen(text));
+    else
+        st = parse_text(ctx, text, name, svg, out);
+    cfi_free(ctx, text, size + 1);
+    return st;
 }
 
 void cf_curve_destroy(cf_curve **pc)

@@ -281,6 +281,23 @@ static void test_files(void)
     CHECK_STATUS(cf_curve_read(ctx, path, &c), CF_ERR_PARSE);
     CHECK(strstr(cf_context_message(ctx), "'C'") != NULL);
     CHECK_STATUS(cf_curve_read(ctx, cft_temp_path(".csv"), &c), CF_ERR_IO);
+    /* from memory (the fuzz targets' entry): same parse, messages name the
+     * given name; a NUL byte is refused rather than silently ending the text */
+    const char svg_text[] = "<svg><path fill=\"none\" d=\"M 0,0 h 2 v 1 L 0 1 z\"/></svg>";
+    CHECK_OK(ctx, cf_curve_read_memory(ctx, svg_text, sizeof svg_text - 1, 1, "mem.svg", &c));
+    CHECK(c && c->count == 4);
+    for (int i = 0; c && i < 8; ++i) CHECK_NEAR(c->points[i], p[i], 0, 0);
+    cf_curve_destroy(&c);
+    const char csv_text[] = "x,y\n0,0\n2,0\n2,1\n0,1\n";
+    CHECK_OK(ctx, cf_curve_read_memory(ctx, csv_text, sizeof csv_text - 1, 0, NULL, &c));
+    CHECK(c && c->count == 4);
+    cf_curve_destroy(&c);
+    const char with_nul[] = "0,0\n1,0\0\n1,1\n";
+    CHECK_STATUS(cf_curve_read_memory(ctx, with_nul, sizeof with_nul - 1, 0, "nul.csv", &c), CF_ERR_PARSE);
+    CHECK(strstr(cf_context_message(ctx), "nul.csv: byte 7 is a NUL byte") != NULL);
+    CHECK_STATUS(cf_curve_read_memory(ctx, "0,0\n1,x\n", 8, 0, "bad.csv", &c), CF_ERR_PARSE);
+    CHECK(strstr(cf_context_message(ctx), "bad.csv:2:") != NULL);
+    CHECK(c == NULL);
     CHECK(cf_context_bytes_in_use(ctx) == 0);
     cf_context_destroy(&ctx);
 }

@@ -31,6 +31,23 @@ static void expect_error(cf_context *ctx, const cf_mesh *mesh, const char *json,
     CHECK(contains(msg, "h.json"));
 }
 
+/* Creates the edit flow with handles (vertices, targets) and checks the
+ * status and, on failure, that the message contains `part`. */
+static void expect_edit_create(cf_context *ctx, const cf_mesh *mesh, int32_t n, const int32_t *vertices,
+                               const double *targets, cf_status status, const char *part)
+{
+    cf_handle_set *h = NULL;
+    CHECK_OK(ctx, cf_handle_set_create(ctx, n, vertices, targets, &h));
+    cf_flow_options fo;
+    cf_flow_options_default(CF_FLOW_STRETCH_BEND_EDIT, &fo);
+    ((cf_stretch_bend_options *)cf_flow_options_method(&fo))->handles = h;
+    cf_flow *flow = NULL;
+    CHECK_STATUS(cf_flow_create(ctx, mesh, NULL, &fo, &flow), status);
+    if (part) CHECK(contains(cf_context_message(ctx), part));
+    cf_flow_destroy(&flow);
+    cf_handle_set_destroy(&h);
+}
+
 static void test_bad_files(void)
 {
     cf_context *ctx = cft_context();
@@ -117,24 +134,13 @@ static void test_bad_files(void)
         for (int b = a + 1; b < 3; ++b)
             if (corners[b] < corners[a]) { int32_t tmp = corners[a]; corners[a] = corners[b]; corners[b] = tmp; }
     const double same[6] = {0.5, 0.5, 1.0, 0.5, 0.5, 1.0};
-    CHECK_OK(ctx, cf_handle_set_create(ctx, 2, corners, same, &h));
-    ((cf_stretch_bend_options *)cf_flow_options_method(&fo))->handles = h;
-    CHECK_STATUS(cf_flow_create(ctx, mesh, NULL, &fo, &flow), CF_ERR_INVALID_ARG);
-    CHECK(contains(cf_context_message(ctx), "share an edge but their handle targets coincide"));
-    cf_handle_set_destroy(&h);
+    expect_edit_create(ctx, mesh, 2, corners, same, CF_ERR_INVALID_ARG, "share an edge but their handle targets coincide");
     const double line[9] = {0, 0, 0, 1, 0, 0, 3, 0, 0};
-    CHECK_OK(ctx, cf_handle_set_create(ctx, 3, corners, line, &h));
-    ((cf_stretch_bend_options *)cf_flow_options_method(&fo))->handles = h;
-    CHECK_STATUS(cf_flow_create(ctx, mesh, NULL, &fo, &flow), CF_ERR_INVALID_ARG);
-    CHECK(contains(cf_context_message(ctx), "face 0: its three vertices are handles with collinear targets"));
-    cf_handle_set_destroy(&h);
+    expect_edit_create(ctx, mesh, 3, corners, line, CF_ERR_INVALID_ARG,
+                       "face 0: its three vertices are handles with collinear targets");
     /* the same corners at non-degenerate targets are fine */
     const double moved[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
-    CHECK_OK(ctx, cf_handle_set_create(ctx, 3, corners, moved, &h));
-    ((cf_stretch_bend_options *)cf_flow_options_method(&fo))->handles = h;
-    CHECK_OK(ctx, cf_flow_create(ctx, mesh, NULL, &fo, &flow));
-    cf_flow_destroy(&flow);
-    cf_handle_set_destroy(&h);
+    expect_edit_create(ctx, mesh, 3, corners, moved, CF_OK, NULL);
 
     cf_mesh_destroy(&mesh);
     CHECK(cf_context_bytes_in_use(ctx) == 0);

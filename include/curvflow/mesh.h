@@ -54,8 +54,8 @@ CF_API void cf_mesh_destroy(cf_mesh **mesh);
 typedef struct cf_mesh_report {
     int32_t index_out_of_range;
     int32_t repeated_index;
-    int32_t nonfinite_coordinates; /* NaN, Inf, or |x| > 1e100 (volumes would overflow) */
-    int32_t degenerate_faces;      /* zero area, or every edge shorter than 1e-100 */
+    int32_t nonfinite_coordinates; /* NaN, Inf, or |x| > 1e50 (volumes would overflow) */
+    int32_t degenerate_faces;      /* zero area, or every edge shorter than 1e-50 */
     int32_t nonmanifold_edges;
     int32_t nonmanifold_vertices;
     int32_t inconsistent_orientation_edges;

@@ -18,7 +18,6 @@
 #include <stdio.h>
 #include <string.h>
 
-
 /* ------------------------------------------------------------------------ */
 /* Defect recording: strict mode stops at the first defect, report mode
  * counts them all and keeps the first message. */

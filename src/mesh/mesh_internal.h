@@ -51,5 +51,4 @@ static inline int32_t cfi_he_prev(int32_t h) { return h - h % 3 + (h % 3 + 2) % 
  * all oriented like f. */
 void cfi_mesh_split4_triangles(const cf_mesh *mesh, int32_t *out);
 
-
 #endif /* CF_MESH_MESH_INTERNAL_H */

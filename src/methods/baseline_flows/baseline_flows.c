@@ -21,6 +21,7 @@
 #include "curvflow/ops.h"
 #include "methods/flow_internal.h"
 #include "ops/cotan_laplacian.h"
+#include "ops/ops_internal.h"
 
 #include <math.h>
 #include <stddef.h>
@@ -418,17 +419,11 @@ static cf_status finish_step(cf_flow *flow, baseline_state *s, cf_flow_info *inf
 static cf_status explain_not_posdef(cf_flow *flow)
 {
     const cf_mesh *mesh = flow->mesh;
-    const double *x = flow->positions;
     double worst = INFINITY;
     int32_t worst_face = -1;
     for (int32_t f = 0; f < mesh->nf; ++f) {
-        const int32_t *t = mesh->triangles + 3 * (size_t)f;
         for (int k = 0; k < 3; ++k) {
-            const double *a = x + 3 * (size_t)t[k], *b = x + 3 * (size_t)t[(k + 1) % 3],
-                         *c = x + 3 * (size_t)t[(k + 2) % 3];
-            double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-            double cr[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
-            double angle = atan2(sqrt(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]), u[0] * v[0] + u[1] * v[1] + u[2] * v[2]);
+            double angle = cfi_corner_angle(flow->positions, mesh->triangles + 3 * (size_t)f, k);
             if (angle < worst) {
                 worst = angle;
                 worst_face = f;

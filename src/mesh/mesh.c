@@ -237,24 +237,6 @@ static cf_status check_arguments(cf_context *ctx, const cf_mesh_desc *d)
     return CF_OK;
 }
 
-static double face_area_ratio(const double *p, const int32_t *t, double *longest2)
-{
-    const double *a = p + 3 * (size_t)t[0], *b = p + 3 * (size_t)t[1], *c = p + 3 * (size_t)t[2];
-    double u[3], v[3], w[3];
-    for (int k = 0; k < 3; ++k) {
-        u[k] = b[k] - a[k];
-        v[k] = c[k] - a[k];
-        w[k] = c[k] - b[k];
-    }
-    double x = u[1] * v[2] - u[2] * v[1], y = u[2] * v[0] - u[0] * v[2], z = u[0] * v[1] - u[1] * v[0];
-    double lu = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
-    double lv = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-    double lw = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
-    double l = lu > lv ? lu : lv;
-    *longest2 = l > lw ? l : lw;
-    return 0.5 * sqrt(x * x + y * y + z * z);
-}
-
 /* Largest |component| of the face's edge vectors (no squares: no underflow). */
 static double face_longest_component(const double *p, const int32_t *t)
 {
@@ -353,11 +335,12 @@ static cf_status run_checks(checker *c, const cf_mesh_desc *d, scratch *s)
                 }
             }
     }
-    /* 4. zero-area faces: area <= 1e-14 * (longest edge)^2 (scale-free) */
+    /* 4. zero-area faces: area <= CFI_ZERO_AREA_RATIO * (longest edge)^2 (scale-free) */
     for (int32_t f = 0; f < nf; ++f) {
         if (!s->face_ok[f]) continue;
         double l2;
-        double area = face_area_ratio(p, tri + 3 * (size_t)f, &l2);
+        const int32_t *t = tri + 3 * (size_t)f;
+        double area = cfi_triangle_area(p + 3 * (size_t)t[0], p + 3 * (size_t)t[1], p + 3 * (size_t)t[2], &l2);
         if (!isfinite(area) || !isfinite(l2)) continue; /* already reported as non-finite or out of range */
         double longest = face_longest_component(p, tri + 3 * (size_t)f);
         if (longest > 0.0 && longest < CFI_MIN_EDGE_LENGTH) {
@@ -369,7 +352,7 @@ static cf_status run_checks(checker *c, const cf_mesh_desc *d, scratch *s)
                 return c->first;
             continue;
         }
-        if (area <= 1e-14 * l2) {
+        if (area <= CFI_ZERO_AREA_RATIO * l2) {
             if (defect(c, &r->degenerate_faces, CF_ERR_DEGENERATE_FACE, "face %d: zero area", f)) return c->first;
         }
     }

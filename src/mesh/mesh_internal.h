@@ -8,6 +8,8 @@
 #include "core/core.h"
 #include "curvflow/mesh.h"
 
+#include <math.h>
+
 struct cf_mesh {
     cf_context *ctx;
     int32_t nv, nf, ne;
@@ -50,5 +52,28 @@ static inline int32_t cfi_he_prev(int32_t h) { return h - h % 3 + (h % 3 + 2) % 
  * (a, m_ab, m_ca), (m_ab, b, m_bc), (m_ca, m_bc, c), (m_ab, m_bc, m_ca),
  * all oriented like f. */
 void cfi_mesh_split4_triangles(const cf_mesh *mesh, int32_t *out);
+
+/* A triangle has zero area for the mesh check when its area is at most this
+ * times the square of its longest edge (scale-free). */
+#define CFI_ZERO_AREA_RATIO 1e-14
+
+/* Area of the triangle (a, b, c); *longest2 gets the square of its longest
+ * edge, for the zero-area test above. */
+static inline double cfi_triangle_area(const double *a, const double *b, const double *c, double *longest2)
+{
+    double u[3], v[3], w[3];
+    for (int k = 0; k < 3; ++k) {
+        u[k] = b[k] - a[k];
+        v[k] = c[k] - a[k];
+        w[k] = c[k] - b[k];
+    }
+    double x = u[1] * v[2] - u[2] * v[1], y = u[2] * v[0] - u[0] * v[2], z = u[0] * v[1] - u[1] * v[0];
+    double lu = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
+    double lv = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+    double lw = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
+    double l = lu > lv ? lu : lv;
+    *longest2 = l > lw ? l : lw;
+    return 0.5 * sqrt(x * x + y * y + z * z);
+}
 
 #endif /* CF_MESH_MESH_INTERNAL_H */

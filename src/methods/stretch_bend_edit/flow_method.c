@@ -253,19 +253,9 @@ static cf_status check_handle_geometry(cf_context *ctx, const cf_mesh *mesh, con
         const int32_t *t = mesh->triangles + 3 * (size_t)f;
         int32_t k[3] = {handle_index(h, t[0]), -1, -1};
         if (k[0] < 0 || (k[1] = handle_index(h, t[1])) < 0 || (k[2] = handle_index(h, t[2])) < 0) continue;
-        const double *p0 = h->targets + 3 * k[0], *p1 = h->targets + 3 * k[1], *p2 = h->targets + 3 * k[2];
-        double u[3], v[3], w[3];
-        for (int c = 0; c < 3; ++c) {
-            u[c] = p1[c] - p0[c];
-            v[c] = p2[c] - p0[c];
-            w[c] = p2[c] - p1[c];
-        }
-        double cr[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
-        double area2 = cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2];
-        double l2 = fmax(u[0] * u[0] + u[1] * u[1] + u[2] * u[2],
-                         fmax(v[0] * v[0] + v[1] * v[1] + v[2] * v[2], w[0] * w[0] + w[1] * w[1] + w[2] * w[2]));
-        /* the mesh check's zero-area test: area <= 1e-14 (longest edge)^2 */
-        if (0.25 * area2 <= 1e-28 * l2 * l2)
+        double l2;
+        double area = cfi_triangle_area(h->targets + 3 * k[0], h->targets + 3 * k[1], h->targets + 3 * k[2], &l2);
+        if (area <= CFI_ZERO_AREA_RATIO * l2) /* the mesh check's zero-area test */
             return cfi_error(ctx, CF_ERR_INVALID_ARG,
                              "stretch-bend-edit: face %d: its three vertices are handles with collinear targets "
                              "(the edit would have a zero-area face)",

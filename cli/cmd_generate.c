@@ -92,14 +92,14 @@ int cli_generate(int argc, char **argv)
         }
         if (!ok) return CLI_EXIT_USAGE;
     }
-    /* lengths must stay inside the range the mesh check accepts (1e50) */
+    /* lengths must stay inside the range the mesh check accepts */
     const struct { const char *name; double value; } lengths[] = {
         {"--radius", radius}, {"--amplitude", amplitude}, {"--major-radius", major}, {"--minor-radius", minor},
         {"--width", width},   {"--height", height},       {"--depth", depth},        {"--size", size}};
     for (size_t i = 0; i < sizeof lengths / sizeof lengths[0]; ++i)
-        if (fabs(lengths[i].value) > 1e50) /* NaN (not given) compares false */
-            return cli_usage_error(cmd, "%s: %g is beyond the range of lengths (|x| <= 1e50)", lengths[i].name,
-                                   lengths[i].value);
+        if (fabs(lengths[i].value) > CF_MAX_COORDINATE) /* NaN (not given) compares false */
+            return cli_usage_error(cmd, "%s: %g is beyond the range of lengths (|x| <= %.0e)", lengths[i].name,
+                                   lengths[i].value, CF_MAX_COORDINATE);
     if (optind + 1 != argc) return cli_usage_error(cmd, "expected one mesh kind");
     if (!output) return cli_usage_error(cmd, "missing -o OUT");
     const char *kind = argv[optind];

@@ -1,6 +1,7 @@
 /* Context: allocator, error message, log callback, failure injection. */
 #include "core/core.h"
 
+#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -237,4 +238,12 @@ double cfi_now_seconds(void)
     struct timespec ts;
     timespec_get(&ts, TIME_UTC);
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+int64_t cfi_first_unusable_point(const double *x, int64_t n, int dim)
+{
+    for (int64_t i = 0; i < n; ++i)
+        for (int c = 0; c < dim; ++c)
+            if (!(fabs(x[dim * i + c]) <= CF_MAX_COORDINATE)) return i; /* also NaN */
+    return -1;
 }

@@ -79,14 +79,8 @@ void cfi_log(cf_context *ctx, cf_log_level level, const char *fmt, ...) CF_PRINT
 /* Monotonic wall-clock time in seconds (for per-step timings). */
 double cfi_now_seconds(void);
 
-/* The range of geometry the library computes with. Volumes are cubes of
- * coordinates, and the eigenproblem of the Willmore flow and the Gram matrices
- * of its constraints multiply areas: a 1e60 (or 1e-60) copy of spot_3k fails
- * in the Willmore flow, 1e90 already in implicit MCF (areas squared overflow),
- * while every flow gives the unit result, scaled, at 1e+-45
- * (tests/methods/test_flow.c). Coordinates beyond 1e50 and faces whose edges
- * are all shorter than 1e-50 are therefore rejected with "rescale the mesh". */
-#define CFI_MAX_COORDINATE 1e50
-#define CFI_MIN_EDGE_LENGTH 1e-50
+/* Index of the first of the n points x[dim i .. dim i + dim) with a
+ * coordinate that is NaN, infinite or beyond CF_MAX_COORDINATE; -1 if none. */
+int64_t cfi_first_unusable_point(const double *x, int64_t n, int dim);
 
 #endif /* CF_CORE_CORE_H */

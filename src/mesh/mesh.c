@@ -300,13 +300,13 @@ static cf_status run_checks(checker *c, const cf_mesh_desc *d, scratch *s)
                     return c->first;
                 break;
             }
-            if (fabs(x) > CFI_MAX_COORDINATE) {
+            if (fabs(x) > CF_MAX_COORDINATE) {
                 /* finite, but cubes of lengths (volumes) and squares of areas
                  * would overflow: every later result would be Inf or NaN */
                 if (defect(c, &r->nonfinite_coordinates, CF_ERR_NONFINITE,
                            "vertex %d: coordinate %c = %.3g is out of range (|x| > %.0e, volumes would overflow); "
                            "rescale the mesh",
-                           v, axis[k], x, CFI_MAX_COORDINATE))
+                           v, axis[k], x, CF_MAX_COORDINATE))
                     return c->first;
                 break;
             }
@@ -343,12 +343,12 @@ static cf_status run_checks(checker *c, const cf_mesh_desc *d, scratch *s)
         double area = cfi_triangle_area(p + 3 * (size_t)t[0], p + 3 * (size_t)t[1], p + 3 * (size_t)t[2], &l2);
         if (!isfinite(area) || !isfinite(l2)) continue; /* already reported as non-finite or out of range */
         double longest = face_longest_component(p, tri + 3 * (size_t)f);
-        if (longest > 0.0 && longest < CFI_MIN_EDGE_LENGTH) {
+        if (longest > 0.0 && longest < CF_MIN_EDGE_LENGTH) {
             /* squared lengths underflow: the face is not degenerate, only too small to measure */
             if (defect(c, &r->degenerate_faces, CF_ERR_DEGENERATE_FACE,
                        "face %d: its edges are shorter than %.0e (longest component %.3g), below the range of "
                        "lengths this library computes with; rescale the mesh",
-                       f, CFI_MIN_EDGE_LENGTH, longest))
+                       f, CF_MIN_EDGE_LENGTH, longest))
                 return c->first;
             continue;
         }

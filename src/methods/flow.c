@@ -240,21 +240,17 @@ cf_status cf_flow_options_format(const cf_flow_options *options, const cf_param_
 /* ---- flow life cycle ---------------------------------------------------- */
 
 /* CF_OK if every coordinate is finite and within the range the mesh check
- * accepts (mesh_internal.h); else `status` with a message naming the first
+ * accepts (CF_MAX_COORDINATE); else `status` with a message naming the first
  * bad vertex, e.g. "vertex 7: starting position is not finite". */
 static cf_status check_positions(cf_context *ctx, const double *x, int32_t nv, cf_status status, const char *what)
 {
-    for (int32_t v = 0; v < nv; ++v) {
-        const double *p = x + 3 * (int64_t)v;
-        if (fabs(p[0]) <= CFI_MAX_COORDINATE && fabs(p[1]) <= CFI_MAX_COORDINATE &&
-            fabs(p[2]) <= CFI_MAX_COORDINATE)
-            continue;
-        if (isfinite(p[0]) && isfinite(p[1]) && isfinite(p[2]))
-            return cfi_error(ctx, status, "vertex %d: %s (%.3g, %.3g, %.3g) is out of range (|x| > %.0e)", v, what,
-                             p[0], p[1], p[2], CFI_MAX_COORDINATE);
-        return cfi_error(ctx, status, "vertex %d: %s is not finite", v, what);
-    }
-    return CF_OK;
+    int64_t v = cfi_first_unusable_point(x, nv, 3);
+    if (v < 0) return CF_OK;
+    const double *p = x + 3 * v;
+    if (isfinite(p[0]) && isfinite(p[1]) && isfinite(p[2]))
+        return cfi_error(ctx, status, "vertex %d: %s (%.3g, %.3g, %.3g) is out of range (|x| > %.0e)", (int)v, what,
+                         p[0], p[1], p[2], CF_MAX_COORDINATE);
+    return cfi_error(ctx, status, "vertex %d: %s is not finite", (int)v, what);
 }
 
 /* Area and volume of the current positions into *info, with drifts. */

@@ -103,9 +103,9 @@ cf_status cf_curve_flow_create(cf_context *ctx, int32_t n, const double *points,
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "curve_flow: time_step must be > 0, got %g", options->time_step);
     for (int32_t i = 0; i < 2 * n; ++i) {
         if (!isfinite(points[i])) return cfi_error(ctx, CF_ERR_NONFINITE, "point %d: not finite", i / 2);
-        if (fabs(points[i]) > CFI_MAX_COORDINATE)
+        if (fabs(points[i]) > CF_MAX_COORDINATE)
             return cfi_error(ctx, CF_ERR_NONFINITE, "point %d: coordinate %.3g is out of range (|x| > %.0e)", i / 2,
-                             points[i], CFI_MAX_COORDINATE);
+                             points[i], CF_MAX_COORDINATE);
     }
     cf_curve_flow *f = CFI_ALLOC(ctx, cf_curve_flow, 1);
     if (!f) return CF_ERR_NOMEM;
@@ -139,11 +139,11 @@ cf_status cf_curve_flow_create(cf_context *ctx, int32_t n, const double *points,
             st = cfi_error(ctx, CF_ERR_DEGENERATE_FACE, "edge %d (points %d, %d): zero length", i, i, j);
             goto done;
         }
-        if (f->len[i] < CFI_MIN_EDGE_LENGTH) {
+        if (f->len[i] < CF_MIN_EDGE_LENGTH) {
             st = cfi_error(ctx, CF_ERR_DEGENERATE_FACE,
                            "edge %d (points %d, %d): length %.3g is below %.0e, the range of lengths this library "
                            "computes with; rescale the curve",
-                           i, i, j, f->len[i], CFI_MIN_EDGE_LENGTH);
+                           i, i, j, f->len[i], CF_MIN_EDGE_LENGTH);
             goto done;
         }
         total += f->len[i];

@@ -25,9 +25,9 @@ static cf_status push(pbuf *b, double x, double y)
 {
     if (!isfinite(x) || !isfinite(y))
         return cfi_error(b->ctx, CF_ERR_NONFINITE, "point %lld: not finite", (long long)b->count);
-    if (fabs(x) > CFI_MAX_COORDINATE || fabs(y) > CFI_MAX_COORDINATE)
+    if (fabs(x) > CF_MAX_COORDINATE || fabs(y) > CF_MAX_COORDINATE)
         return cfi_error(b->ctx, CF_ERR_NONFINITE, "point %lld: (%.3g, %.3g) is out of range (|x| > %.0e); rescale the curve",
-                         (long long)b->count, x, y, CFI_MAX_COORDINATE);
+                         (long long)b->count, x, y, CF_MAX_COORDINATE);
     if (b->count == b->cap) {
         int64_t ncap = b->cap ? 2 * b->cap : 64;
         if (ncap > INT32_MAX / 2) return cfi_error(b->ctx, CF_ERR_INVALID_ARG, "curve: too many points");

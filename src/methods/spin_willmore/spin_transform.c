@@ -59,28 +59,28 @@ cf_status cf_spin_transform(cf_context *ctx, const cf_mesh *mesh, const double *
     if (positions == out_positions)
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin_transform: out_positions may not alias positions");
     int32_t nv = mesh->nv;
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (int32_t i = 0; i < nv; ++i) {
+    for (int32_t i = 0; i < nv; ++i)
         if (!isfinite(rho[i])) return cfi_error(ctx, CF_ERR_NONFINITE, "vertex %d: rho is not finite", i);
+    int64_t bad = cfi_first_unusable_point(positions, nv, 3);
+    if (bad >= 0)
+        return cfi_error(ctx, CF_ERR_NONFINITE, "vertex %d: position is not finite or beyond %.0e", (int)bad,
+                         CF_MAX_COORDINATE);
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int32_t i = 0; i < nv; ++i)
         for (int c = 0; c < 3; ++c) {
-            double x = positions[3 * i + c];
-            if (!(fabs(x) <= CFI_MAX_COORDINATE))
-                return cfi_error(ctx, CF_ERR_NONFINITE, "vertex %d: position is not finite or beyond %.0e", i,
-                                 CFI_MAX_COORDINATE);
-            lo[c] = fmin(lo[c], x);
-            hi[c] = fmax(hi[c], x);
+            lo[c] = fmin(lo[c], positions[3 * i + c]);
+            hi[c] = fmax(hi[c], positions[3 * i + c]);
         }
-    }
     /* rho is a curvature (1 / length): measured against the mesh's size it
      * must stay inside the range of lengths the library computes with, or its
      * square overflows in the matrix of App. G */
     double size = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
                        (hi[2] - lo[2]) * (hi[2] - lo[2]));
     for (int32_t i = 0; i < nv; ++i)
-        if (fabs(rho[i]) * size > CFI_MAX_COORDINATE)
+        if (fabs(rho[i]) * size > CF_MAX_COORDINATE)
             return cfi_error(ctx, CF_ERR_NONFINITE,
                              "vertex %d: rho = %.3g is out of range (|rho| times the mesh size %.3g exceeds %.0e)", i,
-                             rho[i], size, CFI_MAX_COORDINATE);
+                             rho[i], size, CF_MAX_COORDINATE);
     cfi_dirac *dirac = NULL;
     cfi_poisson *poisson = NULL;
     cf_cholesky *chol = NULL;

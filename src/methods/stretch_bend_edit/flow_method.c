@@ -280,10 +280,9 @@ static cf_status setup_system(sbe_state *s, cf_context *ctx, const cf_mesh *mesh
                              k, v, nv);
         if (k > 0 && v <= h->vertices[k - 1])
             return cfi_error(ctx, CF_ERR_INVALID_ARG, "handle %d: vertex %d repeated or not sorted", k, v);
-        for (int d = 0; d < 3; ++d)
-            if (!(fabs(h->targets[3 * k + d]) <= CFI_MAX_COORDINATE))
-                return cfi_error(ctx, CF_ERR_NONFINITE, "handle %d (vertex %d): target is not finite or beyond %.0e",
-                                 k, v, CFI_MAX_COORDINATE);
+        if (cfi_first_unusable_point(h->targets + 3 * k, 1, 3) >= 0)
+            return cfi_error(ctx, CF_ERR_NONFINITE, "handle %d (vertex %d): target is not finite or beyond %.0e", k, v,
+                             CF_MAX_COORDINATE);
     }
     if (h->count >= nv)
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "stretch-bend-edit: all %d vertices are handles; nothing to solve",

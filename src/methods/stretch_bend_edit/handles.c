@@ -56,10 +56,10 @@ cf_status cf_handle_set_create(cf_context *ctx, int32_t count, const int32_t *ve
             double t = targets[3 * k + d];
             if (!isfinite(t))
                 return cfi_error(ctx, CF_ERR_NONFINITE, "handle %d (vertex %d): target is not finite", k, vertices[k]);
-            if (fabs(t) > CFI_MAX_COORDINATE)
+            if (fabs(t) > CF_MAX_COORDINATE)
                 return cfi_error(ctx, CF_ERR_NONFINITE,
                                  "handle %d (vertex %d): target coordinate %.3g is out of range (|x| > %.0e)", k,
-                                 vertices[k], t, CFI_MAX_COORDINATE);
+                                 vertices[k], t, CF_MAX_COORDINATE);
         }
     }
     cf_handle_set *h = alloc_set(ctx, count);
@@ -120,13 +120,6 @@ static cf_status jerr(const json_reader *r, const char *set, const char *fmt, co
     if (set)
         return cfi_error(r->ctx, CF_ERR_PARSE, "%s: set '%s': %s%s", r->src, set, fmt, detail ? detail : "");
     return cfi_error(r->ctx, CF_ERR_PARSE, "%s: %s%s", r->src, fmt, detail ? detail : "");
-}
-
-/* Targets obey the mesh's coordinate range (mesh_internal.h). */
-static int target_in_range(const double *p)
-{
-    return fabs(p[0]) <= CFI_MAX_COORDINATE && fabs(p[1]) <= CFI_MAX_COORDINATE &&
-           fabs(p[2]) <= CFI_MAX_COORDINATE;
 }
 
 static int read_vec3(json_t *a, double out[3])
@@ -263,9 +256,9 @@ static cf_status read_set(json_reader *r, json_t *set, size_t index, char *name_
             if (!read_vec3(json_array_get(jt, (size_t)k), r->target + 3 * r->members[k]))
                 return cfi_error(ctx, CF_ERR_PARSE, "%s: set '%s': targets[%d] is not 3 finite numbers", r->src, name,
                                  (int)k);
-            if (!target_in_range(r->target + 3 * r->members[k]))
+            if (cfi_first_unusable_point(r->target + 3 * r->members[k], 1, 3) >= 0)
                 return cfi_error(ctx, CF_ERR_PARSE, "%s: set '%s': targets[%d] is beyond the range of coordinates (|x| <= %.0e)",
-                                 r->src, name, (int)k, CFI_MAX_COORDINATE);
+                                 r->src, name, (int)k, CF_MAX_COORDINATE);
         }
         return CF_OK;
     }
@@ -305,11 +298,11 @@ static cf_status read_set(json_reader *r, json_t *set, size_t index, char *name_
         double *o = r->target + 3 * r->members[k];
         for (int d = 0; d < 3; ++d)
             o[d] = c[d] + s * (rot[3 * d] * q[0] + rot[3 * d + 1] * q[1] + rot[3 * d + 2] * q[2]) + t[d];
-        if (!target_in_range(o))
+        if (cfi_first_unusable_point(o, 1, 3) >= 0)
             return cfi_error(ctx, CF_ERR_PARSE,
                              "%s: set '%s': the transform moves vertex %d to (%.3g, %.3g, %.3g), beyond the range of "
                              "coordinates (|x| <= %.0e)",
-                             r->src, name, r->members[k], o[0], o[1], o[2], CFI_MAX_COORDINATE);
+                             r->src, name, r->members[k], o[0], o[1], o[2], CF_MAX_COORDINATE);
     }
     return CF_OK;
 }

@@ -165,7 +165,7 @@ static void test_invalid_input(void)
     p[0] = NAN;
     CHECK_STATUS(cf_curve_flow_create(ctx, 3, p, NULL, &flow), CF_ERR_NONFINITE);
     CHECK(flow == NULL);
-    /* the library's range of lengths, 1e-50 .. 1e50 (core.h) */
+    /* the library's range of lengths, 1e-50 .. 1e50 (CF_MAX_COORDINATE, curvflow.h) */
     double far[6] = {0, 0, 1e60, 0, 0, 1};
     CHECK_STATUS(cf_curve_flow_create(ctx, 3, far, NULL, &flow), CF_ERR_NONFINITE);
     CHECK(strstr(cf_context_message(ctx), "point 1: coordinate 1e+60 is out of range") != NULL);

@@ -78,6 +78,20 @@ static double turning(const double *p, int32_t n, int32_t i)
     return atan2(u[0] * v[1] - u[1] * v[0], u[0] * v[0] + u[1] * v[1]);
 }
 
+/* Energy sum kappa_i^2 l*_i (kappa_i = turning angle / l*_i) of the points p
+ * and, if asked, their turning number. */
+static double energy_of(const double *p, int32_t n, const double *dual, int32_t *turning_number)
+{
+    double e = 0.0, turn = 0.0;
+    for (int32_t i = 0; i < n; ++i) {
+        double phi = turning(p, n, i), k = phi / dual[i];
+        e += k * k * dual[i];
+        turn += phi;
+    }
+    if (turning_number) *turning_number = (int32_t)lround(turn / (2.0 * CFI_PI));
+    return e;
+}
+
 /* kappa and energy of the current state. */
 static double curvature(cf_curve_flow *f)
 {
@@ -184,12 +198,7 @@ cf_status cf_curve_flow_create(cf_context *ctx, int32_t n, const double *points,
     st = cf_cholesky_create(ctx, f->l, &co, &f->chol);
     if (st == CF_OK) st = cf_cholesky_factorize(f->chol, f->l);
     (void)total;
-    if (st == CF_OK) {
-        f->energy0 = curvature(f);
-        double turn = 0.0;
-        for (int32_t i = 0; i < n; ++i) turn += turning(points, n, i);
-        f->turning0 = (int32_t)lround(turn / (2.0 * CFI_PI));
-    }
+    if (st == CF_OK) f->energy0 = energy_of(points, n, f->dual, &f->turning0);
 done:
     CFI_FREE(ctx, ri, 4 * (int64_t)n);
     CFI_FREE(ctx, ci, 4 * (int64_t)n);
@@ -276,13 +285,8 @@ cf_status cf_curve_flow_step(cf_curve_flow *f, cf_curve_flow_info *info)
      * step on kappa overshoots: the energy climbs and the curve can wind
      * differently. Both contradict the flow (energy descent, turning number
      * kept), so they are failures rather than results. */
-    double e_new = 0.0, turn_new = 0.0;
-    for (int32_t i = 0; i < n; ++i) {
-        double phi = turning(cand, n, i);
-        e_new += phi * phi / f->dual[i];
-        turn_new += phi;
-    }
-    int32_t winding = (int32_t)lround(turn_new / (2.0 * CFI_PI));
+    int32_t winding = 0;
+    double e_new = energy_of(cand, n, f->dual, &winding);
     if (winding != f->turning0)
         return cfi_error(f->ctx, CF_ERR_NUMERICAL,
                          "iteration %lld: the turning number changed from %d to %d: time_step %g is above the "
@@ -297,19 +301,18 @@ cf_status cf_curve_flow_step(cf_curve_flow *f, cf_curve_flow_info *info)
     ++f->iteration;
     if (info) {
         info->iteration = f->iteration;
-        info->energy = curvature(f);
+        info->energy = e_new; /* of the accepted points, now p */
         info->closure_gap = hypot(gap[0], gap[1]) / len_sum;
         info->constraint_residual = resid;
-        double maxerr = 0.0, turn = 0.0;
+        double maxerr = 0.0;
         for (int32_t i = 0; i < n; ++i) {
             int32_t j = (i + 1) % n;
             double l = hypot(p[2 * j] - p[2 * i], p[2 * j + 1] - p[2 * i + 1]);
             double e = fabs(l - f->len[i]) / f->len[i];
             if (e > maxerr) maxerr = e;
-            turn += turning(p, n, i);
         }
         info->max_length_error = maxerr;
-        info->turning_number = (int32_t)lround(turn / (2.0 * CFI_PI));
+        info->turning_number = winding;
     }
     return CF_OK;
 }
@@ -320,10 +323,5 @@ int32_t cf_curve_flow_size(const cf_curve_flow *f) { return f ? f->n : 0; }
 double cf_curve_flow_energy(const cf_curve_flow *f)
 {
     if (!f) return NAN;
-    double e = 0.0;
-    for (int32_t i = 0; i < f->n; ++i) {
-        double k = turning(f->points, f->n, i) / f->dual[i];
-        e += k * k * f->dual[i];
-    }
-    return e;
+    return energy_of(f->points, f->n, f->dual, NULL);
 }

@@ -214,9 +214,12 @@ static int has_suffix(const char *path, const char *suffix)
     return 1;
 }
 
-/* Parses a NUL-terminated text (modified in place) named `name` in messages. */
-static cf_status parse_text(cf_context *ctx, char *text, const char *name, int svg, cf_curve **out)
+/* Parses `length` bytes of text followed by a NUL (modified in place), named
+ * `name` in messages; a NUL byte inside the text is refused. */
+static cf_status parse_text(cf_context *ctx, char *text, size_t length, const char *name, int svg, cf_curve **out)
 {
+    if (strlen(text) != length)
+        return cfi_error(ctx, CF_ERR_PARSE, "%s: byte %zu is a NUL byte (not a text file?)", name, strlen(text));
     cf_status st = CF_OK;
     pbuf b = {ctx, NULL, 0, 0};
     if (svg) {
@@ -267,10 +270,7 @@ cf_status cf_curve_read(cf_context *ctx, const char *path, cf_curve **out)
     size_t cap = 0, length = 0;
     cf_status st = read_file(ctx, path, &text, &cap, &length);
     if (st != CF_OK) return st;
-    if (strlen(text) != length)
-        st = cfi_error(ctx, CF_ERR_PARSE, "%s: byte %zu is a NUL byte (not a text file?)", path, strlen(text));
-    else
-        st = parse_text(ctx, text, path, has_suffix(path, ".svg"), out);
+    st = parse_text(ctx, text, length, path, has_suffix(path, ".svg"), out);
     cfi_free(ctx, text, cap);
     return st;
 }
@@ -287,11 +287,7 @@ cf_status cf_curve_read_memory(cf_context *ctx, const void *bytes, size_t size, 
     if (!text) return CF_ERR_NOMEM;
     if (size) memcpy(text, bytes, size);
     text[size] = '\0';
-    cf_status st;
-    if (strlen(text) != size)
-        st = cfi_error(ctx, CF_ERR_PARSE, "%s: byte %zu is a NUL byte (not a text file?)", name, strlen(text));
-    else
-        st = parse_text(ctx, text, name, svg, out);
+    cf_status st = parse_text(ctx, text, size, name, svg, out);
     cfi_free(ctx, text, size + 1);
     return st;
 }

@@ -2,8 +2,9 @@
  * Shape metrics: comparison of two position sets on one connectivity
  * (quasi-conformal error, area distortion, angle change), single-shape
  * summaries (area, volume, Willmore energy, Gauss-Bonnet check, best-fit
- * sphere), similarity alignment (Umeyama) and vertex-to-surface distance,
- * plus the robust 3 x 3 SVD and closest-rotation kernels other modules use.
+ * sphere), similarity alignment (Umeyama) and vertex-to-surface distance.
+ * The 3 x 3 SVD and closest-rotation kernels live in the linear-algebra
+ * layer (curvflow/svd3.h, included here for existing callers).
  *
  * Matrices are 3 x 3 row-major (m[3 r + c]). Per-face/per-vertex outputs are
  * caller-allocated and optional (NULL skips them).
@@ -13,31 +14,11 @@
 
 #include "curvflow/curvflow.h"
 #include "curvflow/mesh.h"
+#include "curvflow/svd3.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
-
-/* ---- 3 x 3 kernels ----------------------------------------------------- */
-
-/* Signed singular value decomposition a = u diag(s) v^T by one-sided
- * (Hestenes) Jacobi rotations, accurate to the relative precision of the
- * small singular values (no a^T a is formed).
- * u and v are rotations (det +1). Sign correction: s[0] >= s[1] >= |s[2]|
- * and s[2] carries the sign of det(a), i.e. s[2] < 0 exactly when a
- * contains a reflection; |s| are the usual singular values. Rank-deficient
- * inputs get an arbitrary orthonormal completion of u.
- * Statuses: CF_OK, CF_ERR_INVALID_ARG (NULL), CF_ERR_NONFINITE (NaN/Inf
- * entry; outputs then hold identity/zero). No context: this is a pure kernel. */
-CF_API cf_status cf_svd3(const double a[9], double u[9], double s[3], double v[9]);
-
-/* Closest rotation r to a in the Frobenius norm (maximises trace(r^T a)):
- * r = u v^T with the signed SVD above, which is the polar factor with the
- * determinant correction "negate the column of the smallest singular value".
- * For an ARAP/Procrustes covariance S = sum_k w_k p_k q_k^T (p rest, q
- * deformed edge) the rotation taking p to q is cf_rotation_from_covariance
- * of S^T. Statuses as cf_svd3. */
-CF_API cf_status cf_rotation_from_covariance(const double a[9], double r[9]);
 
 /* ---- statistics ---------------------------------------------------------- */
 

@@ -7,8 +7,10 @@
  * (Demmel & Veselic 1992). Column swaps used for sorting negate one column
  * in U and V alike so that V stays a rotation; the third column of U is
  * u0 x u1, which makes U a rotation and gives s[2] the sign of det(a).
+ * (Moved here from src/metrics: it is dense linear algebra, used by metrics
+ * and by the methods alike; declared in curvflow/svd3.h.)
  */
-#include "curvflow/metrics.h"
+#include "curvflow/svd3.h"
 
 #include <math.h>
 

@@ -1,6 +1,6 @@
 /* cf_svd3 / cf_rotation_from_covariance: reconstruction, orthogonality,
  * ordering and signs on random, near-singular, rank-1, reflected input. */
-#include "curvflow/metrics.h"
+#include "curvflow/svd3.h"
 #include "test.h"
 
 #include <stdint.h>

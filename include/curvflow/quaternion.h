@@ -43,8 +43,42 @@ CF_API void cf_quat_conj_sandwich(cf_quat q, const double v[3], double out[3]);
  *   [ y  z  w -x ]
  *   [ z -y  x  w ]  */
 CF_API void cf_quat_left_matrix(cf_quat q, double m[16]);
-/* Real 4 x 4 matrix of right multiplication p -> p q (row-major). */
+/* Real 4 x 4 matrix of right multiplication p -> p q (row-major):
+ *   [ w -x -y -z ]
+ *   [ x  w  z -y ]
+ *   [ y -z  w  x ]
+ *   [ z  y -x  w ]
+ * Left and right matrices commute (L(a) R(b) p = a p b). */
 CF_API void cf_quat_right_matrix(cf_quat q, double m[16]);
+
+/* Inverse of cf_quat_left_matrix / cf_quat_right_matrix: the quaternion
+ * whose matrix is nearest to m (row-major 4 x 4) in the Frobenius norm,
+ * i.e. the average of the four entries that hold each component. Exact
+ * (q back bit for bit) on a matrix made by the functions above; on a block
+ * that is not a quaternion's matrix it is the orthogonal projection onto
+ * those matrices. A NULL m gives zero. */
+CF_API cf_quat cf_quat_from_left_matrix(const double m[16]);
+CF_API cf_quat cf_quat_from_right_matrix(const double m[16]);
+
+/* (w, x, y, z) arrays <-> cf_quat, for quaternion fields stored as 4
+ * doubles per element (as the methods' 4 nv vectors are). NULL reads as
+ * zero / writes nothing. */
+CF_API cf_quat cf_quat_load(const double p[4]);
+CF_API void cf_quat_store(cf_quat q, double p[4]);
+
+/* Rotation matrix (3 x 3, row-major) of a UNIT quaternion: r v = q v conj(q)
+ * for v in R^3 (imaginary quaternions), i.e. a rotation by angle theta about
+ * the unit axis u for q = cos(theta/2) + sin(theta/2) u, counter-clockwise
+ * seen from the tip of u (right-hand rule). The unit-norm formula
+ * (1 - 2 (y^2 + z^2), ...) is used as is: normalise q first. Note the
+ * opposite order of cf_quat_conj_sandwich (conj(q) v q = r^T v |q|^2). */
+CF_API void cf_quat_to_rotation_matrix(cf_quat q, double r[9]);
+/* Unit quaternion of a rotation matrix (row-major), from the largest of
+ * the four diagonal combinations (Shepperd's branch choice, no
+ * cancellation), normalised; either sign of q may come back (q and -q are
+ * the same rotation). r must be a rotation (orthogonal, det +1); the input
+ * is not checked. A NULL r gives the identity. */
+CF_API cf_quat cf_quat_from_rotation_matrix(const double r[9]);
 
 #ifdef __cplusplus
 }

@@ -100,3 +100,69 @@ void cf_quat_right_matrix(cf_quat q, double m[16])
     m[8] = q.y;  m[9] = -q.z; m[10] = q.w;  m[11] = q.x;
     m[12] = q.z; m[13] = q.y; m[14] = -q.x; m[15] = q.w;
 }
+
+/* Each component sits in four entries of the matrix, with the signs of the
+ * layouts above; averaging them is the orthogonal projection onto the
+ * 4-dimensional space of left (right) multiplication matrices. */
+cf_quat cf_quat_from_left_matrix(const double m[16])
+{
+    if (!m) return cf_quat_make(0.0, 0.0, 0.0, 0.0);
+    /* summed in pairs so that a quaternion's own matrix gives 4 q exactly */
+    return cf_quat_make(0.25 * ((m[0] + m[5]) + (m[10] + m[15])), 0.25 * ((m[4] - m[1]) + (m[14] - m[11])),
+                        0.25 * ((m[8] - m[2]) + (m[7] - m[13])), 0.25 * ((m[12] - m[3]) + (m[9] - m[6])));
+}
+
+cf_quat cf_quat_from_right_matrix(const double m[16])
+{
+    if (!m) return cf_quat_make(0.0, 0.0, 0.0, 0.0);
+    return cf_quat_make(0.25 * ((m[0] + m[5]) + (m[10] + m[15])), 0.25 * ((m[4] - m[1]) + (m[11] - m[14])),
+                        0.25 * ((m[8] - m[2]) + (m[13] - m[7])), 0.25 * ((m[12] - m[3]) + (m[6] - m[9])));
+}
+
+cf_quat cf_quat_load(const double p[4]) { return p ? cf_quat_make(p[0], p[1], p[2], p[3]) : cf_quat_make(0.0, 0.0, 0.0, 0.0); }
+
+void cf_quat_store(cf_quat q, double p[4])
+{
+    if (!p) return;
+    p[0] = q.w;
+    p[1] = q.x;
+    p[2] = q.y;
+    p[3] = q.z;
+}
+
+/* q v conj(q) expanded for |q| = 1 (w^2 = 1 - x^2 - y^2 - z^2 folded into
+ * the diagonal). */
+void cf_quat_to_rotation_matrix(cf_quat q, double r[9])
+{
+    if (!r) return;
+    double w = q.w, x = q.x, y = q.y, z = q.z;
+    r[0] = 1 - 2 * (y * y + z * z); r[1] = 2 * (x * y - w * z);     r[2] = 2 * (x * z + w * y);
+    r[3] = 2 * (x * y + w * z);     r[4] = 1 - 2 * (x * x + z * z); r[5] = 2 * (y * z - w * x);
+    r[6] = 2 * (x * z - w * y);     r[7] = 2 * (y * z + w * x);     r[8] = 1 - 2 * (x * x + y * y);
+}
+
+/* 4 w^2 = 1 + tr r, 4 x^2 = 1 + r00 - r11 - r22, ...: take the square root
+ * of the largest, the other components from the off-diagonal sums and
+ * differences divided by it. */
+cf_quat cf_quat_from_rotation_matrix(const double r[9])
+{
+    if (!r) return cf_quat_make(1.0, 0.0, 0.0, 0.0);
+    double q[4];
+    double tr = r[0] + r[4] + r[8];
+    if (tr > 0.0) {
+        double s = 2.0 * sqrt(tr + 1.0);
+        q[0] = 0.25 * s; q[1] = (r[7] - r[5]) / s; q[2] = (r[2] - r[6]) / s; q[3] = (r[3] - r[1]) / s;
+    } else if (r[0] > r[4] && r[0] > r[8]) {
+        double s = 2.0 * sqrt(1.0 + r[0] - r[4] - r[8]);
+        q[0] = (r[7] - r[5]) / s; q[1] = 0.25 * s; q[2] = (r[1] + r[3]) / s; q[3] = (r[2] + r[6]) / s;
+    } else if (r[4] > r[8]) {
+        double s = 2.0 * sqrt(1.0 + r[4] - r[0] - r[8]);
+        q[0] = (r[2] - r[6]) / s; q[1] = (r[1] + r[3]) / s; q[2] = 0.25 * s; q[3] = (r[5] + r[7]) / s;
+    } else {
+        double s = 2.0 * sqrt(1.0 + r[8] - r[0] - r[4]);
+        q[0] = (r[3] - r[1]) / s; q[1] = (r[2] + r[6]) / s; q[2] = (r[5] + r[7]) / s; q[3] = 0.25 * s;
+    }
+    double n = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    for (int k = 0; k < 4; ++k) q[k] /= n;
+    return cf_quat_make(q[0], q[1], q[2], q[3]);
+}

@@ -9,8 +9,9 @@
  */
 #include "methods/stretch_bend_edit/sbe_internal.h"
 
-#include "curvflow/metrics.h"
 #include "curvflow/ops.h"
+#include "curvflow/quaternion.h"
+#include "curvflow/svd3.h"
 
 #include <math.h>
 #include <string.h>
@@ -316,36 +317,6 @@ done:
     return st;
 }
 
-/* Unit quaternion (w, x, y, z) to a row-major rotation matrix. */
-static void quat_to_matrix(const double q[4], double r[9])
-{
-    double w = q[0], x = q[1], y = q[2], z = q[3];
-    r[0] = 1 - 2 * (y * y + z * z); r[1] = 2 * (x * y - w * z);     r[2] = 2 * (x * z + w * y);
-    r[3] = 2 * (x * y + w * z);     r[4] = 1 - 2 * (x * x + z * z); r[5] = 2 * (y * z - w * x);
-    r[6] = 2 * (x * z - w * y);     r[7] = 2 * (y * z + w * x);     r[8] = 1 - 2 * (x * x + y * y);
-}
-
-/* Rotation matrix to a unit quaternion (largest-component branch). */
-static void matrix_to_quat(const double r[9], double q[4])
-{
-    double tr = r[0] + r[4] + r[8];
-    if (tr > 0.0) {
-        double s = 2.0 * sqrt(tr + 1.0);
-        q[0] = 0.25 * s; q[1] = (r[7] - r[5]) / s; q[2] = (r[2] - r[6]) / s; q[3] = (r[3] - r[1]) / s;
-    } else if (r[0] > r[4] && r[0] > r[8]) {
-        double s = 2.0 * sqrt(1.0 + r[0] - r[4] - r[8]);
-        q[0] = (r[7] - r[5]) / s; q[1] = 0.25 * s; q[2] = (r[1] + r[3]) / s; q[3] = (r[2] + r[6]) / s;
-    } else if (r[4] > r[8]) {
-        double s = 2.0 * sqrt(1.0 + r[4] - r[0] - r[8]);
-        q[0] = (r[2] - r[6]) / s; q[1] = (r[1] + r[3]) / s; q[2] = 0.25 * s; q[3] = (r[5] + r[7]) / s;
-    } else {
-        double s = 2.0 * sqrt(1.0 + r[8] - r[0] - r[4]);
-        q[0] = (r[3] - r[1]) / s; q[1] = (r[2] + r[6]) / s; q[2] = (r[5] + r[7]) / s; q[3] = 0.25 * s;
-    }
-    double n = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-    for (int k = 0; k < 4; ++k) q[k] /= n;
-}
-
 static double trace_rt_c(const double r[9], const double c[9])
 {
     double t = 0.0;
@@ -364,7 +335,7 @@ static double trace_rt_c(const double r[9], const double c[9])
 static int polar_iterate(const double c[9], double q[4], double r[9])
 {
     for (int it = 0; it < 10; ++it) {
-        quat_to_matrix(q, r);
+        cf_quat_to_rotation_matrix(cf_quat_load(q), r);
         double w[3] = {0, 0, 0};
         for (int i = 0; i < 3; ++i) {
             double a0 = r[i], a1 = r[3 + i], a2 = r[6 + i], b0 = c[i], b1 = c[3 + i], b2 = c[6 + i];
@@ -403,15 +374,12 @@ static int polar_iterate(const double c[9], double q[4], double r[9])
         double scale = angle > 1.0 ? 1.0 / angle : 1.0; /* damp far from the optimum */
         angle *= scale;
         double s = sin(0.5 * angle) / (angle / scale), cw = cos(0.5 * angle);
-        double dq[4] = {cw, s * d[0], s * d[1], s * d[2]};
-        double nq[4] = {dq[0] * q[0] - dq[1] * q[1] - dq[2] * q[2] - dq[3] * q[3],
-                        dq[0] * q[1] + dq[1] * q[0] + dq[2] * q[3] - dq[3] * q[2],
-                        dq[0] * q[2] - dq[1] * q[3] + dq[2] * q[0] + dq[3] * q[1],
-                        dq[0] * q[3] + dq[1] * q[2] - dq[2] * q[1] + dq[3] * q[0]};
-        double n = sqrt(nq[0] * nq[0] + nq[1] * nq[1] + nq[2] * nq[2] + nq[3] * nq[3]);
-        for (int k = 0; k < 4; ++k) q[k] = nq[k] / n;
+        /* R <- exp([d]x) R is q <- dq q (Hamilton product), renormalised */
+        cf_quat nq = cf_quat_mul(cf_quat_make(cw, s * d[0], s * d[1], s * d[2]), cf_quat_load(q));
+        double n = sqrt(cf_quat_norm2(nq));
+        cf_quat_store(cf_quat_make(nq.w / n, nq.x / n, nq.y / n, nq.z / n), q);
     }
-    quat_to_matrix(q, r);
+    cf_quat_to_rotation_matrix(cf_quat_load(q), r);
     return 0;
 }
 
@@ -552,7 +520,7 @@ cf_status cfi_sbe_local_step(cfi_sbe_model *m, const double *x, int exact, doubl
             if (st != CF_OK)
                 return cfi_error(ctx, CF_ERR_NUMERICAL, "%s %d: cross-covariance is not finite",
                                  m->per_face ? "face" : "vertex", r);
-            if (m->quats) matrix_to_quat(rot, m->quats + 4 * r);
+            if (m->quats) cf_quat_store(cf_quat_from_rotation_matrix(rot), m->quats + 4 * r);
         }
         tr = trace_rt_c(rot, c);
         term_energy += def_sq - 2.0 * tr + m->rest_sq[r];

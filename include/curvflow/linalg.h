@@ -2,7 +2,8 @@
  * Sparse linear algebra: compressed-column matrices, one-pass assembly with
  * value refill into a fixed pattern, Cholesky with symbolic analysis reused
  * across numeric refactorisations, saddle-point systems, LU, inverse power
- * iteration and weighted Gram-Schmidt.
+ * iteration and weighted Gram-Schmidt; Anderson acceleration
+ * (cf_anderson); the dense 3 x 3 SVD (curvflow/svd3.h, included here).
  *
  * Only src/linalg/ includes SuiteSparse. Dense vectors are double arrays;
  * several right-hand sides are stored column after column (column-major,
@@ -12,6 +13,7 @@
 #define CURVFLOW_LINALG_H
 
 #include "curvflow/curvflow.h"
+#include "curvflow/svd3.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -248,6 +250,46 @@ CF_API void cf_project_out(int32_t n, int32_t k, const double *basis, const doub
 
 /* Weighted dot product sum_i w_i a_i b_i (w NULL: plain). */
 CF_API double cf_dot(int32_t n, const double *a, const double *b, const double *w);
+
+/* ---- Anderson acceleration --------------------------------------------- */
+
+/* Accelerator of a fixed-point iteration x <- G(x) ("type II" Anderson
+ * mixing, Walker & Ni 2011). Sign convention: the residual is
+ * f = G(x) - x (zero at a fixed point). With dF, dG the differences of f
+ * and of G(x) between the last `depth` + 1 calls,
+ *     gamma = argmin_gamma |f - dF gamma|_2,   x_next = G(x) - dG gamma,
+ * gamma from the normal equations with a Tikhonov shift of 1e-10 times the
+ * largest diagonal entry. The object owns all its memory (2 depth n + 2 n
+ * doubles, allocated at create): a step allocates nothing and costs
+ * O(depth n). It is not a safeguard: a caller that needs monotone progress
+ * (an energy, a residual norm) tests x_next and, if it is worse, takes G(x)
+ * and calls cf_anderson_reset. */
+typedef struct cf_anderson cf_anderson;
+
+#define CF_ANDERSON_MAX_DEPTH 64
+
+/* n: vector length (>= 1); depth: history columns in [1, CF_ANDERSON_MAX_DEPTH]
+ * (5 is a good default; see docs/linalg.md). Statuses: CF_OK,
+ * CF_ERR_INVALID_ARG, CF_ERR_NOMEM. */
+CF_API cf_status cf_anderson_create(cf_context *ctx, int64_t n, int32_t depth, cf_anderson **out);
+
+/* Pushes the pair (x, g = G(x)) (n entries each) into the history and, when
+ * there is at least one difference pair, writes the mixed candidate into out
+ * (n entries; may not alias x or g) and sets *mixed = 1. *mixed = 0 (out
+ * untouched) on the first call after create/reset, when f did not change,
+ * or when the history is numerically singular: take g then. Statuses:
+ * CF_OK; CF_ERR_INVALID_ARG (NULL argument); CF_ERR_NUMERICAL when
+ * G(x) - x is not finite (message names the entry; the history is reset). */
+CF_API cf_status cf_anderson_step(cf_anderson *aa, const double *x, const double *g, double *out, int32_t *mixed);
+
+/* Forgets the history (after a rejected candidate, a restart or a jump of
+ * x the iteration did not make). No allocation. NULL is ignored. */
+CF_API void cf_anderson_reset(cf_anderson *aa);
+
+/* Number of difference columns in the history (0 .. depth). */
+CF_API int32_t cf_anderson_history(const cf_anderson *aa);
+
+CF_API void cf_anderson_destroy(cf_anderson **aa);
 
 #ifdef __cplusplus
 }

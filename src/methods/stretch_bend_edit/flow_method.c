@@ -43,14 +43,11 @@ typedef struct sbe_state {
     int32_t first_pending;    /* the next step is the first after create/reset: two candidates */
     int64_t first_from_start; /* first steps won by the rotations of the unsnapped start (statistics) */
     double factorize_seconds; /* of the last (re)factorisation, reported once */
-    /* Anderson acceleration (depth from options.anderson, see sbe_create), all 3 nv: */
+    /* Anderson acceleration of G = global(local(x)) (depth from
+     * options.anderson, see sbe_create; linalg's cf_anderson): */
     int32_t aa_depth;
-    int32_t aa_count;         /* valid columns in the history */
-    int32_t aa_next;          /* next column to overwrite */
-    int32_t aa_have_prev;     /* f_prev, g_prev valid */
-    double *aa_df, *aa_dg;    /* depth columns of differences of f = G(x) - x and of G(x) */
-    double *aa_fprev, *aa_gprev, *aa_g, *aa_x;
-    double aa_gram[10 * 10];  /* dF^T dF by history slot, kept between steps */
+    cf_anderson *aa;
+    double *aa_g, *aa_x;      /* 3 nv each: G(x) and the mixed candidate */
     int64_t aa_accepted, aa_rejected;
 } sbe_state;
 
@@ -135,11 +132,8 @@ static void state_free(sbe_state *s, cf_context *ctx)
     CFI_FREE(ctx, s->rhs, 3 * (size_t)nv);
     CFI_FREE(ctx, s->hu, 3 * (size_t)nv);
     CFI_FREE(ctx, s->x_start, 3 * (size_t)nv);
-    size_t n3 = 3 * (size_t)nv, depth = (size_t)s->aa_depth;
-    CFI_FREE(ctx, s->aa_df, depth * n3);
-    CFI_FREE(ctx, s->aa_dg, depth * n3);
-    CFI_FREE(ctx, s->aa_fprev, n3);
-    CFI_FREE(ctx, s->aa_gprev, n3);
+    size_t n3 = 3 * (size_t)nv;
+    cf_anderson_destroy(&s->aa);
     CFI_FREE(ctx, s->aa_g, n3);
     CFI_FREE(ctx, s->aa_x, n3);
     cfi_sbe_model_free(&s->model);
@@ -475,15 +469,13 @@ static cf_status sbe_create(cf_flow *flow, const void *options)
     int32_t depth_opt = o->anderson;
     if (depth_opt < 0) depth_opt = (o->energy == CF_EDIT_ARAP || o->energy == CF_EDIT_ARAP_RIMS) ? 0 : 5;
     if (depth_opt > 0) {
-        size_t n3 = 3 * (size_t)nv, depth = (size_t)depth_opt;
+        size_t n3 = 3 * (size_t)nv;
         s->aa_depth = depth_opt;
-        s->aa_df = CFI_ALLOC(ctx, double, depth * n3);
-        s->aa_dg = CFI_ALLOC(ctx, double, depth * n3);
-        s->aa_fprev = CFI_ALLOC(ctx, double, n3);
-        s->aa_gprev = CFI_ALLOC(ctx, double, n3);
         s->aa_g = CFI_ALLOC(ctx, double, n3);
         s->aa_x = CFI_ALLOC(ctx, double, n3);
-        if (!s->aa_df || !s->aa_dg || !s->aa_fprev || !s->aa_gprev || !s->aa_g || !s->aa_x) return CF_ERR_NOMEM;
+        if (!s->aa_g || !s->aa_x) return CF_ERR_NOMEM;
+        cf_status ast = cf_anderson_create(ctx, (int64_t)n3, depth_opt, &s->aa);
+        if (ast != CF_OK) return ast;
     }
     const double *rest = o->rest_positions ? o->rest_positions : mesh->positions;
     for (int32_t i = 0; i < 3 * nv; ++i) {
@@ -578,93 +570,6 @@ cfi_sbe_model *cfi_sbe_flow_model(cf_flow *flow)
 
 /* One local/global iteration: global solve with the rotations and u' of the
  * current state, then the local step at the new state (which also gives the
- * energy E(x') reported for it). */
-/* Anderson mixing (Walker & Ni 2011, type II) of the fixed-point map
- * G = global(local(x)): with f = G(x) - x and the last columns of
- * differences dF, dG, gamma = argmin |f - dF gamma| and the candidate is
- * G(x) - dG gamma, written into s->aa_x.
- *
- * The history lives in a circular buffer of aa_depth columns; the Gram
- * matrix dF^T dF is kept between steps by slot, so a step computes only the
- * new column's dot products. One pass over the 3 nv entries pushes the new
- * difference pair and accumulates those dots and dF^T f; a second pass mixes
- * the candidate. (Recomputing the whole Gram matrix cost 1.8 ms per
- * iteration on armadillo_26k, 17 % of the iteration.) Returns 0 when there
- * is no history yet or the small least-squares system is singular. */
-static int anderson_push_and_mix(sbe_state *s, const double *x)
-{
-    size_t n3 = 3 * (size_t)s->model.nv;
-    const double *g = s->aa_g;
-    if (!s->aa_have_prev) {
-        for (size_t i = 0; i < n3; ++i) {
-            s->aa_fprev[i] = g[i] - x[i];
-            s->aa_gprev[i] = g[i];
-        }
-        s->aa_have_prev = 1;
-        return 0;
-    }
-    int32_t slot = s->aa_next;
-    s->aa_next = (s->aa_next + 1) % s->aa_depth;
-    if (s->aa_count < s->aa_depth) ++s->aa_count;
-    int32_t m = s->aa_count; /* the valid slots are 0 .. m-1 */
-    double *df_new = s->aa_df + (size_t)slot * n3, *dg_new = s->aa_dg + (size_t)slot * n3;
-    const double *df_col[10];
-    double gram_row[10] = {0}, rhs[10] = {0}, gamma[10];
-    for (int32_t b = 0; b < m; ++b) df_col[b] = s->aa_df + (size_t)b * n3;
-    for (size_t i = 0; i < n3; ++i) {
-        double f = g[i] - x[i];
-        double dfi = f - s->aa_fprev[i];
-        df_new[i] = dfi;
-        dg_new[i] = g[i] - s->aa_gprev[i];
-        s->aa_fprev[i] = f;
-        s->aa_gprev[i] = g[i];
-        for (int32_t b = 0; b < m; ++b) {
-            double db = b == slot ? dfi : df_col[b][i];
-            gram_row[b] += dfi * db;
-            rhs[b] += db * f;
-        }
-    }
-    double *kept = s->aa_gram;
-    for (int32_t b = 0; b < m; ++b) kept[slot * 10 + b] = kept[b * 10 + slot] = gram_row[b];
-    /* Cholesky of the Gram matrix with a relative Tikhonov shift. */
-    double gram[10 * 10];
-    double big = 0.0;
-    for (int32_t a = 0; a < m; ++a) big = fmax(big, kept[a * 10 + a]);
-    if (!(big > 0.0)) return 0;
-    for (int32_t a = 0; a < m; ++a) {
-        for (int32_t b = 0; b <= a; ++b) {
-            double v = kept[a * 10 + b] + (a == b ? 1e-10 * big : 0.0);
-            for (int32_t k = 0; k < b; ++k) v -= gram[a * 10 + k] * gram[b * 10 + k];
-            if (a == b) {
-                if (!(v > 0.0)) return 0;
-                gram[a * 10 + a] = sqrt(v);
-            } else {
-                gram[a * 10 + b] = v / gram[b * 10 + b];
-            }
-        }
-    }
-    for (int32_t a = 0; a < m; ++a) {
-        double v = rhs[a];
-        for (int32_t k = 0; k < a; ++k) v -= gram[a * 10 + k] * gamma[k];
-        gamma[a] = v / gram[a * 10 + a];
-    }
-    for (int32_t a = m - 1; a >= 0; --a) {
-        double v = gamma[a];
-        for (int32_t k = a + 1; k < m; ++k) v -= gram[k * 10 + a] * gamma[k];
-        gamma[a] = v / gram[a * 10 + a];
-    }
-    const double *dg_col[10];
-    for (int32_t a = 0; a < m; ++a) dg_col[a] = s->aa_dg + (size_t)a * n3;
-    for (size_t i = 0; i < n3; ++i) {
-        double v = g[i];
-        for (int32_t a = 0; a < m; ++a) v -= gamma[a] * dg_col[a][i];
-        s->aa_x[i] = v;
-    }
-    return 1;
-}
-
-/* One local/global iteration: global solve with the rotations and u' of the
- * current state, then the local step at the new state (which also gives the
  * energy E(x') reported for it). With Anderson acceleration the candidate
  * mixed from the history replaces the plain result when its energy is not
  * higher than the current one. */
@@ -713,7 +618,9 @@ static cf_status sbe_step(cf_flow *flow, cf_flow_info *info)
         st = global_solve(s, s->aa_g, &assemble, &solve);
         if (st != CF_OK) return st;
         t2 = cfi_now_seconds();
-        int have = anderson_push_and_mix(s, x);
+        int32_t have = 0;
+        st = cf_anderson_step(s->aa, x, s->aa_g, s->aa_x, &have);
+        if (st != CF_OK) return st;
         int accepted = 0;
         if (have) {
             double e_aa = 0.0;
@@ -726,9 +633,7 @@ static cf_status sbe_step(cf_flow *flow, cf_flow_info *info)
             } else {
                 /* Rejected: restart the history from the plain step. */
                 ++s->aa_rejected;
-                s->aa_count = 0;
-                s->aa_next = 0;
-                s->aa_have_prev = 0;
+                cf_anderson_reset(s->aa);
             }
         }
         if (!accepted) {
@@ -766,9 +671,7 @@ static cf_status sbe_reset(cf_flow *flow)
 {
     sbe_state *s = flow->impl;
     if (!s) return CF_OK;
-    s->aa_count = 0;
-    s->aa_next = 0;
-    s->aa_have_prev = 0;
+    cf_anderson_reset(s->aa);
     cf_status st = start_state(s, flow->positions);
     if (st == CF_OK) fill_terms(s, &flow->info);
     return st;

@@ -106,7 +106,8 @@ void cf_spin_willmore_options_default(cf_spin_willmore_options *o)
     o->complex_factorization = 1;
     o->harmonic_update = 1;
     o->exactness_linearized = 1;
-    o->adaptive = 0;
+    o->adaptive = 1;
+    o->max_scale_change = 1.2;
     o->input_metric = 1;
     o->regularization = CFI_SPIN_SHIFT;
 }
@@ -151,7 +152,10 @@ static const cf_param_desc spin_params[] = {
     {"input_metric", CF_PARAM_BOOL, OPT(input_metric), 0, 1, NULL,
      "recover positions in the cotan metric of the starting surface (0: the current surface's, per step)"},
     {"adaptive", CF_PARAM_BOOL, OPT(adaptive), 0, 1, NULL,
-     "halve tau while a step would raise W (up to 10 times; then stop as converged), grow it back after"},
+     "retry a step with a smaller tau while it would raise W or exceed max_scale_change (up to 10 times; then "
+     "stop as converged), grow tau back after; 0: the paper's fixed step"},
+    {"max_scale_change", CF_PARAM_DOUBLE, OPT(max_scale_change), 0.0, 100.0, NULL,
+     "adaptive: largest change of the log conformal scale across an edge in one step (0: no bound)"},
     {"exactness_linearized", CF_PARAM_BOOL, OPT(exactness_linearized), 0, 1, NULL,
      "exactness as the discrete linearisation of 'no periods' (0: App. C's Z_i on closed surfaces)"},
     {"regularization", CF_PARAM_DOUBLE, OPT(regularization), 1e-9, 1e6, NULL,
@@ -895,7 +899,23 @@ static int32_t project(spin_state *s, int32_t ncols)
 /* Steps IV-VI for the time step tau from the current state (rhodot and its
  * constraints computed): rho, lambda, edges, positions (x in place) and the
  * geometry of the new surface (s->energy). */
-static cf_status realise_step(cf_flow *flow, spin_state *s, double tau, double *t_asm, double *t_fac, double *t_sol)
+/* Largest change of the log conformal scale across an edge, |log(|l_i|^2 / |l_j|^2)|. */
+static double max_scale_change(const cf_mesh *mesh, const double *lambda)
+{
+    double worst = 0.0;
+    for (int32_t e = 0; e < mesh->ne; ++e) {
+        const double *li = lambda + 4 * (int64_t)mesh->edge_vertices[2 * e];
+        const double *lj = lambda + 4 * (int64_t)mesh->edge_vertices[2 * e + 1];
+        double ni = li[0] * li[0] + li[1] * li[1] + li[2] * li[2] + li[3] * li[3];
+        double nj = lj[0] * lj[0] + lj[1] * lj[1] + lj[2] * lj[2] + lj[3] * lj[3];
+        double r = ni > 0.0 && nj > 0.0 ? fabs(log(ni / nj)) : INFINITY;
+        if (!(r <= worst)) worst = r;
+    }
+    return worst;
+}
+
+static cf_status realise_step(cf_flow *flow, spin_state *s, double tau, int *too_large, double *t_asm, double *t_fac,
+                              double *t_sol)
 {
     const cf_mesh *mesh = flow->mesh;
     cf_context *ctx = flow->ctx;
@@ -962,6 +982,16 @@ static cf_status realise_step(cf_flow *flow, spin_state *s, double tau, double *
                 s->lambda[4 * i + r] = q[4 * r] * mu[0] + q[4 * r + 1] * mu[1] + q[4 * r + 2] * mu[2] + q[4 * r + 3] * mu[3];
         }
     }
+
+    /* A lambda whose scale jumps along an edge gives transformed edges that
+     * no similar triangle fits (docs/spin.md, "Robustness"): with adaptive
+     * steps such a step is redone with a smaller tau before positions are
+     * recovered. */
+    s->diag.scale_change = max_scale_change(mesh, s->lambda);
+    /* (prescribed and cmc boundaries turn lambda by design: not bounded) */
+    *too_large = s->opt.adaptive && !s->restricted_boundary && s->opt.max_scale_change > 0.0 &&
+                 !(s->diag.scale_change <= s->opt.max_scale_change);
+    if (*too_large) return CF_OK;
 
     /* VI. edges and positions */
     ta = cfi_now_seconds();
@@ -1085,9 +1115,11 @@ static cf_status spin_step(cf_flow *flow, cf_flow_info *info)
     /* a failed attempt restores x from xsave, so one copy serves every retry */
     if (s->opt.adaptive) memcpy(s->xsave, x, 3 * (size_t)nv * sizeof(double));
     for (;;) {
-        st = realise_step(flow, s, tau, &t_asm, &t_fac, &t_sol);
+        int too_large = 0;
+        st = realise_step(flow, s, tau, &too_large, &t_asm, &t_fac, &t_sol);
         if (!s->opt.adaptive) break;
-        if (st == CF_OK && s->energy <= energy_before) break;
+        /* prescribed and cmc boundaries may raise W by design: only the scale bound applies */
+        if (st == CF_OK && !too_large && (s->energy <= energy_before || s->restricted_boundary)) break;
         if (st != CF_OK && st != CF_ERR_NUMERICAL && st != CF_ERR_NOT_POSDEF && st != CF_ERR_DEGENERATE_FACE)
             return st;
         memcpy(x, s->xsave, 3 * (size_t)nv * sizeof(double));
@@ -1102,7 +1134,8 @@ static cf_status spin_step(cf_flow *flow, cf_flow_info *info)
             break;
         }
         ++halvings;
-        tau *= 0.5;
+        /* the scale change grows about linearly with tau: cut it in proportion (at least halve) */
+        tau *= too_large ? fmin(0.5, 0.9 * s->opt.max_scale_change / s->diag.scale_change) : 0.5;
     }
     if (st != CF_OK) return st;
     if (s->opt.adaptive && !stalled) s->tau = halvings ? tau : fmin(s->opt.time_step, 2.0 * tau);
@@ -1142,6 +1175,8 @@ static cf_status spin_step(cf_flow *flow, cf_flow_info *info)
         info->residuals[3] = halvings;
         info->residual_names[3] = "time_step_halvings";
     }
+    info->residuals[4] = s->diag.scale_change;
+    info->residual_names[4] = "scale_change";
     info->assemble_seconds = t_asm;
     info->factorize_seconds = t_fac;
     info->solve_seconds = t_sol;

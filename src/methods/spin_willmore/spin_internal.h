@@ -64,7 +64,7 @@ double cfi_spin_integrability_error(const cf_mesh *mesh, const double *positions
  * the results agree with 1e-6 to 1e-5 relative in W (spot, bunny, bob).
  * The flow's default; its option `regularization` changes it. */
 #define CFI_SPIN_SHIFT 1e-3
-/* adaptive time steps: at most this many halvings of tau within a step */
+/* adaptive time steps: at most this many retries (tau halved or cut) within a step */
 #define CFI_SPIN_MAX_HALVINGS 10
 
 /* Inverse power iteration (Crane 2013, Sec. 6.4.2) on a factorisation of
@@ -120,6 +120,7 @@ typedef struct cfi_spin_diagnostics {
     double eigenvalue;              /* Rayleigh quotient of lambda (shift removed) */
     int32_t harmonic_dimension;     /* dim H^1 used by the exactness constraint: 2g, or 2g + b - 1 with a free boundary (0 if off) */
     double mobius_norm;             /* |balancing term|_M added to rhodot */
+    double scale_change;            /* max over edges of |log(|lambda_i|^2 / |lambda_j|^2)| of the step */
 } cfi_spin_diagnostics;
 
 /* CF_ERR_INVALID_ARG unless the flow is a spin-willmore flow. */

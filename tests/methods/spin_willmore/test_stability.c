@@ -44,6 +44,7 @@ static cf_flow *make_flow_regularized(cf_context *ctx, const cf_mesh *mesh, doub
     cf_flow_options o;
     cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o);
     cf_spin_willmore_options *so = cf_flow_options_method(&o);
+    so->adaptive = 0; /* the paper's fixed step (Sec. 4): what this test is about */
     so->time_step = tau;
     so->tolerance = 0.0;
     /* Fig. 18 observes the oscillation above the threshold, which takes W

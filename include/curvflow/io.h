@@ -28,6 +28,8 @@
 #include "curvflow/curvflow.h"
 #include "curvflow/mesh.h"
 
+#include <stdio.h>
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -160,6 +162,43 @@ CF_API cf_status cf_write_mesh_file_ex(cf_context *ctx, const char *path, const 
 /* Writes `size` bytes of `text` to `path` atomically (temp file + fsync +
  * rename). CF_ERR_IO names the path and the reason. */
 CF_API cf_status cf_write_text_file_atomic(cf_context *ctx, const char *path, const char *text, size_t size);
+
+/* ---- atomic output beyond whole buffers; temporary files ----------------
+ * Every writer above (and cf_write_png, cf_curve_write) writes a target that
+ * is a symbolic link through to the link's final target (the link stays a
+ * link). The temporary file is ".<name>.tmp-<pid>-<n>" next to that target. */
+
+/* A file written atomically as a stream (e.g. a log written while a run
+ * lasts): write to cf_atomic_writer_stream(); the text goes to the
+ * temporary file, and the target appears (or is replaced) only at commit.
+ * Statuses as cf_write_text_file_atomic; *out is NULL on failure. */
+typedef struct cf_atomic_writer cf_atomic_writer;
+CF_API cf_status cf_atomic_writer_open(cf_context *ctx, const char *path, cf_atomic_writer **out);
+/* The stream to write to (NULL for a NULL writer). */
+CF_API FILE *cf_atomic_writer_stream(cf_atomic_writer *writer);
+/* Checks for write errors, flushes, fsyncs and renames over the target;
+ * on failure removes the temporary file (CF_ERR_IO naming the path and the
+ * reason). Always frees the writer and sets *writer to NULL. */
+CF_API cf_status cf_atomic_writer_commit(cf_atomic_writer **writer);
+/* Removes the temporary file, leaves the target untouched, frees the
+ * writer; accepts NULL and *writer == NULL. */
+CF_API void cf_atomic_writer_abort(cf_atomic_writer **writer);
+
+/* Removes the temporary files of the atomic writes this process has in
+ * progress (every thread). Async-signal-safe: meant for a SIGINT / SIGTERM /
+ * SIGHUP handler that then ends the process (re-raising the signal); the
+ * targets stay untouched, and the interrupted writes cannot be committed.
+ * At most 16 writes in progress at once are tracked. */
+CF_API void cf_atomic_remove_pending(void);
+
+/* Removes the temporary files that atomic writes of `path` left behind in
+ * processes that no longer run (killed with SIGKILL, power loss): the files
+ * ".<name>.tmp-<pid>-<n>" next to path's target whose pid is not a running
+ * process. Files of running processes (and of this one) are kept. Best
+ * effort: a folder that cannot be listed removes nothing. *removed (may be
+ * NULL) receives the count. Statuses: CF_OK, CF_ERR_INVALID_ARG, CF_ERR_IO
+ * (cycle of symbolic links), CF_ERR_NOMEM. */
+CF_API cf_status cf_atomic_remove_stale(cf_context *ctx, const char *path, int32_t *removed);
 
 #ifdef __cplusplus
 }

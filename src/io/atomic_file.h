@@ -10,6 +10,14 @@
  *   fprintf(f.fp, ...);
  *   if (failed) { cfi_atomic_abort(ctx, &f); return st; }
  *   return cfi_atomic_commit(ctx, &f);   // also cleans up on failure
+ *
+ * A target that is a symbolic link is written through: the temporary file
+ * sits next to the link's final target and the rename replaces that file,
+ * so the link stays a link. The temporary file is named
+ * ".<target name>.tmp-<pid>-<n>"; while it exists its path is in a
+ * process-wide registry that cf_atomic_remove_pending() (public, for
+ * signal handlers) empties, and cf_atomic_remove_stale() removes such files
+ * left by processes that no longer run (curvflow/io.h).
  */
 #ifndef CF_IO_ATOMIC_FILE_H
 #define CF_IO_ATOMIC_FILE_H
@@ -20,15 +28,19 @@
 
 typedef struct cfi_atomic_file {
     FILE *fp;             /* write here; NULL once committed or aborted */
-    char *path;           /* copy of the target path */
+    char *path;           /* copy of the path as given (messages) */
     size_t path_bytes;
+    char *target;         /* the file the rename replaces: path with symbolic links followed */
+    size_t target_bytes;
     char *tmp_path;       /* the temporary file */
     size_t tmp_bytes;
+    int slot;             /* registry slot of tmp_path, -1 if not registered */
 } cfi_atomic_file;
 
 /* Creates the temporary file (mode 0666 minus umask, or the existing
- * target's mode). CF_ERR_IO naming the path and the reason, CF_ERR_NOMEM.
- * On failure nothing is left behind and f->fp is NULL. */
+ * target's mode). CF_ERR_IO naming the path and the reason (also for a
+ * cycle of symbolic links), CF_ERR_NOMEM. On failure nothing is left behind
+ * and f->fp is NULL. */
 cf_status cfi_atomic_open(cf_context *ctx, const char *path, cfi_atomic_file *f);
 
 /* Checks for write errors, flushes, fsyncs, closes and renames over the

@@ -93,6 +93,12 @@ CF_API cf_status cf_flow_options_set(cf_context *ctx, cf_flow_options *options, 
 CF_API cf_status cf_flow_options_format(const cf_flow_options *options, const cf_param_desc *param, char *buf,
                                         size_t size);
 
+/* Text of the values a parameter accepts, as the range messages of
+ * cf_flow_options_set name them: "[1e-09, 10]" for numbers (each limit the
+ * shortest text that reads back as it, e.g. 1.5707963267948966), "true|false",
+ * or the choices "a|b|c". CF_ERR_INVALID_ARG for NULL or a too small buffer. */
+CF_API cf_status cf_flow_param_range_format(const cf_param_desc *param, char *buf, size_t size);
+
 /* The parameter table of a kind. */
 CF_API cf_status cf_flow_params(cf_flow_kind kind, const cf_param_desc **params, int32_t *count);
 

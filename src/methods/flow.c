@@ -108,6 +108,52 @@ static void list_param_names(const cfi_flow_method *m, char *buf, size_t size)
     buf[used] = '\0';
 }
 
+/* Shortest text that strtod reads back as v ("0.001", "1.5707963267948966",
+ * "1e-09"), so a limit printed in a message or by --list-params can be typed
+ * back and means the same number; integral values below 1e15 without an
+ * exponent ("100000"). */
+static void format_number(double v, char *buf, size_t size)
+{
+    if (v == floor(v) && fabs(v) < 1e15) {
+        snprintf(buf, size, "%.0f", v);
+        return;
+    }
+    snprintf(buf, size, "%.17g", v);
+    for (int prec = 1; prec < 17; ++prec) {
+        char tmp[64];
+        snprintf(tmp, sizeof tmp, "%.*g", prec, v);
+        if (strtod(tmp, NULL) == v) {
+            snprintf(buf, size, "%s", tmp);
+            return;
+        }
+    }
+}
+
+/* The whole of `text` as a finite double: 0 ok, 1 not a number, 2 a number
+ * that is not finite (nan, inf, or beyond the double range). A value below
+ * the smallest normal double (1e-320) is a number like any other: strtod
+ * flags it with ERANGE but returns it (or 0), and the range check decides. */
+static int parse_number(const char *text, double *out)
+{
+    char *end = NULL;
+    errno = 0;
+    double v = strtod(text, &end);
+    if (end == text || *end != '\0') return 1;
+    if (!isfinite(v) || (errno == ERANGE && fabs(v) > 1.0)) return 2;
+    *out = v;
+    return 0;
+}
+
+/* "'time_step': 1e-320 is outside [1e-09, 10] (below the smallest accepted
+ * value)": the value as written, the limits as they read back exactly. */
+static cf_status range_error(cf_context *ctx, const cf_param_desc *p, const char *value, double v)
+{
+    char range[160];
+    if (cf_flow_param_range_format(p, range, sizeof range) != CF_OK) snprintf(range, sizeof range, "its range");
+    return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter '%s': %s is outside %s (%s accepted value)", p->name, value,
+                     range, v < p->min_value ? "below the smallest" : "above the largest");
+}
+
 static int parse_bool(const char *s, int32_t *out)
 {
     static const char *const yes[] = {"1", "true", "yes", "on"};
@@ -138,14 +184,12 @@ cf_status cf_flow_options_set(cf_context *ctx, cf_flow_options *options, const c
     unsigned char *base = options->storage.bytes;
     switch (p->type) {
     case CF_PARAM_DOUBLE: {
-        char *end = NULL;
-        errno = 0;
-        double v = strtod(value, &end);
-        if (end == value || *end != '\0' || errno == ERANGE || !isfinite(v))
-            return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter '%s': '%s' is not a finite number", name, value);
-        if (v < p->min_value || v > p->max_value)
-            return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter '%s': %g is outside [%g, %g]", name, v, p->min_value,
-                             p->max_value);
+        double v = 0.0;
+        int bad = parse_number(value, &v);
+        if (bad)
+            return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter '%s': '%s' is not a %snumber", name, value,
+                             bad == 2 ? "finite " : "");
+        if (v < p->min_value || v > p->max_value) return range_error(ctx, p, value, v);
         memcpy(base + p->offset, &v, sizeof v);
         return CF_OK;
     }
@@ -155,9 +199,7 @@ cf_status cf_flow_options_set(cf_context *ctx, cf_flow_options *options, const c
         long long v = strtoll(value, &end, 10);
         if (end == value || *end != '\0' || errno == ERANGE || v < INT32_MIN || v > INT32_MAX)
             return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter '%s': '%s' is not an integer", name, value);
-        if ((double)v < p->min_value || (double)v > p->max_value)
-            return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter '%s': %lld is outside [%g, %g]", name, v,
-                             p->min_value, p->max_value);
+        if ((double)v < p->min_value || (double)v > p->max_value) return range_error(ctx, p, value, (double)v);
         int32_t iv = (int32_t)v;
         memcpy(base + p->offset, &iv, sizeof iv);
         return CF_OK;
@@ -202,13 +244,9 @@ cf_status cf_flow_options_format(const cf_flow_options *options, const cf_param_
     case CF_PARAM_DOUBLE: {
         double v;
         memcpy(&v, base + param->offset, sizeof v);
-        n = snprintf(buf, size, "%.17g", v);
-        /* shortest text that round-trips */
-        for (int prec = 1; prec <= 17; ++prec) {
-            char tmp[64];
-            snprintf(tmp, sizeof tmp, "%.*g", prec, v);
-            if (strtod(tmp, NULL) == v) { n = snprintf(buf, size, "%s", tmp); break; }
-        }
+        char text[64];
+        format_number(v, text, sizeof text);
+        n = snprintf(buf, size, "%s", text);
         break;
     }
     case CF_PARAM_INT: {
@@ -233,6 +271,32 @@ cf_status cf_flow_options_format(const cf_flow_options *options, const cf_param_
         break;
     }
     default: return CF_ERR_INVALID_ARG;
+    }
+    return (n < 0 || (size_t)n >= size) ? CF_ERR_INVALID_ARG : CF_OK;
+}
+
+cf_status cf_flow_param_range_format(const cf_param_desc *param, char *buf, size_t size)
+{
+    if (!param || !buf || size == 0) return CF_ERR_INVALID_ARG;
+    int n = 0;
+    if (param->type == CF_PARAM_DOUBLE || param->type == CF_PARAM_INT) {
+        char lo[64], hi[64];
+        format_number(param->min_value, lo, sizeof lo);
+        format_number(param->max_value, hi, sizeof hi);
+        n = snprintf(buf, size, "[%s, %s]", lo, hi);
+    } else if (param->type == CF_PARAM_BOOL) {
+        n = snprintf(buf, size, "true|false");
+    } else if (param->type == CF_PARAM_CHOICE) {
+        size_t used = 0;
+        buf[0] = '\0';
+        for (int32_t i = 0; param->choices && param->choices[i]; ++i) {
+            n = snprintf(buf + used, size - used, "%s%s", i ? "|" : "", param->choices[i]);
+            if (n < 0 || (size_t)n >= size - used) return CF_ERR_INVALID_ARG;
+            used += (size_t)n;
+        }
+        return CF_OK;
+    } else {
+        return CF_ERR_INVALID_ARG;
     }
     return (n < 0 || (size_t)n >= size) ? CF_ERR_INVALID_ARG : CF_OK;
 }

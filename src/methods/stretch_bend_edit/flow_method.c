@@ -261,7 +261,9 @@ static cf_status check_handle_geometry(cf_context *ctx, const cf_mesh *mesh, con
 static cf_status setup_system(sbe_state *s, cf_context *ctx, const cf_mesh *mesh, const cf_handle_set *h)
 {
     int32_t nv = mesh->nv;
-    if (!h) return cfi_error(ctx, CF_ERR_INVALID_ARG, "stretch-bend-edit: no handle set (options.handles is NULL)");
+    if (!h)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "stretch-bend-edit needs handles: set cf_stretch_bend_options.handles "
+                         "(cf_handle_set_read_json reads a handle file; tool: --handles FILE or `curvflow edit`)");
     if (h->count < 0 || (h->count > 0 && (!h->vertices || !h->targets)))
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "stretch-bend-edit: malformed handle set");
     if (h->count == 0)

@@ -8,6 +8,9 @@ CURVFLOW_ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 BUILD_DIR=${BUILD_DIR:-$CURVFLOW_ROOT/build}
 BUILD_TYPE=${BUILD_TYPE:-Release}
 CURVFLOW_PACKAGES="build-essential cmake ninja-build pkg-config libsuitesparse-dev libopenblas-dev libmetis-dev libstb-dev libjansson-dev"
+# the Python package (python/, docs/python.md): numpy, the tests, the Dask batch
+# runner, and the local install (venv + pip --no-build-isolation, no PyPI)
+CURVFLOW_PACKAGES="$CURVFLOW_PACKAGES python3-numpy python3-pytest python3-distributed python3-setuptools python3-wheel python3-venv"
 
 curvflow_install_packages() {
     local missing=""

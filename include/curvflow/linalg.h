@@ -2,7 +2,8 @@
  * Sparse linear algebra: compressed-column matrices, one-pass assembly with
  * value refill into a fixed pattern, Cholesky with symbolic analysis reused
  * across numeric refactorisations, saddle-point systems, LU, inverse power
- * iteration and weighted Gram-Schmidt; Anderson acceleration
+ * iteration and weighted Gram-Schmidt; the fixed-value / linear-equality
+ * quadratic solver built on them (cf_min_quad); Anderson acceleration
  * (cf_anderson); the dense 3 x 3 SVD (curvflow/svd3.h, included here).
  *
  * Only src/linalg/ includes SuiteSparse. Dense vectors are double arrays;
@@ -250,6 +251,75 @@ CF_API void cf_project_out(int32_t n, int32_t k, const double *basis, const doub
 
 /* Weighted dot product sum_i w_i a_i b_i (w NULL: plain). */
 CF_API double cf_dot(int32_t n, const double *a, const double *b, const double *w);
+
+/* ---- Quadratics with fixed values and linear equalities --------------- */
+
+/* Precompute / solve for
+ *
+ *     minimise   1/2 x^T A x + b^T x
+ *     subject to x[known[k]] = y[k]  (k < known_count)  and  Aeq x = beq,
+ *
+ * the shape of libigl's min_quad_with_fixed. Sign convention: the linear
+ * term enters with +b, so without constraints x = -A^-1 b (a system
+ * A x = r is b = -r). A: n x n symmetric, both triangles stored (its values
+ * are checked symmetric to 1e-10 of its largest entry; the form only sees
+ * (A + A^T) / 2 and a one-sided A would be silently wrong); Aeq: m x n, any
+ * pattern. With u the free variables the known columns move to the right:
+ *   no equalities: A_uu x_u = -b_u - A_uk y, by supernodal Cholesky
+ *     (A_uu must be positive definite: a known value in every connected
+ *     component of a Laplacian, for instance);
+ *   equalities:    [A_uu Aeq_u^T; Aeq_u 0] [x_u; lambda] =
+ *                  [-b_u - A_uk y; beq - Aeq_k y] by the saddle layer (C = 0:
+ *     LU on the full matrix), so A_uu may be only semi-definite as long as
+ *     the constraints remove its kernel; lambda are the multipliers of
+ *     1/2 x^T A x + b^T x + lambda^T (Aeq x - beq) (not returned).
+ * create analyses and factorises; cf_min_quad_factorize refactorises for new
+ * values of the same patterns and known set (no new analysis); solve takes
+ * new b, y, beq for any number of columns without refactorising.
+ * Conventions: several right-hand sides are columns (column-major): b is
+ * n x nrhs, y known_count x nrhs in the order of `known`, beq m x nrhs,
+ * x n x nrhs; on exit x[known[k]] = y[k] exactly. */
+typedef struct cf_min_quad cf_min_quad;
+
+typedef struct cf_min_quad_options {
+    int32_t block_size;   /* as cf_cholesky_options (default 1); must divide the number of free variables */
+    cf_ordering ordering; /* fill-reducing ordering of A_uu (default CF_ORDERING_AUTO) */
+    int32_t max_rhs;      /* columns solved at once (default 1, at most 4096): solves of up to this many
+                             columns allocate nothing (the Cholesky path); wider ones go in chunks */
+} cf_min_quad_options;
+
+CF_API void cf_min_quad_options_default(cf_min_quad_options *options);
+
+/* Precompute. known: known_count distinct indices in [0, n) in any order
+ * (NULL if known_count = 0); aeq may be NULL (no equalities); options may
+ * be NULL. The caller's matrices are not kept (values are copied).
+ * Statuses: CF_ERR_INVALID_ARG (shapes, upper_only input, A not
+ * structurally symmetric or not symmetric in value, a known index out of
+ * range or repeated, equalities with every variable known, block size not
+ * dividing the free count), CF_ERR_NONFINITE (a value of A or Aeq, named),
+ * CF_ERR_NOT_POSDEF (A_uu, no equalities; the message names the column of
+ * the free block), CF_ERR_NUMERICAL (singular saddle system, e.g. dependent
+ * rows of Aeq), CF_ERR_NOMEM. */
+CF_API cf_status cf_min_quad_create(cf_context *ctx, const cf_sparse *a, int32_t known_count, const int32_t *known,
+                                    const cf_sparse *aeq, const cf_min_quad_options *options, cf_min_quad **out);
+
+/* Numeric refactorisation for new values of A and Aeq with the patterns
+ * given at create (else CF_ERR_INVALID_ARG); the analysis is reused.
+ * Other statuses as create. After a failure, solves are refused until a
+ * factorisation succeeds. */
+CF_API cf_status cf_min_quad_factorize(cf_min_quad *q, const cf_sparse *a, const cf_sparse *aeq);
+
+/* Solves for nrhs columns. b, y, beq may be NULL (zero); x may equal b (it
+ * must not overlap y or beq). Statuses: CF_ERR_INVALID_ARG (no successful
+ * factorisation, NULL x), CF_ERR_NUMERICAL (a non-finite input entry, named,
+ * or a non-finite solution). */
+CF_API cf_status cf_min_quad_solve(cf_min_quad *q, int32_t nrhs, const double *b, const double *y, const double *beq,
+                                   double *x);
+
+/* Number of free variables (n - known_count). */
+CF_API int32_t cf_min_quad_free_count(const cf_min_quad *q);
+
+CF_API void cf_min_quad_destroy(cf_min_quad **q);
 
 /* ---- Anderson acceleration --------------------------------------------- */
 

@@ -8,9 +8,11 @@
  * the normal equations (Eq. 23, with K = M L_pointwise = 2 L)
  *     [alpha K_t + beta K M^-1 K] x' = alpha b + beta K (|H| u')
  * are solved for the free vertices, the handle columns moved to the
- * right-hand side. The matrix depends only on the rest shape and the handle
- * set, so it is factorised once per handle set; each iteration solves
- * three right-hand sides. Local phase: model.c.
+ * right-hand side (linalg's cf_min_quad, fixed values). The matrix depends
+ * only on the rest shape and the handle set, so it is factorised once per
+ * handle set; each iteration solves three right-hand sides. Anderson
+ * acceleration of the local/global map: linalg's cf_anderson. Local phase:
+ * model.c.
  */
 #include "methods/flow_internal.h"
 #include "methods/stretch_bend_edit/sbe_internal.h"
@@ -24,20 +26,16 @@ typedef struct sbe_state {
     cfi_sbe_model model;
     cf_stretch_bend_options options;
     double *rest;             /* 3 nv, copy of the rest pose */
-    int32_t nfree;
-    int32_t *free_index;      /* nv: index among free vertices, -1 for a handle */
     int32_t handle_count;
     int32_t *handle_vertices; /* copy of the handle set */
     double *handle_targets;
-    cf_sparse *a_full;        /* nv x nv system matrix (before reduction) */
-    cf_sparse *a_free;        /* nfree x nfree */
-    cf_cholesky *chol;
-    double *rhs_const;        /* 3 nfree: A_fc x_c */
+    cf_sparse *a_full;        /* nv x nv system matrix (before the handles are eliminated) */
+    cf_min_quad *mq;          /* A_full with the handles fixed (linalg's precompute / solve) */
+    double *y_cols;           /* 3 handle_count: the targets by coordinate (known values of mq) */
+    double *b_cols;           /* 3 nv: -rhs by coordinate (linear term of mq) */
+    double *x_cols;           /* 3 nv: the solution by coordinate */
     double *rhs;              /* 3 nv interleaved right-hand side (full) */
     double *hu;               /* 3 nv interleaved |H| u' */
-    double *rhs_free;         /* 3 nfree */
-    double *sol_free;         /* 3 nfree */
-    int32_t rhs_cap_free;     /* allocated size of the nfree arrays */
     double energy;            /* E at the current positions */
     double *x_start;          /* 3 nv: the starting state with its handles on their targets */
     int32_t first_pending;    /* the next step is the first after create/reset: two candidates */
@@ -109,17 +107,11 @@ static const cf_param_desc params[] = {
 
 static void free_system(sbe_state *s, cf_context *ctx)
 {
-    cf_cholesky_destroy(&s->chol);
-    cf_sparse_destroy(&s->a_free);
-    CFI_FREE(ctx, s->free_index, (size_t)s->model.nv);
+    cf_min_quad_destroy(&s->mq);
     CFI_FREE(ctx, s->handle_vertices, (size_t)s->handle_count);
     CFI_FREE(ctx, s->handle_targets, 3 * (size_t)s->handle_count);
-    CFI_FREE(ctx, s->rhs_const, 3 * (size_t)s->rhs_cap_free);
-    CFI_FREE(ctx, s->rhs_free, 3 * (size_t)s->rhs_cap_free);
-    CFI_FREE(ctx, s->sol_free, 3 * (size_t)s->rhs_cap_free);
-    s->rhs_cap_free = 0;
+    CFI_FREE(ctx, s->y_cols, 3 * (size_t)s->handle_count);
     s->handle_count = 0;
-    s->nfree = 0;
 }
 
 static void state_free(sbe_state *s, cf_context *ctx)
@@ -132,6 +124,8 @@ static void state_free(sbe_state *s, cf_context *ctx)
     CFI_FREE(ctx, s->rhs, 3 * (size_t)nv);
     CFI_FREE(ctx, s->hu, 3 * (size_t)nv);
     CFI_FREE(ctx, s->x_start, 3 * (size_t)nv);
+    CFI_FREE(ctx, s->b_cols, 3 * (size_t)nv);
+    CFI_FREE(ctx, s->x_cols, 3 * (size_t)nv);
     size_t n3 = 3 * (size_t)nv;
     cf_anderson_destroy(&s->aa);
     CFI_FREE(ctx, s->aa_g, n3);
@@ -296,24 +290,22 @@ static cf_status build_system(sbe_state *s, cf_context *ctx, const cf_mesh *mesh
 {
     int32_t nv = mesh->nv;
     free_system(s, ctx);
-    s->free_index = CFI_ALLOC(ctx, int32_t, (size_t)nv);
     s->handle_vertices = CFI_ALLOC(ctx, int32_t, (size_t)h->count);
     s->handle_targets = CFI_ALLOC(ctx, double, 3 * (size_t)h->count);
+    s->y_cols = CFI_ALLOC(ctx, double, 3 * (size_t)h->count);
     s->handle_count = h->count; /* the size free_system releases */
-    if (!s->free_index || !s->handle_vertices || !s->handle_targets) return CF_ERR_NOMEM;
+    if (!s->handle_vertices || !s->handle_targets || !s->y_cols) return CF_ERR_NOMEM;
     memcpy(s->handle_vertices, h->vertices, (size_t)h->count * sizeof(int32_t));
     memcpy(s->handle_targets, h->targets, 3 * (size_t)h->count * sizeof(double));
+    for (int32_t k = 0; k < h->count; ++k)
+        for (int d = 0; d < 3; ++d) s->y_cols[(size_t)d * h->count + k] = h->targets[3 * k + d];
 
     /* Every connected component needs a handle, else the system is
      * singular (translations of that component cost nothing). */
     int32_t nc = mesh->component_count;
     uint8_t *has = CFI_ALLOC(ctx, uint8_t, (size_t)(nc > 0 ? nc : 1));
     if (!has) return CF_ERR_NOMEM;
-    for (int32_t v = 0; v < nv; ++v) s->free_index[v] = 0;
-    for (int32_t k = 0; k < h->count; ++k) {
-        s->free_index[h->vertices[k]] = -1;
-        has[mesh->vertex_component[h->vertices[k]]] = 1;
-    }
+    for (int32_t k = 0; k < h->count; ++k) has[mesh->vertex_component[h->vertices[k]]] = 1;
     int32_t missing = -1;
     for (int32_t v = 0; v < nv && missing < 0; ++v)
         if (!has[mesh->vertex_component[v]]) missing = v;
@@ -322,57 +314,16 @@ static cf_status build_system(sbe_state *s, cf_context *ctx, const cf_mesh *mesh
         return cfi_error(ctx, CF_ERR_INVALID_ARG,
                          "stretch-bend-edit: the connected component of vertex %d has no handle vertex "
                          "(the system would be singular)", missing);
-    int32_t nfree = 0;
-    for (int32_t v = 0; v < nv; ++v)
-        if (s->free_index[v] == 0) s->free_index[v] = nfree++; else s->free_index[v] = -1;
-    s->nfree = nfree;
-    s->rhs_cap_free = nfree;
-    s->rhs_const = CFI_ALLOC(ctx, double, 3 * (size_t)nfree);
-    s->rhs_free = CFI_ALLOC(ctx, double, 3 * (size_t)nfree);
-    s->sol_free = CFI_ALLOC(ctx, double, 3 * (size_t)nfree);
-    if (!s->rhs_const || !s->rhs_free || !s->sol_free) return CF_ERR_NOMEM;
 
-    /* Target of each vertex (only handles are read). */
-    const cf_sparse *a = s->a_full;
-    int64_t nnz = cf_sparse_nnz(a);
-    int32_t *rows = CFI_ALLOC(ctx, int32_t, nnz);
-    int32_t *cols = CFI_ALLOC(ctx, int32_t, nnz);
-    double *vals = CFI_ALLOC(ctx, double, nnz);
-    int32_t *handle_slot = CFI_ALLOC(ctx, int32_t, (size_t)nv);
-    cf_status st = (rows && cols && vals && handle_slot) ? CF_OK : CF_ERR_NOMEM;
-    if (st == CF_OK) {
-        for (int32_t k = 0; k < h->count; ++k) handle_slot[h->vertices[k]] = k;
-        int64_t n = 0;
-        for (int32_t j = 0; j < nv; ++j) {
-            int32_t fj = s->free_index[j];
-            for (int32_t p = a->colptr[j]; p < a->colptr[j + 1]; ++p) {
-                int32_t fi = s->free_index[a->rowind[p]];
-                if (fi < 0) continue;
-                if (fj >= 0) {
-                    rows[n] = fi;
-                    cols[n] = fj;
-                    vals[n] = a->values[p];
-                    ++n;
-                } else {
-                    const double *tgt = h->targets + 3 * handle_slot[j];
-                    for (int d = 0; d < 3; ++d) s->rhs_const[(size_t)d * nfree + fi] += a->values[p] * tgt[d];
-                }
-            }
-        }
-        st = cf_sparse_from_triplets(ctx, nfree, nfree, n, rows, cols, vals, 1, &s->a_free, NULL);
-    }
-    CFI_FREE(ctx, rows, nnz);
-    CFI_FREE(ctx, cols, nnz);
-    CFI_FREE(ctx, vals, nnz);
-    CFI_FREE(ctx, handle_slot, (size_t)nv);
-    if (st != CF_OK) return st;
-
+    /* Sec. 4.1: the handle columns move to the right-hand side and the
+     * free block is factorised once per handle set (linalg's cf_min_quad;
+     * the three coordinates are its three right-hand sides). */
     double t0 = cfi_now_seconds();
-    cf_cholesky_options copt;
-    cf_cholesky_options_default(&copt);
-    copt.block_size = 1;
-    st = cf_cholesky_create(ctx, s->a_free, &copt, &s->chol);
-    if (st == CF_OK) st = cf_cholesky_factorize(s->chol, s->a_free);
+    cf_min_quad_options qo;
+    cf_min_quad_options_default(&qo);
+    qo.block_size = 1;
+    qo.max_rhs = 3;
+    cf_status st = cf_min_quad_create(ctx, s->a_full, h->count, h->vertices, NULL, &qo, &s->mq);
     s->factorize_seconds = cfi_now_seconds() - t0;
     if (st == CF_ERR_NOT_POSDEF)
         return cfi_error(ctx, CF_ERR_NOT_POSDEF,
@@ -457,7 +408,9 @@ static cf_status sbe_create(cf_flow *flow, const void *options)
     s->rhs = CFI_ALLOC(ctx, double, 3 * (size_t)nv);
     s->hu = CFI_ALLOC(ctx, double, 3 * (size_t)nv);
     s->x_start = CFI_ALLOC(ctx, double, 3 * (size_t)nv);
-    if (!s->rest || !s->rhs || !s->hu || !s->x_start) return CF_ERR_NOMEM;
+    s->b_cols = CFI_ALLOC(ctx, double, 3 * (size_t)nv);
+    s->x_cols = CFI_ALLOC(ctx, double, 3 * (size_t)nv);
+    if (!s->rest || !s->rhs || !s->hu || !s->x_start || !s->b_cols || !s->x_cols) return CF_ERR_NOMEM;
     if (o->anderson < -1 || o->anderson > 10)
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "stretch-bend-edit: anderson depth %d not in [-1, 10]",
                          (int)o->anderson);
@@ -514,27 +467,21 @@ static void assemble_rhs(sbe_state *s)
  * vertices for the current rotations and u', handles at their targets. */
 static cf_status global_solve(sbe_state *s, double *x, double *assemble_seconds, double *solve_seconds)
 {
-    int32_t nv = s->model.nv, nfree = s->nfree;
+    int32_t nv = s->model.nv;
     double t0 = cfi_now_seconds();
     /* The local step has assembled the right-hand side (model.rhs). */
     if (!s->model.rhs) assemble_rhs(s);
+    /* A x = rhs is the minimiser of 1/2 x^T A x + b^T x with b = -rhs. */
     const double *rhs = s->rhs;
-    for (int32_t v = 0; v < nv; ++v) {
-        int32_t f = s->free_index[v];
-        if (f < 0) continue;
-        for (int d = 0; d < 3; ++d)
-            s->rhs_free[(size_t)d * nfree + f] = rhs[3 * (size_t)v + d] - s->rhs_const[(size_t)d * nfree + f];
-    }
+    for (int32_t v = 0; v < nv; ++v)
+        for (int d = 0; d < 3; ++d) s->b_cols[(size_t)d * nv + v] = -rhs[3 * (size_t)v + d];
     double t1 = cfi_now_seconds();
-    cf_status st = cf_cholesky_solve(s->chol, 3, s->rhs_free, s->sol_free);
+    cf_status st = cf_min_quad_solve(s->mq, 3, s->b_cols, s->y_cols, NULL, s->x_cols);
     if (st != CF_OK) return st;
     double t2 = cfi_now_seconds();
-    for (int32_t v = 0; v < nv; ++v) {
-        int32_t f = s->free_index[v];
-        if (f < 0) continue;
-        for (int d = 0; d < 3; ++d) x[3 * v + d] = s->sol_free[(size_t)d * nfree + f];
-    }
-    snap_handles(s, x);
+    /* the handle vertices come back exactly on their targets */
+    for (int32_t v = 0; v < nv; ++v)
+        for (int d = 0; d < 3; ++d) x[3 * v + d] = s->x_cols[(size_t)d * nv + v];
     if (assemble_seconds) *assemble_seconds = t1 - t0;
     if (solve_seconds) *solve_seconds = t2 - t1;
     return CF_OK;
@@ -580,7 +527,7 @@ static cf_status sbe_step(cf_flow *flow, cf_flow_info *info)
     sbe_state *s = flow->impl;
     cfi_sbe_model *m = &s->model;
     double *x = flow->positions;
-    if (!s->chol)
+    if (!s->mq)
         return cfi_error(flow->ctx, CF_ERR_INVALID_ARG,
                          "stretch-bend-edit: no valid handle set (the last cf_stretch_bend_set_handles failed)");
     size_t n3 = 3 * (size_t)m->nv;

@@ -13,6 +13,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 static void usage(FILE *out)
 {
@@ -23,10 +24,12 @@ static void usage(FILE *out)
             "log area distortion log(area_B / area_A) after normalising the total area, and the\n"
             "per-vertex largest corner angle change. Means are area-weighted (areas of A).\n\n"
             "  --json       print one JSON object instead of text\n"
-            "  --ply OUT    write B with per-face fields Q and log_area_distortion (PLY properties;\n"
-            "               for OBJ a side CSV <stem>.face.csv)\n"
+            "  --ply OUT    write B with per-face fields Q and log_area_distortion (OUT.ply: PLY\n"
+            "               properties; OUT.obj: a side CSV <stem>.face.csv; OFF cannot hold them)\n"
+            "  -f, --force  replace read-only output files\n"
             "  -h, --help   show this help\n\n"
-            "Exit status: 0 ok, 1 usage, 2 unreadable / invalid mesh or different connectivity.\n");
+            "Exit status: 0 ok, 1 usage, 2 unreadable / invalid mesh, different connectivity, or an\n"
+            "output that cannot or must not be written (checked before reading).\n");
 }
 
 static json_t *num(double v) { return isfinite(v) ? json_real(v) : json_null(); }
@@ -48,25 +51,43 @@ int cli_compare(int argc, char **argv)
     static const struct option longopts[] = {{"json", no_argument, NULL, 'j'},
                                              {"ply", required_argument, NULL, 'p'},
                                              {"help", no_argument, NULL, 'h'},
+                                             {"force", no_argument, NULL, 'f'},
                                              {NULL, 0, NULL, 0}};
     int as_json = 0, c;
+    bool force = false;
     const char *ply = NULL;
     opterr = 0;
-    while ((c = getopt_long(argc, argv, ":h", longopts, NULL)) != -1) {
+    while ((c = getopt_long(argc, argv, ":fh", longopts, NULL)) != -1) {
         switch (c) {
         case 'j': as_json = 1; break;
         case 'p': ply = optarg; break;
+        case 'f': force = true; break;
         case 'h': usage(stdout); return CLI_EXIT_OK;
         default: return cli_option_error("compare", c, argv);
         }
     }
     if (optind + 2 != argc) return cli_usage_error("compare", "expected two meshes A B, got %d", argc - optind);
     const char *pa = argv[optind], *pb = argv[optind + 1];
+    cli_files files = {.force = force};
+    cli_files_input(&files, "A", pa);
+    cli_files_input(&files, "B", pb);
+    /* an OBJ gets its face fields in "<stem>.face.csv" (cf_write_mesh_file):
+     * that file is an output too */
+    char side[4096] = "";
+    if (ply) {
+        cli_files_output(&files, "--ply", ply, CLI_FILE_FIELD_MESH);
+        size_t n = strlen(ply);
+        if (n > 4 && n < sizeof side - 16 && strcasecmp(ply + n - 4, ".obj") == 0) {
+            snprintf(side, sizeof side, "%.*s.face.csv", (int)(n - 4), ply);
+            cli_files_output(&files, "--ply (its face fields)", side, CLI_FILE_TABLE);
+        }
+    }
     cf_context *ctx = cli_context(false);
     if (!ctx) return CLI_EXIT_NUMERICAL;
     cf_mesh *a = NULL, *b = NULL;
     double *q = NULL, *lad = NULL;
-    int code = cli_load_mesh(ctx, pa, &a);
+    int code = cli_files_check(ctx, &files);
+    if (code == CLI_EXIT_OK) code = cli_load_mesh(ctx, pa, &a);
     if (code == CLI_EXIT_OK) code = cli_load_mesh(ctx, pb, &b);
     if (code != CLI_EXIT_OK) goto done;
     int32_t nv = cf_mesh_vertex_count(a), nf = cf_mesh_face_count(a);

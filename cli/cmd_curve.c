@@ -3,10 +3,12 @@
  * Isometric flow of a closed planar polyline (Crane, Pinkall, Schroeder 2013,
  * Sec. 5). File formats: curvflow/curve_flow.h.
  */
+#define _GNU_SOURCE
 #include "cli.h"
 #include "common.h"
 #include "curvflow/curve_flow.h"
 
+#include <getopt.h>
 #include <string.h>
 
 static void usage(FILE *out)
@@ -16,54 +18,62 @@ static void usage(FILE *out)
             "Isometric curvature flow of a closed planar polyline (Crane et al. 2013, Sec. 5):\n"
             "edge lengths are kept while the curve flows toward the smoothest curve of equal\n"
             "turning number (a circle for a simple curve).\n"
-            "  IN, OUT        .csv (x,y per line) or .svg (polygon/polyline points, or a path with\n"
-            "                 M L H V Z commands, absolute or relative)\n"
-            "  --steps N      number of steps (default 10)\n"
-            "  --time-step T  tau (default 0.5; stable for tau < 1)\n"
-            "  --quiet        no per-step lines\n"
+            "  IN, OUT          .csv or .txt (x,y per line) or .svg (polygon/polyline points, or a path\n"
+            "                   with M L H V Z commands, absolute or relative); OUT's extension picks\n"
+            "                   the format written, and any other extension is refused\n"
+            "  -n, --steps N    number of steps (default 10)\n"
+            "  -t, --time-step T  tau (default 0.5; stable for tau < 1)\n"
+            "  -q, --quiet      no per-step lines\n"
+            "  -f, --force      replace a read-only OUT\n"
             "A step that raises the energy above its starting value or changes the turning number\n"
             "(tau above the stability limit) fails.\n"
-            "Exit status: 0 ok, 1 usage error, 2 invalid input or unwritable output, 3 numerical\n"
-            "failure (the last good state is still written).\n");
+            "Exit status: 0 ok, 1 usage error, 2 invalid input or an output that cannot or must not\n"
+            "be written, 3 numerical failure (the last good state is still written).\n");
 }
 
 int cli_curve(int argc, char **argv)
 {
-    const char *in = NULL, *out = NULL;
+    static const struct option longopts[] = {
+        {"output", required_argument, NULL, 'o'}, {"steps", required_argument, NULL, 'n'},
+        {"time-step", required_argument, NULL, 't'}, {"quiet", no_argument, NULL, 'q'},
+        {"force", no_argument, NULL, 'f'},        {"help", no_argument, NULL, 'h'},
+        {NULL, 0, NULL, 0}};
+    const char *cmd = "curve", *out = NULL;
     long long steps = 10;
-    bool quiet = false;
+    bool quiet = false, force = false;
     cf_curve_flow_options opt;
     cf_curve_flow_options_default(&opt);
-    for (int i = 1; i < argc; ++i) {
-        const char *a = argv[i];
-        if (strcmp(a, "-h") == 0 || strcmp(a, "--help") == 0) {
-            usage(stdout);
-            return CLI_EXIT_OK;
-        } else if ((strcmp(a, "-o") == 0 || strcmp(a, "--output") == 0) && i + 1 < argc) {
-            out = argv[++i];
-        } else if (strcmp(a, "--steps") == 0 && i + 1 < argc) {
-            if (!cli_parse_int("curve", "--steps", argv[++i], 0, 100000000, &steps)) return CLI_EXIT_USAGE;
-        } else if (strcmp(a, "--time-step") == 0 && i + 1 < argc) {
-            if (!cli_parse_double("curve", "--time-step", argv[++i], &opt.time_step)) return CLI_EXIT_USAGE;
-            if (!(opt.time_step > 0.0)) return cli_usage_error("curve", "--time-step must be > 0");
-        } else if (strcmp(a, "--quiet") == 0 || strcmp(a, "-q") == 0) {
-            quiet = true;
-        } else if (a[0] == '-' && a[1] != '\0') {
-            return cli_usage_error("curve", "unknown or incomplete option '%s'", a);
-        } else if (!in) {
-            in = a;
-        } else {
-            return cli_usage_error("curve", "unexpected argument '%s'", a);
+    int c;
+    opterr = 0;
+    while ((c = getopt_long(argc, argv, ":o:n:t:qfh", longopts, NULL)) != -1) {
+        switch (c) {
+        case 'o': out = optarg; break;
+        case 'n':
+            if (!cli_parse_int(cmd, "--steps", optarg, 0, 100000000, &steps)) return CLI_EXIT_USAGE;
+            break;
+        case 't':
+            if (!cli_parse_double(cmd, "--time-step", optarg, &opt.time_step)) return CLI_EXIT_USAGE;
+            if (!(opt.time_step > 0.0)) return cli_usage_error(cmd, "--time-step must be > 0, got '%s'", optarg);
+            break;
+        case 'q': quiet = true; break;
+        case 'f': force = true; break;
+        case 'h': usage(stdout); return CLI_EXIT_OK;
+        default: return cli_option_error(cmd, c, argv);
         }
     }
-    if (!in || !out) return cli_usage_error("curve", "IN and -o OUT are required");
+    if (optind + 1 != argc) return cli_usage_error(cmd, "expected one input curve");
+    if (!out) return cli_usage_error(cmd, "missing -o OUT");
+    const char *in = argv[optind];
+    cli_files files = {.force = force};
+    cli_files_input(&files, "IN", in);
+    cli_files_output(&files, "-o", out, CLI_FILE_CURVE);
     cf_context *ctx = cli_context(false);
     if (!ctx) return CLI_EXIT_NUMERICAL;
     int code = CLI_EXIT_OK;
     cf_curve *curve = NULL;
     cf_curve_flow *flow = NULL;
     cf_status st = CF_OK;
-    if ((code = cli_check_output(ctx, out, false)) != CLI_EXIT_OK) goto done;
+    if ((code = cli_files_check(ctx, &files)) != CLI_EXIT_OK) goto done;
     st = cf_curve_read(ctx, in, &curve);
     if (st != CF_OK) {
         code = cli_fail(ctx, in, st);

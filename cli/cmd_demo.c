@@ -113,7 +113,7 @@ int cli_demo(int argc, char **argv)
         code = cli_fail(ctx, "demo", st);
         goto done;
     }
-    if ((code = cli_progress_open_log(&progress, p_log)) != CLI_EXIT_OK) goto done;
+    if ((code = cli_progress_open_log(&progress, ctx, p_log)) != CLI_EXIT_OK) goto done;
     cli_progress_log(&progress, cf_flow_last_info(flow));
     cf_flow_set_progress(flow, cli_progress_callback, &progress);
     cf_status run = cf_flow_run(flow, steps, NULL);

@@ -34,14 +34,18 @@ static void usage(FILE *out)
             "                        -1 = 5 for hybrid/stretch/bend, off for ARAP); a mixed step is\n"
             "                        kept only if it lowers the energy\n"
             "  -o, --output OUT      output mesh (required)\n"
-            "  -l, --log FILE        JSONL log, one object per iteration (energy terms stretch, bend)\n"
+            "  -l, --log FILE.jsonl  JSONL log, one object per iteration (energy terms stretch, bend),\n"
+            "                        written atomically when the run ends\n"
             "  -q, --quiet           no status lines\n"
+            "  -f, --force           replace read-only output files\n"
             "  -h, --help            show this help\n\n"
             "Example:\n"
             "  curvflow generate bar -o bar.obj\n"
             "  curvflow edit bar.obj --handles twist.json --energy hybrid --lambda 0.5 -o bent.obj\n\n"
+            "OUT is .obj, .off or .ply and must not be one of the inputs (checked before the run).\n"
             "Exit status: 0 ok, 1 usage error or bad parameter, 2 invalid input (mesh or handle file)\n"
-            "or unwritable output, 3 numerical failure (the last good state is still written).\n");
+            "or an output that cannot or must not be written, 3 numerical failure (the last good state\n"
+            "is still written).\n");
 }
 
 int cli_edit(int argc, char **argv)
@@ -55,31 +59,31 @@ int cli_edit(int argc, char **argv)
         {"mass", required_argument, NULL, OPT_MASS},  {"no-scale-free", no_argument, NULL, OPT_NO_SCALE_FREE},
         {"output", required_argument, NULL, 'o'},     {"log", required_argument, NULL, 'l'},
         {"quiet", no_argument, NULL, 'q'},            {"help", no_argument, NULL, 'h'},
-        {"anderson", required_argument, NULL, 'a'},
+        {"anderson", required_argument, NULL, 'a'},   {"force", no_argument, NULL, 'f'},
         {NULL, 0, NULL, 0}};
     const char *cmd = "edit";
     const char *handles_path = NULL, *energy = "hybrid", *output = NULL, *log_path = NULL, *start_path = NULL;
     const char *mass = "voronoi";
     double lambda = 0.5, tol = 1e-6;
     long long iterations = 100;
-    bool quiet = false, scale_free = true;
+    bool quiet = false, scale_free = true, force = false, lambda_given = false;
     int c;
     optind = 1;
     opterr = 0;
-    while ((c = getopt_long(argc, argv, ":H:e:L:n:t:s:o:l:a:qh", longopts, NULL)) != -1) {
+    while ((c = getopt_long(argc, argv, ":H:e:L:n:t:s:o:l:a:qfh", longopts, NULL)) != -1) {
         switch (c) {
         case 'H': handles_path = optarg; break;
         case 'e': energy = optarg; break;
         case 'L':
-            if (!cli_parse_double(cmd, "--lambda", optarg, &lambda)) return CLI_EXIT_USAGE;
-            if (lambda < 0.0 || lambda > 1.0) return cli_usage_error(cmd, "--lambda must be in [0, 1], got %g", lambda);
+            if (!cli_parse_double_in(cmd, "--lambda", optarg, 0.0, 1.0, &lambda)) return CLI_EXIT_USAGE;
+            lambda_given = true;
             break;
         case 'n':
             if (!cli_parse_int(cmd, "--iterations", optarg, 0, 10000000LL, &iterations)) return CLI_EXIT_USAGE;
             break;
         case 't':
             if (!cli_parse_double(cmd, "--tol", optarg, &tol)) return CLI_EXIT_USAGE;
-            if (tol < 0.0) return cli_usage_error(cmd, "--tol must be >= 0, got %g", tol);
+            if (tol < 0.0) return cli_usage_error(cmd, "--tol must be >= 0, got '%s'", optarg);
             break;
         case 's': start_path = optarg; break;
         case 'a':
@@ -90,6 +94,7 @@ int cli_edit(int argc, char **argv)
         case 'o': output = optarg; break;
         case 'l': log_path = optarg; break;
         case 'q': quiet = true; break;
+        case 'f': force = true; break;
         case 'h': usage(stdout); return CLI_EXIT_OK;
         default: return cli_option_error(cmd, c, argv);
         }
@@ -100,10 +105,16 @@ int cli_edit(int argc, char **argv)
     if (strcmp(mass, "voronoi") != 0 && strcmp(mass, "barycentric") != 0)
         return cli_usage_error(cmd, "--mass must be voronoi or barycentric, got '%s'", mass);
     const char *input = argv[optind];
+    cli_files files = {.force = force};
+    cli_files_input(&files, "IN", input);
+    cli_files_input(&files, "--handles", handles_path);
+    cli_files_input(&files, "--start", start_path);
+    cli_files_output(&files, "-o", output, CLI_FILE_MESH);
+    if (log_path) cli_files_output(&files, "--log", log_path, CLI_FILE_LOG);
 
     cf_context *ctx = cli_context(false);
     if (!ctx) return CLI_EXIT_NUMERICAL;
-    int out_code = cli_check_output(ctx, output, true);
+    int out_code = cli_files_check(ctx, &files);
     if (out_code != CLI_EXIT_OK) {
         cf_context_destroy(&ctx);
         return out_code;
@@ -117,6 +128,11 @@ int cli_edit(int argc, char **argv)
         int code = cli_usage_error(cmd, "%s", cf_context_message(ctx));
         cf_context_destroy(&ctx);
         return code;
+    }
+    if (lambda_given && kind != CF_EDIT_HYBRID) {
+        cf_context_destroy(&ctx);
+        /* stretch and bend are lambda = 1 and 0; the ARAP energies have none */
+        return cli_usage_error(cmd, "--lambda weighs --energy hybrid; it has no effect with --energy %s", energy);
     }
     o->energy = kind;
     o->lambda = lambda;
@@ -166,24 +182,9 @@ int cli_edit(int argc, char **argv)
         if (st == CF_ERR_INVALID_ARG) code = CLI_EXIT_INPUT;
         goto done;
     }
-    if (log_path && (code = cli_progress_open_log(&progress, log_path)) != CLI_EXIT_OK) goto done;
-    cli_progress_log(&progress, cf_flow_last_info(flow));
-    cf_flow_set_progress(flow, cli_progress_callback, &progress);
-    cf_flow_info info;
-    cf_status run = cf_flow_run(flow, iterations, &info);
-    int log_code = cli_progress_finish(&progress);
-    if (run != CF_OK) {
-        code = cli_fail(ctx, input, run);
-        if (code == CLI_EXIT_USAGE) code = CLI_EXIT_NUMERICAL;
-        fprintf(stderr, "curvflow: writing the last good state (iteration %lld) to %s\n",
-                (long long)cf_flow_last_info(flow)->iteration, output);
-    }
-    st = cf_write_mesh_file(ctx, output, mesh, cf_flow_positions(flow), NULL, 0);
-    if (st == CF_OK) cli_warn_if_unreadable(ctx, mesh, cf_flow_positions(flow), output);
-    if (st != CF_OK) {
-        int wcode = cli_fail(ctx, output, st);
-        if (code == CLI_EXIT_OK) code = wcode == CLI_EXIT_USAGE ? CLI_EXIT_INPUT : wcode;
-    } else if (!quiet && run == CF_OK) {
+    bool completed = false;
+    code = cli_run_flow_and_write(ctx, flow, &progress, log_path, iterations, input, mesh, output, &completed);
+    if (completed && !quiet) {
         const cf_flow_info *last = cf_flow_last_info(flow);
         if (kind == CF_EDIT_ARAP || kind == CF_EDIT_ARAP_RIMS)
             fprintf(stderr, "curvflow: edit %s: %lld iterations%s, energy %.9g; wrote %s\n", energy,
@@ -193,7 +194,6 @@ int cli_edit(int argc, char **argv)
                     energy, (long long)last->iteration, cf_flow_converged(flow) ? " (converged)" : "", last->energy,
                     last->energy_terms[0], last->energy_terms[1], output);
     }
-    if (code == CLI_EXIT_OK) code = log_code;
 done:
     cli_progress_finish(&progress);
     cf_flow_destroy(&flow);

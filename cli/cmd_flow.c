@@ -9,6 +9,7 @@
 #include "common.h"
 #include "curvflow/io.h"
 #include "curvflow/spin_willmore.h"
+#include "curvflow/stretch_bend_edit.h"
 
 #include <errno.h>
 #include <getopt.h>
@@ -29,9 +30,13 @@ static void usage(FILE *out)
             "  -t, --time-step T     shorthand for --param time_step=T (scale-free, see --list-params)\n"
             "  -p, --param KEY=VAL   set a method parameter (repeatable)\n"
             "  -o, --output OUT      output mesh (required)\n"
-            "  -l, --log FILE        JSONL log: one object per step (iteration 0 = start) with iteration,\n"
-            "                        time, time_step, energy, terms, residuals, area, volume, drifts, seconds\n"
+            "  -l, --log FILE.jsonl  JSONL log: one object per step (iteration 0 = start) with iteration,\n"
+            "                        time, time_step, energy, terms, residuals, area, volume, drifts, seconds;\n"
+            "                        written atomically when the run ends (also after a numerical failure)\n"
             "  -q, --quiet           no status lines\n"
+            "  -f, --force           replace read-only output files\n"
+            "      --handles FILE    handle file of --method stretch-bend-edit (format in docs/edit.md;\n"
+            "                        `curvflow edit` has the editing options)\n"
             "      --boundary-targets FILE\n"
             "                        spin-willmore with boundary=prescribed (Sec. 6.3.1): target direction of\n"
             "                        the boundary vector V at each boundary vertex, one line 'VERTEX X Y Z'\n"
@@ -40,10 +45,11 @@ static void usage(FILE *out)
             "      --list-methods    list the methods and exit\n"
             "      --list-params     list the parameters of --method with their defaults and exit\n"
             "  -h, --help            show this help\n\n"
+            "OUT is .obj, .off or .ply; it must not be IN (nor the log), and is checked before the run.\n"
             "On a numerical failure (a step that produces NaN, blows up or fails to factorise) the last\n"
             "good state is still written to OUT, the message names the iteration, and the exit status is 3.\n"
-            "Exit status: 0 ok, 1 usage error or bad parameter, 2 invalid input or unwritable output,\n"
-            "3 numerical failure.\n");
+            "Exit status: 0 ok, 1 usage error or bad parameter, 2 invalid input or an output that cannot\n"
+            "or must not be written, 3 numerical failure.\n");
 }
 
 static void list_methods(void)
@@ -64,20 +70,12 @@ static int list_params(cf_flow_kind kind)
     for (int32_t i = 0; i < count; ++i) {
         char def[64];
         if (cf_flow_options_format(&o, &params[i], def, sizeof def) != CF_OK) strcpy(def, "?");
-        char range[160] = "";
-        if (params[i].type == CF_PARAM_DOUBLE || params[i].type == CF_PARAM_INT)
-            snprintf(range, sizeof range, " in [%g, %g]", params[i].min_value, params[i].max_value);
-        else if (params[i].type == CF_PARAM_BOOL)
-            snprintf(range, sizeof range, " true|false");
-        else if (params[i].choices) {
-            size_t used = 0;
-            for (int32_t j = 0; params[i].choices[j] && used + 2 < sizeof range; ++j) {
-                int w = snprintf(range + used, sizeof range - used, "%s%s", j ? "|" : " ", params[i].choices[j]);
-                if (w < 0) break;
-                used += (size_t)w;
-            }
-        }
-        printf("  %-20s [%s]%s\n      %s\n", params[i].name, def, range, params[i].help ? params[i].help : "");
+        /* the limits as the range messages print them (they read back exactly) */
+        char range[256];
+        if (cf_flow_param_range_format(&params[i], range, sizeof range) != CF_OK) strcpy(range, "?");
+        bool numeric = params[i].type == CF_PARAM_DOUBLE || params[i].type == CF_PARAM_INT;
+        printf("  %-20s [%s] %s%s\n      %s\n", params[i].name, def, numeric ? "in " : "", range,
+               params[i].help ? params[i].help : "");
     }
     return CLI_EXIT_OK;
 }
@@ -144,7 +142,7 @@ static int read_boundary_targets(const char *path, const cf_mesh *mesh, double *
 
 int cli_flow(int argc, char **argv)
 {
-    enum { OPT_LIST_METHODS = 256, OPT_LIST_PARAMS, OPT_BOUNDARY_TARGETS };
+    enum { OPT_LIST_METHODS = 256, OPT_LIST_PARAMS, OPT_BOUNDARY_TARGETS, OPT_HANDLES };
     static const struct option longopts[] = {
         {"method", required_argument, NULL, 'm'}, {"steps", required_argument, NULL, 'n'},
         {"time-step", required_argument, NULL, 't'}, {"param", required_argument, NULL, 'p'},
@@ -152,18 +150,20 @@ int cli_flow(int argc, char **argv)
         {"quiet", no_argument, NULL, 'q'}, {"list-methods", no_argument, NULL, OPT_LIST_METHODS},
         {"list-params", no_argument, NULL, OPT_LIST_PARAMS}, {"help", no_argument, NULL, 'h'},
         {"boundary-targets", required_argument, NULL, OPT_BOUNDARY_TARGETS},
+        {"handles", required_argument, NULL, OPT_HANDLES}, {"force", no_argument, NULL, 'f'},
         {NULL, 0, NULL, 0}};
     const char *cmd = "flow";
     const char *method = NULL, *output = NULL, *log_path = NULL, *time_step = NULL, *targets_path = NULL;
+    const char *handles_path = NULL;
     long long steps = 10;
-    bool quiet = false, want_methods = false, want_params = false;
+    bool quiet = false, want_methods = false, want_params = false, force = false;
     /* --param values are applied after the method is known */
     char **param_args = calloc((size_t)argc + 1, sizeof *param_args);
     int param_count = 0;
     if (!param_args) return CLI_EXIT_NUMERICAL;
     int c;
     opterr = 0;
-    while ((c = getopt_long(argc, argv, ":m:n:t:p:o:l:qh", longopts, NULL)) != -1) {
+    while ((c = getopt_long(argc, argv, ":m:n:t:p:o:l:qfh", longopts, NULL)) != -1) {
         switch (c) {
         case 'm': method = optarg; break;
         case 'n':
@@ -177,6 +177,8 @@ int cli_flow(int argc, char **argv)
         case OPT_LIST_METHODS: want_methods = true; break;
         case OPT_LIST_PARAMS: want_params = true; break;
         case OPT_BOUNDARY_TARGETS: targets_path = optarg; break;
+        case OPT_HANDLES: handles_path = optarg; break;
+        case 'f': force = true; break;
         case 'h': usage(stdout); free(param_args); return CLI_EXIT_OK;
         default: free(param_args); return cli_option_error(cmd, c, argv);
         }
@@ -202,7 +204,21 @@ int cli_flow(int argc, char **argv)
         free(param_args);
         return cli_usage_error(cmd, "--boundary-targets is an option of --method spin-willmore");
     }
+    if (kind == CF_FLOW_STRETCH_BEND_EDIT && !handles_path) {
+        free(param_args);
+        return cli_usage_error(cmd, "--method stretch-bend-edit needs handles: use --handles FILE or `curvflow edit`");
+    }
+    if (handles_path && kind != CF_FLOW_STRETCH_BEND_EDIT) {
+        free(param_args);
+        return cli_usage_error(cmd, "--handles is an option of --method stretch-bend-edit");
+    }
     const char *input = argv[optind];
+    cli_files files = {.force = force};
+    cli_files_input(&files, "IN", input);
+    cli_files_input(&files, "--boundary-targets", targets_path);
+    cli_files_input(&files, "--handles", handles_path);
+    cli_files_output(&files, "-o", output, CLI_FILE_MESH);
+    if (log_path) cli_files_output(&files, "--log", log_path, CLI_FILE_LOG);
 
     cf_context *ctx = cli_context(false);
     if (!ctx) { free(param_args); return CLI_EXIT_NUMERICAL; }
@@ -211,7 +227,8 @@ int cli_flow(int argc, char **argv)
     int code = CLI_EXIT_OK;
     cf_status st;
     double *targets = NULL;
-    if ((code = cli_check_output(ctx, output, true)) != CLI_EXIT_OK) goto early;
+    cf_handle_set *handles = NULL;
+    if ((code = cli_files_check(ctx, &files)) != CLI_EXIT_OK) goto early;
     if (targets_path && (st = cf_flow_options_set(ctx, &options, "boundary", "prescribed")) != CF_OK) {
         code = cli_fail(ctx, "--boundary-targets", st);
         goto early;
@@ -257,6 +274,15 @@ int cli_flow(int argc, char **argv)
         if (code != CLI_EXIT_OK) goto done;
         ((cf_spin_willmore_options *)cf_flow_options_method(&options))->boundary_targets = targets;
     }
+    if (handles_path) {
+        st = cf_handle_set_read_json(ctx, mesh, NULL, handles_path, &handles);
+        if (st != CF_OK) {
+            code = cli_fail(ctx, handles_path, st);
+            if (code == CLI_EXIT_USAGE) code = CLI_EXIT_INPUT;
+            goto done;
+        }
+        ((cf_stretch_bend_options *)cf_flow_options_method(&options))->handles = handles;
+    }
     st = cf_flow_create(ctx, mesh, NULL, &options, &flow);
     if (st != CF_OK) {
         code = cli_fail(ctx, input, st);
@@ -273,6 +299,7 @@ int cli_flow(int argc, char **argv)
 done:
     cli_progress_finish(&progress);
     cf_flow_destroy(&flow);
+    cf_handle_set_destroy(&handles);
     cf_mesh_destroy(&mesh);
 early:
     cf_context_destroy(&ctx);

@@ -27,22 +27,10 @@ static void usage(FILE *out)
             "      --up X,Y,Z           screen up direction [0,1,0]\n"
             "      --size WxH           image size in pixels [800x800]\n"
             "      --perspective        perspective instead of orthographic projection\n"
-            "  -h, --help               show this help\n");
-}
-
-static bool parse_vec3(const char *text, double v[3])
-{
-    char *end = NULL;
-    const char *s = text;
-    for (int k = 0; k < 3; ++k) {
-        v[k] = strtod(s, &end);
-        if (end == s) return false;
-        if (k < 2) {
-            if (*end != ',') return false;
-            s = end + 1;
-        }
-    }
-    return *end == '\0';
+            "  -f, --force              replace a read-only OUT.png\n"
+            "  -h, --help               show this help\n\n"
+            "OUT must end in .png (the only format written). Exit status: 0 ok, 1 usage error,\n"
+            "2 invalid input or an output that cannot or must not be written.\n");
 }
 
 int cli_render(int argc, char **argv)
@@ -54,45 +42,44 @@ int cli_render(int argc, char **argv)
         {"range", required_argument, NULL, OPT_RANGE}, {"view", required_argument, NULL, OPT_VIEW},
         {"up", required_argument, NULL, OPT_UP},       {"size", required_argument, NULL, OPT_SIZE},
         {"perspective", no_argument, NULL, OPT_PERSP}, {"help", no_argument, NULL, 'h'},
-        {NULL, 0, NULL, 0}};
+        {"force", no_argument, NULL, 'f'},             {NULL, 0, NULL, 0}};
     const char *cmd = "render", *output = NULL, *field = NULL;
     cf_render_options ro;
     cf_render_options_default(&ro);
+    bool force = false, range_given = false, count_given = false;
     int c;
     opterr = 0;
-    while ((c = getopt_long(argc, argv, ":o:h", longopts, NULL)) != -1) {
+    while ((c = getopt_long(argc, argv, ":o:fh", longopts, NULL)) != -1) {
         switch (c) {
         case 'o': output = optarg; break;
         case OPT_CHECKER: ro.uv_checker = 1; break;
         case OPT_COUNT:
             if (!cli_parse_double(cmd, "--checker-count", optarg, &ro.checker_count)) return CLI_EXIT_USAGE;
+            if (!(ro.checker_count > 0.0))
+                return cli_usage_error(cmd, "--checker-count must be > 0, got '%s'", optarg);
+            count_given = true;
             break;
         case OPT_FIELD: field = optarg; break;
         case OPT_RANGE: {
-            char *end = NULL;
-            ro.field_min = strtod(optarg, &end);
-            if (end == optarg || *end != ',') return cli_usage_error(cmd, "--range: expected MIN,MAX, got '%s'", optarg);
-            const char *s = end + 1;
-            ro.field_max = strtod(s, &end);
-            if (end == s || *end != '\0' || !(ro.field_min < ro.field_max))
-                return cli_usage_error(cmd, "--range: expected MIN,MAX with MIN < MAX, got '%s'", optarg);
+            double r[2];
+            if (!cli_parse_doubles(cmd, "--range", optarg, ',', 2, "MIN,MAX", r)) return CLI_EXIT_USAGE;
+            if (!(r[0] < r[1])) return cli_usage_error(cmd, "--range: expected MIN < MAX, got '%s'", optarg);
+            ro.field_min = r[0];
+            ro.field_max = r[1];
+            range_given = true;
             break;
         }
         case OPT_VIEW:
-            if (!parse_vec3(optarg, ro.view)) return cli_usage_error(cmd, "--view: expected X,Y,Z, got '%s'", optarg);
+            if (!cli_parse_doubles(cmd, "--view", optarg, ',', 3, "X,Y,Z", ro.view)) return CLI_EXIT_USAGE;
             break;
         case OPT_UP:
-            if (!parse_vec3(optarg, ro.up)) return cli_usage_error(cmd, "--up: expected X,Y,Z, got '%s'", optarg);
+            if (!cli_parse_doubles(cmd, "--up", optarg, ',', 3, "X,Y,Z", ro.up)) return CLI_EXIT_USAGE;
             break;
-        case OPT_SIZE: {
-            int w = 0, h = 0;
-            char tail = 0;
-            if (sscanf(optarg, "%dx%d%c", &w, &h, &tail) != 2 || w < 1 || h < 1 || w > 16384 || h > 16384)
-                return cli_usage_error(cmd, "--size: expected WxH in 1..16384, got '%s'", optarg);
-            ro.width = w;
-            ro.height = h;
+        case OPT_SIZE:
+            /* the renderer's limit per side (render.h) */
+            if (!cli_parse_size(cmd, "--size", optarg, 16384, &ro.width, &ro.height)) return CLI_EXIT_USAGE;
             break;
-        }
+        case 'f': force = true; break;
         case OPT_PERSP: ro.perspective = 1; break;
         case 'h': usage(stdout); return CLI_EXIT_OK;
         default: return cli_option_error(cmd, c, argv);
@@ -102,7 +89,13 @@ int cli_render(int argc, char **argv)
     if (!output) return cli_usage_error(cmd, "missing -o OUT.png");
     if (field && strncmp(field, "face:", 5) != 0)
         return cli_usage_error(cmd, "--field: expected face:NAME, got '%s'", field);
+    if (range_given && !field) return cli_usage_error(cmd, "--range is the colour range of --field; give --field too");
+    if (count_given && !ro.uv_checker)
+        return cli_usage_error(cmd, "--checker-count sets the squares of --uv-checker; give --uv-checker too");
     const char *input = argv[optind];
+    cli_files files = {.force = force};
+    cli_files_input(&files, "IN", input);
+    cli_files_output(&files, "-o", output, CLI_FILE_IMAGE);
 
     cf_context *ctx = cli_context(false);
     if (!ctx) return CLI_EXIT_NUMERICAL;
@@ -111,7 +104,7 @@ int cli_render(int argc, char **argv)
     cf_mesh *mesh = NULL;
     cf_mesh_desc desc;
     cf_status st = CF_OK;
-    if ((code = cli_check_output(ctx, output, false)) != CLI_EXIT_OK) goto done;
+    if ((code = cli_files_check(ctx, &files)) != CLI_EXIT_OK) goto done;
     st = cf_read_mesh_file(ctx, input, &data);
     if (st == CF_OK) st = cf_mesh_data_desc(data, &desc);
     if (st == CF_OK) st = cf_mesh_create(ctx, &desc, &mesh);

@@ -5,12 +5,14 @@
  * a text file (one value per vertex, whitespace or newline separated, '#'
  * comments) or from a PLY vertex property of that name.
  */
+#define _GNU_SOURCE
 #include "cli.h"
 #include "common.h"
 #include "curvflow/io.h"
 #include "curvflow/spin_willmore.h"
 
 #include <errno.h>
+#include <getopt.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -23,7 +25,11 @@ static void usage(FILE *out)
             "  --rho FILE|NAME  text file with one value per vertex (1/length), or the name of a\n"
             "                   PLY vertex property of IN\n"
             "  --scale S        multiply rho by S (default 1)\n"
-            "  -o OUT           output mesh (OBJ, OFF or PLY; texture coordinates are kept)\n");
+            "  -o OUT           output mesh (.obj, .off or .ply; texture coordinates are kept; a PLY\n"
+            "                   also gets rho as a vertex property); must not be IN or the rho file\n"
+            "  -f, --force      replace a read-only OUT\n"
+            "Exit status: 0 ok, 1 usage error, 2 invalid input or an output that cannot or must not\n"
+            "be written, 3 numerical failure.\n");
 }
 
 /* Reads nv numbers from a text file; returns 0 or an exit code. */
@@ -69,28 +75,34 @@ static int read_values(const char *path, int32_t nv, double *out)
 
 int cli_spin(int argc, char **argv)
 {
-    const char *in = NULL, *out = NULL, *rho_arg = NULL;
+    enum { OPT_RHO = 256, OPT_SCALE };
+    static const struct option longopts[] = {
+        {"rho", required_argument, NULL, OPT_RHO}, {"scale", required_argument, NULL, OPT_SCALE},
+        {"output", required_argument, NULL, 'o'}, {"force", no_argument, NULL, 'f'},
+        {"help", no_argument, NULL, 'h'},         {NULL, 0, NULL, 0}};
+    const char *cmd = "spin", *out = NULL, *rho_arg = NULL;
     double scale = 1.0;
-    for (int i = 1; i < argc; ++i) {
-        const char *a = argv[i];
-        if (strcmp(a, "-h") == 0 || strcmp(a, "--help") == 0) {
-            usage(stdout);
-            return CLI_EXIT_OK;
-        } else if (strcmp(a, "--rho") == 0 && i + 1 < argc) {
-            rho_arg = argv[++i];
-        } else if ((strcmp(a, "-o") == 0 || strcmp(a, "--output") == 0) && i + 1 < argc) {
-            out = argv[++i];
-        } else if (strcmp(a, "--scale") == 0 && i + 1 < argc) {
-            if (!cli_parse_double("spin", "--scale", argv[++i], &scale)) return CLI_EXIT_USAGE;
-        } else if (a[0] == '-' && a[1] != '\0') {
-            return cli_usage_error("spin", "unknown or incomplete option '%s'", a);
-        } else if (!in) {
-            in = a;
-        } else {
-            return cli_usage_error("spin", "unexpected argument '%s'", a);
+    bool force = false;
+    int c;
+    opterr = 0;
+    while ((c = getopt_long(argc, argv, ":o:fh", longopts, NULL)) != -1) {
+        switch (c) {
+        case OPT_RHO: rho_arg = optarg; break;
+        case 'o': out = optarg; break;
+        case OPT_SCALE:
+            if (!cli_parse_double(cmd, "--scale", optarg, &scale)) return CLI_EXIT_USAGE;
+            break;
+        case 'f': force = true; break;
+        case 'h': usage(stdout); return CLI_EXIT_OK;
+        default: return cli_option_error(cmd, c, argv);
         }
     }
-    if (!in || !out || !rho_arg) return cli_usage_error("spin", "IN, --rho and -o are required");
+    if (optind + 1 != argc || !out || !rho_arg) return cli_usage_error(cmd, "IN, --rho and -o are required");
+    const char *in = argv[optind];
+    cli_files files = {.force = force};
+    cli_files_input(&files, "IN", in);
+    cli_files_input(&files, "--rho", rho_arg); /* a property name matches no file */
+    cli_files_output(&files, "-o", out, CLI_FILE_MESH);
 
     cf_context *ctx = cli_context(false);
     if (!ctx) return CLI_EXIT_NUMERICAL;
@@ -98,7 +110,7 @@ int cli_spin(int argc, char **argv)
     cf_mesh_data *data = NULL;
     cf_mesh *mesh = NULL;
     double *rho = NULL, *x = NULL;
-    if ((code = cli_check_output(ctx, out, true)) != CLI_EXIT_OK) goto done;
+    if ((code = cli_files_check(ctx, &files)) != CLI_EXIT_OK) goto done;
     cf_status st = cf_read_mesh_file(ctx, in, &data);
     if (st != CF_OK) {
         code = cli_fail(ctx, in, st);

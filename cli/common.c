@@ -1,15 +1,18 @@
 /* Shared helpers of the curvflow subcommands (see common.h). */
-#define _POSIX_C_SOURCE 200809L
+#define _XOPEN_SOURCE 700 /* POSIX 2008 with XSI: realpath, SA_RESETHAND */
 #include "common.h"
 
 #include "curvflow/io.h"
 
 #include <errno.h>
 #include <jansson.h>
+#include <limits.h>
 #include <math.h>
+#include <signal.h>
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
@@ -85,16 +88,89 @@ bool cli_parse_int(const char *command, const char *option, const char *text, lo
     return true;
 }
 
+/* strtod over [text, *end): 0 ok, 1 not a number, 2 not finite. Underflow
+ * (ERANGE with a tiny or zero result) is a number; the caller's range check
+ * decides whether it is acceptable. */
+static int parse_number(const char *text, char **end, double *out)
+{
+    errno = 0;
+    double v = strtod(text, end);
+    if (*end == text) return 1;
+    if (!isfinite(v) || (errno == ERANGE && fabs(v) > 1.0)) return 2;
+    *out = v;
+    return 0;
+}
+
 bool cli_parse_double(const char *command, const char *option, const char *text, double *out)
 {
     char *end = NULL;
-    errno = 0;
-    double v = strtod(text, &end);
-    if (end == text || *end != '\0' || errno == ERANGE || !isfinite(v)) {
-        cli_usage_error(command, "%s: '%s' is not a finite number", option, text);
+    double v = 0.0;
+    int bad = parse_number(text, &end, &v);
+    if (!bad && *end != '\0') bad = 1;
+    if (bad) {
+        cli_usage_error(command, "%s: '%s' is not a %snumber", option, text, bad == 2 ? "finite " : "");
         return false;
     }
     *out = v;
+    return true;
+}
+
+bool cli_parse_double_in(const char *command, const char *option, const char *text, double lo, double hi,
+                         double *out)
+{
+    double v = 0.0;
+    if (!cli_parse_double(command, option, text, &v)) return false;
+    if (v < lo || v > hi) {
+        /* one formatter for every printed range: the flow layer's */
+        cf_param_desc range = {option, CF_PARAM_DOUBLE, 0, lo, hi, NULL, NULL};
+        char text_range[160];
+        if (cf_flow_param_range_format(&range, text_range, sizeof text_range) != CF_OK) strcpy(text_range, "?");
+        cli_usage_error(command, "%s: '%s' is outside %s", option, text, text_range);
+        return false;
+    }
+    *out = v;
+    return true;
+}
+
+bool cli_parse_doubles(const char *command, const char *option, const char *text, char separator, int count,
+                       const char *form, double *out)
+{
+    const char *s = text;
+    for (int k = 0; k < count; ++k) {
+        char *end = NULL;
+        int bad = parse_number(s, &end, &out[k]);
+        if (!bad && *end != (k + 1 < count ? separator : '\0')) bad = 1;
+        if (bad) {
+            cli_usage_error(command, "%s: expected %s (%d finite numbers), got '%s'", option, form, count, text);
+            return false;
+        }
+        s = end + 1;
+    }
+    return true;
+}
+
+bool cli_parse_size(const char *command, const char *option, const char *text, long long max_side, int32_t *width,
+                    int32_t *height)
+{
+    long long v[2] = {0, 0};
+    const char *s = text;
+    bool ok = true;
+    for (int k = 0; k < 2 && ok; ++k) {
+        char *end = NULL;
+        errno = 0;
+        /* digits only: strtoll would also take a sign or leading blanks */
+        ok = *s >= '0' && *s <= '9';
+        if (ok) v[k] = strtoll(s, &end, 10);
+        ok = ok && errno != ERANGE && v[k] >= 1 && v[k] <= max_side && *end == (k == 0 ? 'x' : '\0');
+        if (ok) s = end + 1;
+    }
+    if (!ok) {
+        cli_usage_error(command, "%s: expected WxH with W and H integers in [1, %lld], got '%s'", option, max_side,
+                        text);
+        return false;
+    }
+    *width = (int32_t)v[0];
+    *height = (int32_t)v[1];
     return true;
 }
 
@@ -161,7 +237,7 @@ int cli_run_flow_and_write(cf_context *ctx, cf_flow *flow, cli_progress *progres
 {
     *completed = false;
     int code = CLI_EXIT_OK;
-    if (log_path && (code = cli_progress_open_log(progress, log_path)) != CLI_EXIT_OK) return code;
+    if (log_path && (code = cli_progress_open_log(progress, ctx, log_path)) != CLI_EXIT_OK) return code;
     cli_progress_log(progress, cf_flow_last_info(flow));
     cf_flow_set_progress(flow, cli_progress_callback, progress);
     cf_flow_info info;
@@ -185,47 +261,218 @@ int cli_run_flow_and_write(cf_context *ctx, cf_flow *flow, cli_progress *progres
     return code;
 }
 
-int cli_check_output(cf_context *ctx, const char *path, bool mesh)
+/* ---- signals ------------------------------------------------------------ */
+
+static void on_fatal_signal(int sig)
+{
+    /* async-signal-safe only: unlink in the library, then the default
+     * action (SA_RESETHAND restored it; the signal is blocked while this
+     * handler runs and is delivered again as it returns) */
+    cf_atomic_remove_pending();
+    raise(sig);
+}
+
+void cli_install_signal_cleanup(void)
+{
+    static const int signals[] = {SIGINT, SIGTERM, SIGHUP};
+    for (size_t i = 0; i < sizeof signals / sizeof signals[0]; ++i) {
+        struct sigaction old;
+        if (sigaction(signals[i], NULL, &old) != 0 || old.sa_handler == SIG_IGN) continue;
+        struct sigaction sa;
+        memset(&sa, 0, sizeof sa);
+        sa.sa_handler = on_fatal_signal;
+        sigemptyset(&sa.sa_mask);
+        sa.sa_flags = SA_RESETHAND;
+        (void)sigaction(signals[i], &sa, NULL);
+    }
+}
+
+/* ---- the output-path check ---------------------------------------------- */
+
+void cli_files_input(cli_files *files, const char *option, const char *path)
+{
+    if (!path || files->input_count >= CLI_MAX_FILES) return;
+    files->inputs[files->input_count].option = option;
+    files->inputs[files->input_count].path = path;
+    ++files->input_count;
+}
+
+void cli_files_output(cli_files *files, const char *option, const char *path, cli_file_kind kind)
+{
+    if (files->output_count >= CLI_MAX_FILES) return;
+    files->outputs[files->output_count].option = option;
+    files->outputs[files->output_count].path = path;
+    files->outputs[files->output_count].kind = kind;
+    ++files->output_count;
+}
+
+/* What each kind of output accepts; the writers pick the format from the
+ * extension (case-insensitive), so these lists are the formats they write. */
+static const struct {
+    const char *label;
+    const char *extensions[4];
+    const char *text;
+} file_kinds[] = {
+    [CLI_FILE_MESH] = {"mesh", {".obj", ".off", ".ply", NULL}, ".obj, .off or .ply"},
+    [CLI_FILE_FIELD_MESH] = {"mesh", {".ply", ".obj", NULL, NULL},
+                             ".ply, or .obj with the fields in <stem>.face.csv; OFF cannot hold them"},
+    [CLI_FILE_IMAGE] = {"image", {".png", NULL, NULL, NULL}, ".png"},
+    [CLI_FILE_CURVE] = {"curve", {".csv", ".txt", ".svg", NULL}, ".csv, .txt or .svg"},
+    [CLI_FILE_LOG] = {"log", {".jsonl", NULL, NULL, NULL}, ".jsonl"},
+    [CLI_FILE_TABLE] = {"table", {".csv", NULL, NULL, NULL}, ".csv"},
+    [CLI_FILE_HTML] = {"report", {".html", ".htm", NULL, NULL}, ".html"},
+};
+
+/* The extension of the last path component ("" when it has none). */
+static const char *extension(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    const char *base = slash ? slash + 1 : path;
+    const char *dot = strrchr(base, '.');
+    return dot && dot != base ? dot : "";
+}
+
+/* Canonical name of a path that may not exist yet: realpath of the file if
+ * it exists (symbolic links followed), else realpath of its directory plus
+ * the last component. Falls back to the path as given. */
+static void canonical(const char *path, char *out, size_t size)
+{
+    char resolved[PATH_MAX];
+    if (realpath(path, resolved)) {
+        snprintf(out, size, "%s", resolved);
+        return;
+    }
+    const char *slash = strrchr(path, '/');
+    char dir[PATH_MAX];
+    if (!slash) {
+        strcpy(dir, ".");
+    } else if ((size_t)(slash - path) < sizeof dir) {
+        memcpy(dir, path, (size_t)(slash - path));
+        dir[slash - path] = '\0';
+        if (!dir[0]) strcpy(dir, "/");
+    } else {
+        snprintf(out, size, "%s", path);
+        return;
+    }
+    int n = -1;
+    if (realpath(dir, resolved))
+        n = snprintf(out, size, "%s%s%s", resolved, strcmp(resolved, "/") == 0 ? "" : "/", slash ? slash + 1 : path);
+    if (n < 0 || (size_t)n >= size) snprintf(out, size, "%s", path);
+}
+
+static bool same_file(const struct stat *a, const struct stat *b)
+{
+    return a->st_dev == b->st_dev && a->st_ino == b->st_ino;
+}
+
+/* Checks of one output apart from the other files; 0 or 2 with a message. */
+static int check_one_output(const char *option, const char *path, cli_file_kind kind, bool force)
 {
     if (!path || !*path) {
-        fprintf(stderr, "curvflow: the output path is empty\n");
+        fprintf(stderr, "curvflow: %s: the output path is empty\n", option);
         return CLI_EXIT_INPUT;
     }
-    if (mesh) {
-        cf_mesh_format format;
-        cf_status st = cf_mesh_format_from_path(ctx, path, &format);
-        if (st != CF_OK) {
-            int code = cli_fail(ctx, path, st);
-            return code == CLI_EXIT_USAGE ? CLI_EXIT_INPUT : code;
-        }
-    }
+    const char *ext = extension(path);
+    bool known = false;
+    for (int i = 0; i < 4 && file_kinds[kind].extensions[i]; ++i)
+        known |= strcasecmp(ext, file_kinds[kind].extensions[i]) == 0;
     struct stat sb;
-    if (stat(path, &sb) == 0 && S_ISDIR(sb.st_mode)) {
-        fprintf(stderr, "curvflow: %s: is a directory\n", path);
+    bool is_dir = path[strlen(path) - 1] == '/' || (stat(path, &sb) == 0 && S_ISDIR(sb.st_mode));
+    if (is_dir) {
+        fprintf(stderr, "curvflow: %s: is a directory (%s needs a %s file name)\n", path, option,
+                file_kinds[kind].label);
         return CLI_EXIT_INPUT;
     }
-    /* the directory part ("." when there is none) must exist and be writable */
-    const char *slash = strrchr(path, '/');
-    char dir[4096];
+    if (!known) {
+        if (*ext)
+            fprintf(stderr, "curvflow: %s: unknown %s format '%s' for %s (use %s)\n", path, file_kinds[kind].label, ext,
+                    option, file_kinds[kind].text);
+        else
+            fprintf(stderr, "curvflow: %s: no extension to tell the %s format for %s (use %s)\n", path,
+                    file_kinds[kind].label, option, file_kinds[kind].text);
+        return CLI_EXIT_INPUT;
+    }
+    /* the directory the rename happens in ("." when there is none): the
+     * link's target's for a symbolic link, which the write goes through */
+    char target[PATH_MAX], dir[PATH_MAX];
+    canonical(path, target, sizeof target);
+    const char *slash = strrchr(target, '/');
     if (!slash) {
         strcpy(dir, ".");
     } else {
-        size_t n = (size_t)(slash - path);
+        size_t n = (size_t)(slash - target);
         if (n == 0) n = 1; /* "/name" */
-        if (n >= sizeof dir) {
-            fprintf(stderr, "curvflow: %s: path too long\n", path);
-            return CLI_EXIT_INPUT;
-        }
-        memcpy(dir, path, n);
+        memcpy(dir, target, n);
         dir[n] = '\0';
     }
     if (stat(dir, &sb) != 0 || !S_ISDIR(sb.st_mode)) {
-        fprintf(stderr, "curvflow: %s: cannot write: directory %s does not exist\n", path, dir);
+        const char *given = strrchr(path, '/');
+        fprintf(stderr, "curvflow: %s: cannot write: directory %.*s does not exist\n", path,
+                given ? (int)(given - path) + (given == path) : 1, given ? path : ".");
         return CLI_EXIT_INPUT;
     }
     if (access(dir, W_OK) != 0) {
         fprintf(stderr, "curvflow: %s: cannot write: %s\n", path, strerror(errno));
         return CLI_EXIT_INPUT;
+    }
+    if (stat(path, &sb) == 0) {
+        if (!S_ISREG(sb.st_mode)) {
+            fprintf(stderr, "curvflow: %s: exists and is not a regular file; refusing to replace it\n", path);
+            return CLI_EXIT_INPUT;
+        }
+        /* the mode bits, not only access(): root may write anything, yet a
+         * file without write permission was meant to stay */
+        if (!force && ((sb.st_mode & 0222) == 0 || access(path, W_OK) != 0)) {
+            fprintf(stderr, "curvflow: %s: the existing file is read-only; --force replaces it\n", path);
+            return CLI_EXIT_INPUT;
+        }
+    }
+    return CLI_EXIT_OK;
+}
+
+int cli_files_check(cf_context *ctx, const cli_files *files)
+{
+    for (int i = 0; i < files->output_count; ++i) {
+        const char *out = files->outputs[i].path, *opt = files->outputs[i].option;
+        int code = check_one_output(opt, out, files->outputs[i].kind, files->force);
+        if (code != CLI_EXIT_OK) return code;
+        struct stat so, si;
+        bool out_exists = stat(out, &so) == 0;
+        char co[PATH_MAX], ci[PATH_MAX];
+        canonical(out, co, sizeof co);
+        for (int k = 0; k < files->input_count; ++k) {
+            const char *in = files->inputs[k].path;
+            bool same = out_exists && stat(in, &si) == 0 ? same_file(&so, &si) : false;
+            if (!same) {
+                canonical(in, ci, sizeof ci);
+                same = strcmp(co, ci) == 0;
+            }
+            if (same) {
+                fprintf(stderr, "curvflow: %s: %s names the same file as the input %s (%s); refusing to overwrite an input\n",
+                        out, opt, in, files->inputs[k].option);
+                return CLI_EXIT_INPUT;
+            }
+        }
+        for (int k = 0; k < i; ++k) {
+            const char *other = files->outputs[k].path;
+            bool same = out_exists && stat(other, &si) == 0 ? same_file(&so, &si) : false;
+            if (!same) {
+                canonical(other, ci, sizeof ci);
+                same = strcmp(co, ci) == 0;
+            }
+            if (same) {
+                fprintf(stderr, "curvflow: %s: %s and %s name the same file\n", out, files->outputs[k].option, opt);
+                return CLI_EXIT_INPUT;
+            }
+        }
+    }
+    /* a run killed without a chance to clean up (SIGKILL, power loss)
+     * leaves its temporary files: remove those of ended processes */
+    for (int i = 0; i < files->output_count; ++i) {
+        int32_t removed = 0;
+        if (cf_atomic_remove_stale(ctx, files->outputs[i].path, &removed) == CF_OK && removed > 0)
+            fprintf(stderr, "curvflow: removed %d temporary file%s of an ended run next to %s\n", (int)removed,
+                    removed == 1 ? "" : "s", files->outputs[i].path);
     }
     return CLI_EXIT_OK;
 }
@@ -247,13 +494,15 @@ void cli_progress_init(cli_progress *p, const char *method, int64_t total_steps,
     p->start_seconds = cli_now();
 }
 
-int cli_progress_open_log(cli_progress *p, const char *path)
+int cli_progress_open_log(cli_progress *p, cf_context *ctx, const char *path)
 {
-    p->log = fopen(path, "w");
-    if (!p->log) {
-        fprintf(stderr, "curvflow: %s: cannot open log: %s\n", path, strerror(errno));
-        return CLI_EXIT_INPUT;
+    cf_status st = cf_atomic_writer_open(ctx, path, &p->log_writer);
+    if (st != CF_OK) {
+        int code = cli_fail(ctx, path, st);
+        return code == CLI_EXIT_USAGE ? CLI_EXIT_INPUT : code;
     }
+    p->ctx = ctx;
+    p->log = cf_atomic_writer_stream(p->log_writer);
     p->log_path = path;
     return CLI_EXIT_OK;
 }
@@ -323,12 +572,18 @@ int cli_progress_finish(cli_progress *p)
     if (p->bar_drawn) fputc('\n', stderr);
     p->bar_drawn = false;
     int code = CLI_EXIT_OK;
-    if (p->log) {
-        if (fclose(p->log) != 0) p->log_failed = true;
+    if (p->log_writer) {
         p->log = NULL;
         if (p->log_failed) {
+            cf_atomic_writer_abort(&p->log_writer);
             fprintf(stderr, "curvflow: %s: could not write the log\n", p->log_path);
             code = CLI_EXIT_INPUT;
+        } else {
+            cf_status st = cf_atomic_writer_commit(&p->log_writer);
+            if (st != CF_OK) {
+                code = cli_fail(p->ctx, p->log_path, st);
+                if (code != CLI_EXIT_NUMERICAL) code = CLI_EXIT_INPUT;
+            }
         }
     }
     return code;

@@ -10,6 +10,7 @@
 #include "cli.h"
 #include "curvflow/curvflow.h"
 #include "curvflow/flow.h"
+#include "curvflow/io.h"
 #include "curvflow/mesh.h"
 
 #include <stdbool.h>
@@ -39,10 +40,25 @@ int cli_usage_error(const char *command, const char *fmt, ...)
 int cli_option_error(const char *command, int c, char **argv);
 
 /* Strict number parsing (whole string, finite, in range); print a usage
- * error naming the option on failure and return false. */
+ * error naming the option on failure and return false. A double below the
+ * smallest normal one (1e-320) is a number (strtod's underflow flag is not
+ * an error); nan, inf and overflow are not finite. */
 bool cli_parse_int(const char *command, const char *option, const char *text, long long min_value,
                    long long max_value, long long *out);
 bool cli_parse_double(const char *command, const char *option, const char *text, double *out);
+/* cli_parse_double, then lo <= value <= hi; the message prints the text as
+ * given and the limits as the flow parameters' messages do (they read back
+ * exactly): "--lambda: '1.0000001' is outside [0, 1]". */
+bool cli_parse_double_in(const char *command, const char *option, const char *text, double lo, double hi,
+                         double *out);
+/* `count` finite numbers separated by `separator` ("1,2,3" for --view,
+ * "MIN,MAX" for --range), with the same rules as cli_parse_double; the
+ * usage error names the option and the expected form `form`. */
+bool cli_parse_doubles(const char *command, const char *option, const char *text, char separator, int count,
+                       const char *form, double *out);
+/* "WxH" with 1 <= W, H <= max_side (integers, no overflow): --size. */
+bool cli_parse_size(const char *command, const char *option, const char *text, long long max_side, int32_t *width,
+                    int32_t *height);
 
 /* A context with warnings from the library forwarded to stderr. */
 cf_context *cli_context(bool verbose);
@@ -51,12 +67,48 @@ cf_context *cli_context(bool verbose);
  * exit code (2), else 0. */
 int cli_load_mesh(cf_context *ctx, const char *path, cf_mesh **out);
 
-/* Checks before a long run that OUT can be written: its directory exists and
- * is writable, OUT is not a directory, and (mesh = true) its extension names a
- * mesh format. Prints "curvflow: OUT: ..." and returns 2 if not, else 0. The
- * write itself stays atomic; this only saves a run whose result could not be
- * kept. */
-int cli_check_output(cf_context *ctx, const char *path, bool mesh);
+/* Removes the temporary files of atomic writes in progress when the tool
+ * gets SIGINT, SIGTERM or SIGHUP, then dies of the signal as it would have
+ * (a signal the tool was started with ignored, e.g. SIGHUP under nohup,
+ * stays ignored). Called once by main. */
+void cli_install_signal_cleanup(void);
+
+/* The files a command reads and writes, checked together before any work
+ * by cli_files_check: the one output-path check of every command. */
+typedef enum cli_file_kind {
+    CLI_FILE_MESH,       /* .obj .off .ply */
+    CLI_FILE_FIELD_MESH, /* a mesh with per-element fields: .ply, or .obj with side CSV files */
+    CLI_FILE_IMAGE,      /* .png */
+    CLI_FILE_CURVE,      /* .csv .txt .svg */
+    CLI_FILE_LOG,        /* .jsonl (JSON lines) */
+    CLI_FILE_TABLE,      /* .csv (the side file of an OBJ with fields) */
+    CLI_FILE_HTML        /* .html .htm (the report) */
+} cli_file_kind;
+
+enum { CLI_MAX_FILES = 12 };
+typedef struct cli_files {
+    struct { const char *option, *path; } inputs[CLI_MAX_FILES];
+    struct { const char *option, *path; cli_file_kind kind; } outputs[CLI_MAX_FILES];
+    int input_count, output_count;
+    bool force;   /* --force: replace read-only targets */
+} cli_files;
+
+/* Records an input (option names it in messages, e.g. "IN", "--handles";
+ * NULL path: ignored). */
+void cli_files_input(cli_files *files, const char *option, const char *path);
+/* Records an output of the given kind (option: "-o", "--log", ...). */
+void cli_files_output(cli_files *files, const char *option, const char *path, cli_file_kind kind);
+/* Before the run, for every output: the path is not empty, its extension
+ * names a format of its kind, it is not a directory, its directory exists
+ * and is writable, an existing target is a regular file and not read-only
+ * (unless files->force), it is not the same file as an input (after
+ * symbolic links, also hard links) nor as another output. Then removes the
+ * stale temporary files of ended runs next to each output
+ * (cf_atomic_remove_stale). Prints "curvflow: OUT: ..." and returns 2 on
+ * the first problem, else 0. The writes stay atomic (a symbolic link is
+ * written through); this saves a run whose result could not be kept and
+ * keeps the tool from clobbering what it should not. */
+int cli_files_check(cf_context *ctx, const cli_files *files);
 
 /* After writing a flow's result: if those positions would not pass the mesh
  * check (a triangle degenerated to zero area), says so on stderr, so that
@@ -75,7 +127,9 @@ typedef struct cli_progress {
     int64_t total_steps;
     bool quiet;             /* no status lines */
     bool tty;               /* draw a bar instead of lines */
-    FILE *log;              /* JSONL log or NULL */
+    FILE *log;              /* stream of log_writer, or NULL */
+    cf_atomic_writer *log_writer; /* the JSONL log, written atomically */
+    cf_context *ctx;        /* for the log's messages */
     const char *log_path;
     bool log_failed;
     double start_seconds;
@@ -83,13 +137,17 @@ typedef struct cli_progress {
 } cli_progress;
 
 void cli_progress_init(cli_progress *p, const char *method, int64_t total_steps, bool quiet);
-/* Opens the log file (truncates); returns 0 or 2 with a message. */
-int cli_progress_open_log(cli_progress *p, const char *path);
+/* Starts the JSONL log: written to a temporary file next to `path` while
+ * the run lasts and renamed into place by cli_progress_finish (also after a
+ * numerical failure: the steps up to it are kept); removed on a signal.
+ * Returns 0 or 2 with a message. */
+int cli_progress_open_log(cli_progress *p, cf_context *ctx, const char *path);
 /* Writes the JSON object of one step (also for the initial state, iteration 0). */
 void cli_progress_log(cli_progress *p, const cf_flow_info *info);
 /* cf_progress_fn: prints and logs the step; never cancels. */
 int cli_progress_callback(void *user, const cf_flow_info *info);
-/* Ends the bar line; closes the log. Returns 0 or 2 if the log could not be written. */
+/* Ends the bar line; commits the log (or, if a write to it failed, removes
+ * it). Returns 0 or 2 if the log could not be written. Idempotent. */
 int cli_progress_finish(cli_progress *p);
 
 /* Runs `steps` steps of a created flow with the progress reporter (the

@@ -3,6 +3,7 @@
  * Exit codes: 0 ok, 1 usage, 2 invalid mesh or file, 3 numerical failure.
  */
 #include "cli.h"
+#include "common.h"
 #include "curvflow/curvflow.h"
 
 #include <stdio.h>
@@ -38,12 +39,18 @@ static void print_help(FILE *out)
             "\nOptions:\n"
             "  -h, --help     show this help (curvflow COMMAND --help for a command)\n"
             "  -V, --version  show the version\n\n"
-            "Meshes are read and written as OBJ, OFF or PLY (format from the extension).\n"
-            "Exit status: 0 ok, 1 usage error, 2 invalid mesh or file, 3 numerical failure.\n");
+            "Meshes are read and written as OBJ, OFF or PLY (format from the extension). Every\n"
+            "output is written atomically and checked before the run: its extension must name a\n"
+            "format of that output, it must not be an input, and a read-only file is replaced only\n"
+            "with --force; a symbolic link is written through to its target.\n"
+            "Exit status: 0 ok, 1 usage error, 2 invalid mesh or file (or an output that cannot or\n"
+            "must not be written), 3 numerical failure.\n");
 }
 
 int main(int argc, char **argv)
 {
+    /* before any command writes: an interrupted run leaves no temporary file */
+    cli_install_signal_cleanup();
     if (argc < 2) {
         print_help(stderr);
         return CLI_EXIT_USAGE;

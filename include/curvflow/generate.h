@@ -43,6 +43,25 @@ CF_API cf_status cf_generate_torus(cf_context *ctx, double major_radius, double 
 CF_API cf_status cf_generate_bumpy_sphere(cf_context *ctx, int32_t subdivisions, double amplitude, uint32_t seed,
                                           cf_mesh **out);
 
+/* Most limbs of cf_generate_limb_sphere. */
+#define CF_LIMB_SPHERE_MAX_LIMBS 8
+
+/* Unit icosphere (`subdivisions` 0..9) with `limbs` (1..8) smooth limbs
+ * grown radially: radius 1 + length * sum_k exp(-(1 - <n, d_k>) / width^2)
+ * at the unit direction n, with d_k the first `limbs` of the cube's corner
+ * directions (1,1,1), (1,-1,-1), (-1,1,-1), (-1,-1,1) (a regular
+ * tetrahedron), then their opposites (-1,-1,-1), (-1,1,1), (1,-1,1),
+ * (1,1,-1), normalised. `length` in [0, 10] is the limb's extra radius in
+ * units of the sphere's radius, `width` in [0.05, 2] its angular width
+ * (radians, ~ the Gaussian's standard deviation). Texture coordinates as
+ * cf_generate_bumpy_sphere (per corner, seam and poles handled). The demo
+ * uses (5, 8, 1.4, 0.22): 10242 vertices, W/4pi 5.78, an eight-armed star
+ * that the conformal Willmore flow takes to a round sphere.
+ * Statuses: CF_OK, CF_ERR_INVALID_ARG (counts or sizes out of range),
+ * CF_ERR_NOMEM. */
+CF_API cf_status cf_generate_limb_sphere(cf_context *ctx, int32_t subdivisions, int32_t limbs, double length,
+                                         double width, cf_mesh **out);
+
 /* Flat rectangle [0, width] x [0, height] at z = 0 made of nx x ny cells
  * (nx, ny >= 1), each split into two triangles along the diagonal from
  * (x0, y0) to (x1, y1). V = (nx+1)(ny+1), F = 2 nx ny, one boundary loop,

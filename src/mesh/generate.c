@@ -1,10 +1,10 @@
 /*
  * Built-in mesh generators (curvflow/generate.h): icosphere, torus, bumpy
- * sphere with a texture seam, grid, cylinder, box bar and sheet (Zhao &
- * Gortler §5 and App. B test shapes), bumpy height field and a genus-2
- * fixture. All are deterministic; random ones use a seeded splitmix64.
- * Each builds flat arrays through the context and hands them to
- * cf_mesh_create, so every generated mesh is validated.
+ * sphere with a texture seam, sphere with limbs (the demo's shape), grid,
+ * cylinder, box bar and sheet (Zhao & Gortler §5 and App. B test shapes),
+ * bumpy height field and a genus-2 fixture. All are deterministic; random
+ * ones use a seeded splitmix64. Each builds flat arrays through the context
+ * and hands them to cf_mesh_create, so every generated mesh is validated.
  */
 #include "curvflow/generate.h"
 #include "mesh/mesh_internal.h"
@@ -313,37 +313,16 @@ static double bump_field(const double *bumps, const double *n)
     return h;
 }
 
-cf_status cf_generate_bumpy_sphere(cf_context *ctx, int32_t subdivisions, double amplitude, uint32_t seed,
-                                   cf_mesh **out)
+/* The unit icosphere `sphere` pushed out radially to radius[v] at vertex v,
+ * with per-corner texture coordinates (longitude / 2 pi, latitude / pi +
+ * 1/2): corners of faces that straddle the longitude-pi seam get a shifted
+ * copy (u + 1) so the texture does not jump, and each pole corner gets its
+ * own uv at the face's mean longitude. Shared by the radial shapes below. */
+static cf_status radial_sphere_with_uv(cf_context *ctx, const cf_mesh *sphere, const double *radius, cf_mesh **out)
 {
-    cf_status st = check_out(ctx, out);
-    if (st != CF_OK) return st;
-    if (!isfinite(amplitude) || fabs(amplitude) >= 0.5)
-        return cfi_error(ctx, CF_ERR_INVALID_ARG, "bumpy sphere amplitude %g must be in (-0.5, 0.5)", amplitude);
-    cf_mesh *sphere = NULL;
-    st = cf_generate_icosphere(ctx, subdivisions, 1.0, &sphere);
-    if (st != CF_OK) return st;
-
-    double bumps[5 * BUMPY_SPHERE_BUMPS];
-    uint64_t state = seed;
-    for (int k = 0; k < BUMPY_SPHERE_BUMPS; ++k) {
-        double z = rng_uniform(&state, -1.0, 1.0), phi = rng_uniform(&state, 0.0, 2.0 * CF_PI);
-        double r = sqrt(1.0 - z * z);
-        double *b = bumps + 5 * k;
-        b[0] = r * cos(phi), b[1] = r * sin(phi), b[2] = z;
-        b[3] = rng_uniform(&state, 0.35, 0.7);
-        b[4] = rng_uniform(&state, -1.0, 1.0);
-    }
+    cf_status st = CF_OK;
     const int32_t nv = sphere->nv, nf = sphere->nf;
     const double *sp = sphere->positions;
-    /* normalise so max |h| = 1 over the vertices */
-    double hmax = 0.0;
-    for (int32_t v = 0; v < nv; ++v) {
-        double h = fabs(bump_field(bumps, sp + 3 * (size_t)v));
-        if (h > hmax) hmax = h;
-    }
-    if (!(hmax > 0.0)) hmax = 1.0;
-
     /* uv: one entry per vertex, plus a shifted copy (u + 1) for vertices
      * used by faces that straddle the seam, plus one entry per pole corner */
     int32_t *shifted = CFI_ALLOC(ctx, int32_t, nv);
@@ -355,8 +334,7 @@ cf_status cf_generate_bumpy_sphere(cf_context *ctx, int32_t subdivisions, double
     if (st == CF_OK) {
         for (int32_t v = 0; v < nv; ++v) {
             const double *n = sp + 3 * (size_t)v;
-            double r = 1.0 + amplitude * bump_field(bumps, n) / hmax;
-            for (int k = 0; k < 3; ++k) a.pos[3 * (size_t)v + k] = r * n[k];
+            for (int k = 0; k < 3; ++k) a.pos[3 * (size_t)v + k] = radius[v] * n[k];
             bool pole = hypot(n[0], n[1]) < 1e-12;
             vu[2 * v] = pole ? -1.0 : (atan2(n[1], n[0]) + CF_PI) / (2.0 * CF_PI);
             vu[2 * v + 1] = asin(n[2] < -1.0 ? -1.0 : (n[2] > 1.0 ? 1.0 : n[2])) / CF_PI + 0.5;
@@ -416,8 +394,95 @@ cf_status cf_generate_bumpy_sphere(cf_context *ctx, int32_t subdivisions, double
     }
     CFI_FREE(ctx, shifted, nv);
     CFI_FREE(ctx, vu, 2 * (size_t)nv);
-    cf_mesh_destroy(&sphere);
     return arrays_finish(ctx, &a, st, out);
+}
+
+cf_status cf_generate_bumpy_sphere(cf_context *ctx, int32_t subdivisions, double amplitude, uint32_t seed,
+                                   cf_mesh **out)
+{
+    cf_status st = check_out(ctx, out);
+    if (st != CF_OK) return st;
+    if (!isfinite(amplitude) || fabs(amplitude) >= 0.5)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "bumpy sphere amplitude %g must be in (-0.5, 0.5)", amplitude);
+    cf_mesh *sphere = NULL;
+    st = cf_generate_icosphere(ctx, subdivisions, 1.0, &sphere);
+    if (st != CF_OK) return st;
+
+    double bumps[5 * BUMPY_SPHERE_BUMPS];
+    uint64_t state = seed;
+    for (int k = 0; k < BUMPY_SPHERE_BUMPS; ++k) {
+        double z = rng_uniform(&state, -1.0, 1.0), phi = rng_uniform(&state, 0.0, 2.0 * CF_PI);
+        double r = sqrt(1.0 - z * z);
+        double *b = bumps + 5 * k;
+        b[0] = r * cos(phi), b[1] = r * sin(phi), b[2] = z;
+        b[3] = rng_uniform(&state, 0.35, 0.7);
+        b[4] = rng_uniform(&state, -1.0, 1.0);
+    }
+    const int32_t nv = sphere->nv;
+    const double *sp = sphere->positions;
+    /* normalise so max |h| = 1 over the vertices */
+    double hmax = 0.0;
+    for (int32_t v = 0; v < nv; ++v) {
+        double h = fabs(bump_field(bumps, sp + 3 * (size_t)v));
+        if (h > hmax) hmax = h;
+    }
+    if (!(hmax > 0.0)) hmax = 1.0;
+
+    double *radius = CFI_ALLOC(ctx, double, nv);
+    if (!radius) {
+        cf_mesh_destroy(&sphere);
+        return CF_ERR_NOMEM;
+    }
+    for (int32_t v = 0; v < nv; ++v) radius[v] = 1.0 + amplitude * bump_field(bumps, sp + 3 * (size_t)v) / hmax;
+    st = radial_sphere_with_uv(ctx, sphere, radius, out);
+    CFI_FREE(ctx, radius, nv);
+    cf_mesh_destroy(&sphere);
+    return st;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Sphere with smooth limbs (the demo's shape) */
+
+cf_status cf_generate_limb_sphere(cf_context *ctx, int32_t subdivisions, int32_t limbs, double length, double width,
+                                  cf_mesh **out)
+{
+    cf_status st = check_out(ctx, out);
+    if (st != CF_OK) return st;
+    if (limbs < 1 || limbs > CF_LIMB_SPHERE_MAX_LIMBS)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "limb sphere: %d limbs outside [1, %d]", limbs,
+                         CF_LIMB_SPHERE_MAX_LIMBS);
+    if (!isfinite(length) || length < 0.0 || length > 10.0)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "limb sphere: limb length %g outside [0, 10]", length);
+    if (!isfinite(width) || width < 0.05 || width > 2.0)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "limb sphere: limb width %g outside [0.05, 2]", width);
+    cf_mesh *sphere = NULL;
+    st = cf_generate_icosphere(ctx, subdivisions, 1.0, &sphere);
+    if (st != CF_OK) return st;
+    /* the cube's corner directions, ordered so that the first four form a
+     * regular tetrahedron (limbs as far apart as possible for 1..4) */
+    static const double corners[CF_LIMB_SPHERE_MAX_LIMBS][3] = {{1, 1, 1},   {1, -1, -1}, {-1, 1, -1}, {-1, -1, 1},
+                                                                {-1, -1, -1}, {-1, 1, 1}, {1, -1, 1},  {1, 1, -1}};
+    const double inv_sqrt3 = 1.0 / sqrt(3.0), inv_w2 = 1.0 / (width * width);
+    const int32_t nv = sphere->nv;
+    double *radius = CFI_ALLOC(ctx, double, nv);
+    if (!radius) {
+        cf_mesh_destroy(&sphere);
+        return CF_ERR_NOMEM;
+    }
+    for (int32_t v = 0; v < nv; ++v) {
+        const double *n = sphere->positions + 3 * (size_t)v;
+        double r = 1.0;
+        for (int32_t k = 0; k < limbs; ++k) {
+            const double *d = corners[k];
+            double c = inv_sqrt3 * (n[0] * d[0] + n[1] * d[1] + n[2] * d[2]);
+            r += length * exp(-(1.0 - c) * inv_w2);
+        }
+        radius[v] = r;
+    }
+    st = radial_sphere_with_uv(ctx, sphere, radius, out);
+    CFI_FREE(ctx, radius, nv);
+    cf_mesh_destroy(&sphere);
+    return st;
 }
 
 /* ------------------------------------------------------------------------ */

@@ -1,6 +1,11 @@
 /*
  * curvflow generate KIND [params] -o OUT: writes a built-in mesh
  * (include/curvflow/generate.h), seeded and deterministic.
+ *
+ * One table says which options each kind takes, with their defaults and,
+ * for counts, the generator's own limits: an option the kind does not use
+ * is a usage error (it used to be ignored), and a count outside the limits
+ * is refused naming the option and the range the generator accepts.
  */
 #define _GNU_SOURCE
 #include "common.h"
@@ -11,132 +16,197 @@
 #include <math.h>
 #include <string.h>
 
+typedef enum gen_option {
+    O_SUBDIV, O_RADIUS, O_SEED, O_AMPLITUDE, O_MAJOR, O_MINOR, O_NMAJOR, O_NMINOR, O_NX, O_NY, O_NZ, O_WIDTH,
+    O_HEIGHT, O_DEPTH, O_NAROUND, O_NALONG, O_SIZE, O_N, O_PATTERN, O_RESOLUTION, O_COUNT
+} gen_option;
+
+static const char *const option_names[O_COUNT] = {
+    "subdivisions", "radius", "seed", "amplitude", "major-radius", "minor-radius", "n-major", "n-minor",
+    "nx", "ny", "nz", "width", "height", "depth", "n-around", "n-along", "size", "n", "pattern", "resolution"};
+
+/* One option of a kind: its default and, for an integer, the range the
+ * generator accepts (generate.h / src/mesh/generate.c; tests/cli checks
+ * that one past each limit is refused by the generator too). Lengths are
+ * checked by the generator (positive, etc.) after the tool's range check. */
+typedef struct gen_param {
+    gen_option option;
+    double fallback;
+    bool integer;
+    long long min, max;
+} gen_param;
+
+enum { KIND_MAX_PARAMS = 8 };
+typedef struct gen_kind {
+    const char *name;
+    const char *note;
+    gen_param params[KIND_MAX_PARAMS];
+    int count; /* entries of params in use */
+} gen_kind;
+
+#define INT(o, d, lo, hi) {o, d, true, lo, hi}
+#define LEN(o, d) {o, d, false, 0, 0}
+static const gen_kind kinds[] = {
+    {"icosphere", NULL, {INT(O_SUBDIV, 3, 0, 9), LEN(O_RADIUS, 1)}, 2},
+    {"bumpy-sphere", "per-corner uv", {INT(O_SUBDIV, 4, 0, 9), LEN(O_AMPLITUDE, 0.25), INT(O_SEED, 1, 0, 4294967295LL)}, 3},
+    {"torus", NULL,
+     {LEN(O_MAJOR, 1), LEN(O_MINOR, 0.4), INT(O_NMAJOR, 48, 3, 100000), INT(O_NMINOR, 24, 3, 100000)}, 4},
+    {"grid", NULL, {INT(O_NX, 16, 1, 46000), INT(O_NY, 16, 1, 46000), LEN(O_WIDTH, 1), LEN(O_HEIGHT, 1)}, 4},
+    {"cylinder", "per-corner uv",
+     {INT(O_NAROUND, 32, 3, 100000), INT(O_NALONG, 16, 1, 100000), LEN(O_RADIUS, 1), LEN(O_HEIGHT, 2)}, 4},
+    {"bar", NULL,
+     {INT(O_NX, 20, 1, 2000), INT(O_NY, 2, 1, 2000), INT(O_NZ, 2, 1, 2000), LEN(O_WIDTH, 10), LEN(O_HEIGHT, 1),
+      LEN(O_DEPTH, 1), INT(O_PATTERN, 0, 0, 1)},
+     7},
+    {"sheet", NULL, {INT(O_N, 16, 1, 46000), LEN(O_SIZE, 1), INT(O_PATTERN, 0, 0, 1)}, 3},
+    {"bumpy-plane", NULL, {INT(O_N, 32, 1, 46000), LEN(O_SIZE, 1), LEN(O_AMPLITUDE, 0.1), INT(O_SEED, 1, 0, 4294967295LL)}, 4},
+    {"double-torus", "genus 2", {INT(O_RESOLUTION, 2, 1, 200)}, 1},
+};
+#undef INT
+#undef LEN
+#define KIND_COUNT (sizeof kinds / sizeof kinds[0])
+
 static void usage(FILE *out)
 {
     fprintf(out,
             "Usage: curvflow generate KIND [OPTIONS] -o OUT\n"
             "Writes a built-in mesh (OBJ, OFF or PLY from OUT's extension).\n\n"
-            "Kinds and the options they use (defaults in brackets):\n"
-            "  icosphere     --subdivisions [3] --radius [1]\n"
-            "  bumpy-sphere  --subdivisions [4] --amplitude [0.25] --seed [1]   (per-corner uv)\n"
-            "  torus         --major-radius [1] --minor-radius [0.4] --n-major [48] --n-minor [24]\n"
-            "  grid          --nx [16] --ny [16] --width [1] --height [1]\n"
-            "  cylinder      --n-around [32] --n-along [16] --radius [1] --height [2]\n"
-            "  bar           --nx [20] --ny [2] --nz [2] --width [10] --height [1] --depth [1] --pattern [0]\n"
-            "  sheet         --n [16] --size [1] --pattern [0]\n"
-            "  bumpy-plane   --n [32] --size [1] --amplitude [0.1] --seed [1]\n"
-            "  double-torus  --resolution [2]\n\n"
-            "  -o, --output OUT   output mesh (required)\n"
+            "Kinds and the options they take (defaults in brackets, counts with their range);\n"
+            "an option a kind does not take is an error:\n");
+    for (size_t k = 0; k < KIND_COUNT; ++k) {
+        fprintf(out, "  %-13s", kinds[k].name);
+        for (int i = 0; i < kinds[k].count; ++i) {
+            const gen_param *p = &kinds[k].params[i];
+            if (p->integer)
+                fprintf(out, " --%s [%.0f] (%lld..%lld)", option_names[p->option], p->fallback, p->min, p->max);
+            else
+                fprintf(out, " --%s [%g]", option_names[p->option], p->fallback);
+        }
+        if (kinds[k].note) fprintf(out, "\n  %-13s (%s)", "", kinds[k].note);
+        fputc('\n', out);
+    }
+    fprintf(out,
+            "\n  -o, --output OUT   output mesh: .obj, .off or .ply (required)\n"
+            "  -f, --force        replace a read-only OUT\n"
             "  -h, --help         show this help\n");
 }
 
-enum {
-    OPT_SUBDIV = 256, OPT_RADIUS, OPT_SEED, OPT_AMPLITUDE, OPT_MAJOR, OPT_MINOR, OPT_NMAJOR, OPT_NMINOR, OPT_NX,
-    OPT_NY, OPT_NZ, OPT_WIDTH, OPT_HEIGHT, OPT_DEPTH, OPT_NAROUND, OPT_NALONG, OPT_SIZE, OPT_N, OPT_PATTERN,
-    OPT_RESOLUTION
-};
+static const gen_param *find_param(const gen_kind *kind, gen_option o)
+{
+    for (int i = 0; i < kind->count; ++i)
+        if (kind->params[i].option == o) return &kind->params[i];
+    return NULL;
+}
 
-static double or_default(double given, double fallback) { return isnan(given) ? fallback : given; }
+/* "--n-around, --n-along, --radius, --height" */
+static void list_options(const gen_kind *kind, char *buf, size_t size)
+{
+    size_t used = 0;
+    buf[0] = '\0';
+    for (int i = 0; i < kind->count && used < size; ++i) {
+        int n = snprintf(buf + used, size - used, "%s--%s", i ? ", " : "", option_names[kind->params[i].option]);
+        if (n < 0) break;
+        used += (size_t)n;
+    }
+}
 
 int cli_generate(int argc, char **argv)
 {
-    static const struct option longopts[] = {
-        {"subdivisions", required_argument, NULL, OPT_SUBDIV}, {"radius", required_argument, NULL, OPT_RADIUS},
-        {"seed", required_argument, NULL, OPT_SEED}, {"amplitude", required_argument, NULL, OPT_AMPLITUDE},
-        {"major-radius", required_argument, NULL, OPT_MAJOR}, {"minor-radius", required_argument, NULL, OPT_MINOR},
-        {"n-major", required_argument, NULL, OPT_NMAJOR}, {"n-minor", required_argument, NULL, OPT_NMINOR},
-        {"nx", required_argument, NULL, OPT_NX}, {"ny", required_argument, NULL, OPT_NY},
-        {"nz", required_argument, NULL, OPT_NZ}, {"width", required_argument, NULL, OPT_WIDTH},
-        {"height", required_argument, NULL, OPT_HEIGHT}, {"depth", required_argument, NULL, OPT_DEPTH},
-        {"n-around", required_argument, NULL, OPT_NAROUND}, {"n-along", required_argument, NULL, OPT_NALONG},
-        {"size", required_argument, NULL, OPT_SIZE}, {"n", required_argument, NULL, OPT_N},
-        {"pattern", required_argument, NULL, OPT_PATTERN}, {"resolution", required_argument, NULL, OPT_RESOLUTION},
-        {"output", required_argument, NULL, 'o'}, {"help", no_argument, NULL, 'h'}, {NULL, 0, NULL, 0}};
-    const char *output = NULL;
-    long long subdiv = -1, seed = 1, n_major = 48, n_minor = 24, nx = -1, ny = -1, nz = 2, n_around = 32,
-              n_along = 16, n = -1, pattern = 0, resolution = 2;
-    /* NAN = not given (kind-specific default); cli_parse_double never yields NaN,
-     * so an explicit negative value reaches the generator and is rejected
-     * there instead of silently becoming the default */
-    double radius = 1.0, amplitude = NAN, major = 1.0, minor = 0.4, width = NAN, height = NAN, depth = 1.0,
-           size = 1.0;
+    enum { OPT_FIRST = 256 };
+    struct option longopts[O_COUNT + 4];
+    for (int i = 0; i < O_COUNT; ++i) longopts[i] = (struct option){option_names[i], required_argument, NULL, OPT_FIRST + i};
+    longopts[O_COUNT] = (struct option){"output", required_argument, NULL, 'o'};
+    longopts[O_COUNT + 1] = (struct option){"force", no_argument, NULL, 'f'};
+    longopts[O_COUNT + 2] = (struct option){"help", no_argument, NULL, 'h'};
+    longopts[O_COUNT + 3] = (struct option){NULL, 0, NULL, 0};
+    const char *output = NULL, *given[O_COUNT] = {NULL};
     const char *cmd = "generate";
+    bool force = false;
     int c;
     opterr = 0;
-    while ((c = getopt_long(argc, argv, ":o:h", longopts, NULL)) != -1) {
-        bool ok = true;
+    while ((c = getopt_long(argc, argv, ":o:fh", longopts, NULL)) != -1) {
+        if (c >= OPT_FIRST && c < OPT_FIRST + O_COUNT) {
+            given[c - OPT_FIRST] = optarg;
+            continue;
+        }
         switch (c) {
         case 'o': output = optarg; break;
+        case 'f': force = true; break;
         case 'h': usage(stdout); return CLI_EXIT_OK;
-        case OPT_SUBDIV: ok = cli_parse_int(cmd, "--subdivisions", optarg, 0, 9, &subdiv); break;
-        case OPT_SEED: ok = cli_parse_int(cmd, "--seed", optarg, 0, 4294967295LL, &seed); break;
-        case OPT_NMAJOR: ok = cli_parse_int(cmd, "--n-major", optarg, 3, 1 << 20, &n_major); break;
-        case OPT_NMINOR: ok = cli_parse_int(cmd, "--n-minor", optarg, 3, 1 << 20, &n_minor); break;
-        case OPT_NX: ok = cli_parse_int(cmd, "--nx", optarg, 1, 1 << 15, &nx); break;
-        case OPT_NY: ok = cli_parse_int(cmd, "--ny", optarg, 1, 1 << 15, &ny); break;
-        case OPT_NZ: ok = cli_parse_int(cmd, "--nz", optarg, 1, 1 << 15, &nz); break;
-        case OPT_NAROUND: ok = cli_parse_int(cmd, "--n-around", optarg, 3, 1 << 20, &n_around); break;
-        case OPT_NALONG: ok = cli_parse_int(cmd, "--n-along", optarg, 1, 1 << 20, &n_along); break;
-        case OPT_N: ok = cli_parse_int(cmd, "--n", optarg, 1, 1 << 15, &n); break;
-        case OPT_PATTERN: ok = cli_parse_int(cmd, "--pattern", optarg, 0, 1, &pattern); break;
-        case OPT_RESOLUTION: ok = cli_parse_int(cmd, "--resolution", optarg, 1, 256, &resolution); break;
-        case OPT_RADIUS: ok = cli_parse_double(cmd, "--radius", optarg, &radius); break;
-        case OPT_AMPLITUDE: ok = cli_parse_double(cmd, "--amplitude", optarg, &amplitude); break;
-        case OPT_MAJOR: ok = cli_parse_double(cmd, "--major-radius", optarg, &major); break;
-        case OPT_MINOR: ok = cli_parse_double(cmd, "--minor-radius", optarg, &minor); break;
-        case OPT_WIDTH: ok = cli_parse_double(cmd, "--width", optarg, &width); break;
-        case OPT_HEIGHT: ok = cli_parse_double(cmd, "--height", optarg, &height); break;
-        case OPT_DEPTH: ok = cli_parse_double(cmd, "--depth", optarg, &depth); break;
-        case OPT_SIZE: ok = cli_parse_double(cmd, "--size", optarg, &size); break;
         default: return cli_option_error(cmd, c, argv);
         }
-        if (!ok) return CLI_EXIT_USAGE;
     }
-    /* lengths must stay inside the range the mesh check accepts */
-    const struct { const char *name; double value; } lengths[] = {
-        {"--radius", radius}, {"--amplitude", amplitude}, {"--major-radius", major}, {"--minor-radius", minor},
-        {"--width", width},   {"--height", height},       {"--depth", depth},        {"--size", size}};
-    for (size_t i = 0; i < sizeof lengths / sizeof lengths[0]; ++i)
-        if (fabs(lengths[i].value) > CF_MAX_COORDINATE) /* NaN (not given) compares false */
-            return cli_usage_error(cmd, "%s: %g is beyond the range of lengths (|x| <= %.0e)", lengths[i].name,
-                                   lengths[i].value, CF_MAX_COORDINATE);
     if (optind + 1 != argc) return cli_usage_error(cmd, "expected one mesh kind");
+    const char *kind_name = argv[optind];
+    const gen_kind *kind = NULL;
+    for (size_t k = 0; k < KIND_COUNT && !kind; ++k)
+        if (strcmp(kinds[k].name, kind_name) == 0) kind = &kinds[k];
+    if (!kind) return cli_usage_error(cmd, "unknown mesh kind '%s'", kind_name);
+
+    /* every option given must be one the kind takes; then its value, in
+     * the kind's range (counts) or the range of lengths (the rest) */
+    double v[O_COUNT] = {0};
+    for (int o = 0; o < O_COUNT; ++o) {
+        const gen_param *p = find_param(kind, (gen_option)o);
+        if (!p) {
+            if (!given[o]) continue;
+            char known[256];
+            list_options(kind, known, sizeof known);
+            return cli_usage_error(cmd, "generate %s: --%s is not an option of %s (its options: %s)", kind->name,
+                                   option_names[o], kind->name, known);
+        }
+        v[o] = p->fallback;
+        if (!given[o]) continue;
+        char label[96];
+        snprintf(label, sizeof label, "generate %s: --%s", kind->name, option_names[o]);
+        if (p->integer) {
+            long long n = 0;
+            if (!cli_parse_int(cmd, label, given[o], p->min, p->max, &n)) return CLI_EXIT_USAGE;
+            v[o] = (double)n;
+        } else {
+            if (!cli_parse_double(cmd, label, given[o], &v[o])) return CLI_EXIT_USAGE;
+            /* lengths must stay inside the range the mesh check accepts */
+            if (fabs(v[o]) > CF_MAX_COORDINATE)
+                return cli_usage_error(cmd, "%s: %g is beyond the range of lengths (|x| <= %.0e)", label, v[o],
+                                       CF_MAX_COORDINATE);
+        }
+    }
     if (!output) return cli_usage_error(cmd, "missing -o OUT");
-    const char *kind = argv[optind];
+    cli_files files = {.force = force};
+    cli_files_output(&files, "-o", output, CLI_FILE_MESH);
 
     cf_context *ctx = cli_context(false);
     if (!ctx) return CLI_EXIT_NUMERICAL;
+    int code = cli_files_check(ctx, &files);
+    if (code != CLI_EXIT_OK) {
+        cf_context_destroy(&ctx);
+        return code;
+    }
     cf_mesh *mesh = NULL;
     cf_status st;
-    if (strcmp(kind, "icosphere") == 0) {
-        st = cf_generate_icosphere(ctx, (int32_t)(subdiv < 0 ? 3 : subdiv), radius, &mesh);
-    } else if (strcmp(kind, "bumpy-sphere") == 0) {
-        st = cf_generate_bumpy_sphere(ctx, (int32_t)(subdiv < 0 ? 4 : subdiv), or_default(amplitude, 0.25),
-                                      (uint32_t)seed, &mesh);
-    } else if (strcmp(kind, "torus") == 0) {
-        st = cf_generate_torus(ctx, major, minor, (int32_t)n_major, (int32_t)n_minor, &mesh);
-    } else if (strcmp(kind, "grid") == 0) {
-        st = cf_generate_grid(ctx, (int32_t)(nx < 0 ? 16 : nx), (int32_t)(ny < 0 ? 16 : ny), or_default(width, 1.0),
-                              or_default(height, 1.0), &mesh);
-    } else if (strcmp(kind, "cylinder") == 0) {
-        st = cf_generate_cylinder(ctx, (int32_t)n_around, (int32_t)n_along, radius, or_default(height, 2.0), &mesh);
-    } else if (strcmp(kind, "bar") == 0) {
-        st = cf_generate_bar(ctx, (int32_t)(nx < 0 ? 20 : nx), (int32_t)(ny < 0 ? 2 : ny), (int32_t)nz,
-                             or_default(width, 10.0), or_default(height, 1.0), depth, (int32_t)pattern, &mesh);
-    } else if (strcmp(kind, "sheet") == 0) {
-        st = cf_generate_sheet(ctx, (int32_t)(n < 0 ? 16 : n), size, (int32_t)pattern, &mesh);
-    } else if (strcmp(kind, "bumpy-plane") == 0) {
-        st = cf_generate_bumpy_plane(ctx, (int32_t)(n < 0 ? 32 : n), size, or_default(amplitude, 0.1),
-                                     (uint32_t)seed, &mesh);
-    } else if (strcmp(kind, "double-torus") == 0) {
-        st = cf_generate_double_torus(ctx, (int32_t)resolution, &mesh);
-    } else {
-        cf_context_destroy(&ctx);
-        return cli_usage_error(cmd, "unknown mesh kind '%s'", kind);
-    }
-    int code = CLI_EXIT_OK;
+    const char *k = kind->name;
+#define I(o) ((int32_t)v[o])
+    if (strcmp(k, "icosphere") == 0)
+        st = cf_generate_icosphere(ctx, I(O_SUBDIV), v[O_RADIUS], &mesh);
+    else if (strcmp(k, "bumpy-sphere") == 0)
+        st = cf_generate_bumpy_sphere(ctx, I(O_SUBDIV), v[O_AMPLITUDE], (uint32_t)v[O_SEED], &mesh);
+    else if (strcmp(k, "torus") == 0)
+        st = cf_generate_torus(ctx, v[O_MAJOR], v[O_MINOR], I(O_NMAJOR), I(O_NMINOR), &mesh);
+    else if (strcmp(k, "grid") == 0)
+        st = cf_generate_grid(ctx, I(O_NX), I(O_NY), v[O_WIDTH], v[O_HEIGHT], &mesh);
+    else if (strcmp(k, "cylinder") == 0)
+        st = cf_generate_cylinder(ctx, I(O_NAROUND), I(O_NALONG), v[O_RADIUS], v[O_HEIGHT], &mesh);
+    else if (strcmp(k, "bar") == 0)
+        st = cf_generate_bar(ctx, I(O_NX), I(O_NY), I(O_NZ), v[O_WIDTH], v[O_HEIGHT], v[O_DEPTH], I(O_PATTERN), &mesh);
+    else if (strcmp(k, "sheet") == 0)
+        st = cf_generate_sheet(ctx, I(O_N), v[O_SIZE], I(O_PATTERN), &mesh);
+    else if (strcmp(k, "bumpy-plane") == 0)
+        st = cf_generate_bumpy_plane(ctx, I(O_N), v[O_SIZE], v[O_AMPLITUDE], (uint32_t)v[O_SEED], &mesh);
+    else
+        st = cf_generate_double_torus(ctx, I(O_RESOLUTION), &mesh);
+#undef I
     if (st != CF_OK) {
-        code = cli_fail(ctx, kind, st);
+        code = cli_fail(ctx, kind->name, st);
     } else if ((st = cf_write_mesh_file(ctx, output, mesh, NULL, NULL, 0)) != CF_OK) {
         code = cli_fail(ctx, output, st);
         if (code == CLI_EXIT_USAGE) code = CLI_EXIT_INPUT;

@@ -5,16 +5,20 @@
  * temporary files are left behind (atomic writes).
  */
 #define _POSIX_C_SOURCE 200809L
+#include "curvflow/generate.h"
 #include "curvflow/io.h"
 #include "curvflow/mesh.h"
 #include "test.h"
 
 #include <dirent.h>
+#include <fcntl.h>
 #include <jansson.h>
+#include <signal.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
+#include <time.h>
 #include <unistd.h>
 
 static char dir[1024];
@@ -81,8 +85,10 @@ static void test_help_and_usage(void)
     CHECK_RUN("", 1);
     CHECK_RUN("frobnicate", 1);
     CHECK(strstr(err_text, "unknown command 'frobnicate'") != NULL);
-    const char *cmds[] = {"info", "generate", "flow", "compare", "demo", "render"};
-    for (int i = 0; i < 6; ++i) {
+    /* every command refuses an unknown option the same way (spin and curve
+     * too, which once had parsers of their own) */
+    const char *cmds[] = {"info", "generate", "flow", "compare", "demo", "render", "spin", "curve", "edit"};
+    for (int i = 0; i < 9; ++i) {
         char args[64];
         snprintf(args, sizeof args, "%s --help", cmds[i]);
         CHECK_RUN(args, 0);
@@ -471,7 +477,7 @@ static void test_no_temp_files(void)
     const char *expected[] = {".", "..", "stdout.txt", "stderr.txt", "ico.obj", "bumpy.obj", "torus.ply", "grid.off",
                               "kind0.ply", "kind1.ply", "kind2.ply", "kind3.ply", "kind4.ply", "broken.obj", "fin.obj",
                               "smooth.obj", "run.jsonl", "p.ply", "blown.obj", "same.ply", "demo", "b.png", "q.png", "neg.obj", "pos.obj",
-                              "wobbly.csv", "round.csv", "blown.csv"};
+                              "wobbly.csv", "round.csv", "blown.csv", "g"};
     struct dirent *e;
     while ((e = readdir(d)) != NULL) {
         int known = 0;
@@ -520,6 +526,314 @@ static void test_curve(void)
     CHECK(strstr(err_text, "does not exist") != NULL);
 }
 
+/* ---- issue 15: hostile use of the command line --------------------------- */
+
+#define CHECK_ERR(part)                                                                                   \
+    do {                                                                                                  \
+        ++cft_checks;                                                                                     \
+        if (!strstr(err_text, (part)))                                                                    \
+            cft_fail(__FILE__, __LINE__, "stderr lacks \"%s\":\n%s", (part), err_text);                   \
+    } while (0)
+
+static void write_text(const char *name, const char *text)
+{
+    FILE *f = fopen(in_dir(name), "w");
+    CHECK(f != NULL);
+    if (!f) return;
+    fputs(text, f);
+    fclose(f);
+}
+
+static void read_named(const char *name, char *buf, size_t size) { read_file(in_dir(name), buf, size); }
+
+/* The misuse reproducers of issue 15, each with its exit code and message. */
+static void test_misuse_reproducers(void)
+{
+    static char before[1 << 16], after[1 << 16];
+    CHECK(mkdir(in_dir("g"), 0777) == 0);
+    CHECK_RUN("generate icosphere --subdivisions 1 -o g/in.obj", 0);
+
+    /* S4: an overflowing size is a usage error naming the option (sscanf
+     * wrapped it to 100x100); so are a size past the renderer's limit and junk */
+    const char *sizes[] = {"4294967396x4294967396", "16385x10", "0x10", "-5x10", "10x", "10x10x", " 10x10", "+10x10"};
+    for (int i = 0; i < 8; ++i) {
+        char args[256];
+        snprintf(args, sizeof args, "render g/in.obj -o g/s.png --size '%s'", sizes[i]);
+        CHECK_RUN(args, 1);
+        CHECK_ERR("--size: expected WxH with W and H integers in [1, 16384], got '");
+    }
+    CHECK(!exists("g/s.png"));
+    CHECK_RUN("render g/in.obj -o g/s.png --size 16x8", 0);
+    int w = 0, h = 0;
+    CHECK(png_size("g/s.png", &w, &h) && w == 16 && h == 8);
+
+    /* S4: an output extension that does not name the format the command
+     * writes is refused before the run, nothing is written */
+    write_text("g/c.csv", "0,0\n1,0\n1,1\n0,1\n0.5,0.6\n");
+    CHECK_RUN("curve g/c.csv -o g/x.obj", 2);
+    CHECK_ERR("curvflow: g/x.obj: unknown curve format '.obj' for -o (use .csv, .txt or .svg)");
+    CHECK(!exists("g/x.obj"));
+    CHECK_RUN("render g/in.obj -o g/r.jpg", 2);
+    CHECK_ERR("curvflow: g/r.jpg: unknown image format '.jpg' for -o (use .png)");
+    CHECK(!exists("g/r.jpg"));
+    CHECK_RUN("generate icosphere -o g/x.png", 2);
+    CHECK_ERR("unknown mesh format '.png' for -o (use .obj, .off or .ply)");
+    CHECK_RUN("generate icosphere -o g/noext", 2);
+    CHECK_ERR("g/noext: no extension to tell the mesh format for -o (use .obj, .off or .ply)");
+    CHECK_RUN("spin g/in.obj --rho x -o g/x.csv", 2);
+    CHECK_ERR("unknown mesh format '.csv' for -o");
+    CHECK_RUN("compare g/in.obj g/in.obj --ply g/q.off", 2);
+    CHECK_ERR("g/q.off: unknown mesh format '.off' for --ply (use .ply, or .obj with the fields in <stem>.face.csv");
+    CHECK_RUN("flow g/in.obj -o g/o.obj -m implicit-mcf -n 1 --log g/l.txt", 2);
+    CHECK_ERR("curvflow: g/l.txt: unknown log format '.txt' for --log (use .jsonl)");
+    CHECK(!exists("g/o.obj"));
+    CHECK_RUN("edit g/in.obj --handles h.json -o g/o.obj --log g/o.log", 2);
+    CHECK_ERR("unknown log format '.log' for --log");
+    /* extensions are case-insensitive, as the writers read them */
+    CHECK_RUN("curve g/c.csv -o g/C.SVG --steps 1 -q", 0);
+    CHECK(exists("g/C.SVG"));
+
+    /* --log IN.obj never overwrites the input; neither does -o through a
+     * symbolic or hard link to it */
+    read_named("g/in.obj", before, sizeof before);
+    CHECK_RUN("flow g/in.obj -o g/o.obj -m implicit-mcf -n 1 --log g/in.obj", 2);
+    CHECK_ERR("g/in.obj: unknown log format '.obj' for --log");
+    CHECK_RUN("flow g/in.obj -o g/in.obj -m implicit-mcf -n 1", 2);
+    CHECK_ERR("curvflow: g/in.obj: -o names the same file as the input g/in.obj (IN); refusing to overwrite an input");
+    CHECK(symlink("in.obj", in_dir("g/sym.obj")) == 0);
+    CHECK_RUN("flow g/in.obj -o g/sym.obj -m implicit-mcf -n 1", 2);
+    CHECK_ERR("g/sym.obj: -o names the same file as the input g/in.obj (IN)");
+    char in_path[2048];
+    snprintf(in_path, sizeof in_path, "%s", in_dir("g/in.obj")); /* in_dir's buffer is static */
+    CHECK(link(in_path, in_dir("g/hard.obj")) == 0);
+    CHECK_RUN("spin g/in.obj --rho g/r.txt -o g/hard.obj", 2);
+    CHECK_ERR("g/hard.obj: -o names the same file as the input g/in.obj (IN)");
+    CHECK_RUN("compare g/in.obj g/hard.obj --ply g/./in.obj", 2);
+    CHECK_ERR("--ply names the same file as the input g/in.obj (A)");
+    write_text("g/t.jsonl", "0 0 0 1\n");
+    CHECK_RUN("flow g/in.obj -o g/o.obj -m spin-willmore --boundary-targets g/t.jsonl --log g/t.jsonl", 2);
+    CHECK_ERR("--log names the same file as the input g/t.jsonl (--boundary-targets)");
+    CHECK_RUN("edit g/in.obj --handles h.json --start g/o2.obj -o g/o2.obj", 2);
+    read_named("g/in.obj", after, sizeof after);
+    CHECK(strcmp(before, after) == 0);
+    CHECK(!exists("g/o.obj"));
+
+    /* M2: stretch-bend-edit through `flow` says what it needs */
+    CHECK_RUN("flow g/in.obj -o g/o.obj --method stretch-bend-edit", 1);
+    CHECK_ERR("curvflow: --method stretch-bend-edit needs handles: use --handles FILE or `curvflow edit`");
+    CHECK(strstr(err_text, "options.handles") == NULL);
+    CHECK_RUN("flow g/in.obj -o g/o.obj --method implicit-mcf --handles h.json", 1);
+    CHECK_ERR("--handles is an option of --method stretch-bend-edit");
+    CHECK_RUN("generate bar --nx 6 --ny 2 --nz 2 --width 3 -o g/bar.obj", 0);
+    write_text("g/h.json", "{\"sets\": [{\"name\": \"left\", \"relative_box\": {\"min\": [0, 0, 0], \"max\": [0, 1, 1]},"
+                           " \"fixed\": true}, {\"name\": \"right\", \"relative_box\": {\"min\": [1, 0, 0], \"max\": [1, 1, 1]},"
+                           " \"transform\": {\"translate\": [0, 0, 0.5]}}]}\n");
+    CHECK_RUN("flow g/bar.obj -o g/bent.obj --method stretch-bend-edit --handles g/h.json -n 5 -q", 0);
+    CHECK(exists("g/bent.obj"));
+
+    /* M3: generate names the real limits of its counts */
+    CHECK_RUN("generate cylinder --n-around 1048576 -o g/cyl.obj", 1);
+    CHECK_ERR("curvflow: generate cylinder: --n-around: '1048576' is not an integer in [3, 100000]");
+    CHECK_RUN("generate cylinder --n-around 100001 -o g/cyl.obj", 1);
+    CHECK_ERR("--n-around: '100001' is not an integer in [3, 100000]");
+    CHECK_RUN("generate grid --nx 46001 -o g/cyl.obj", 1);
+    CHECK_ERR("--nx: '46001' is not an integer in [1, 46000]");
+    CHECK_RUN("generate bar --nx 2001 -o g/cyl.obj", 1);
+    CHECK_ERR("--nx: '2001' is not an integer in [1, 2000]");
+    CHECK(!exists("g/cyl.obj"));
+    {
+        /* the generator's own limits are those: one above is refused by it too */
+        cf_context *ctx = cft_context();
+        cf_context_set_log(ctx, NULL, NULL, CF_LOG_ERROR);
+        cf_mesh *m = NULL;
+        CHECK_STATUS(cf_generate_cylinder(ctx, 100001, 1, 1.0, 1.0, &m), CF_ERR_INVALID_ARG);
+        CHECK_STATUS(cf_generate_cylinder(ctx, 3, 100001, 1.0, 1.0, &m), CF_ERR_INVALID_ARG);
+        CHECK_STATUS(cf_generate_grid(ctx, 46001, 1, 1.0, 1.0, &m), CF_ERR_INVALID_ARG);
+        CHECK_STATUS(cf_generate_bar(ctx, 2001, 1, 1, 1.0, 1.0, 1.0, 0, &m), CF_ERR_INVALID_ARG);
+        CHECK_STATUS(cf_generate_torus(ctx, 1.0, 0.4, 100001, 3, &m), CF_ERR_INVALID_ARG);
+        CHECK_STATUS(cf_generate_double_torus(ctx, 201, &m), CF_ERR_INVALID_ARG);
+        CHECK_OK(ctx, cf_generate_cylinder(ctx, 100000, 1, 1.0, 1.0, &m)); /* and the limit itself is accepted */
+        cf_mesh_destroy(&m);
+        cf_context_destroy(&ctx);
+    }
+
+    /* M4: range messages print limits that read back as themselves */
+    CHECK_RUN("flow g/in.obj -o g/o.obj -m spin-willmore -p boundary_tangent_angle=1.5708", 1);
+    CHECK_ERR("parameter 'boundary_tangent_angle': 1.5708 is outside [-1.5707963267948966, 1.5707963267948966] "
+              "(above the largest accepted value)");
+    CHECK_RUN("flow g/in.obj -o g/o.obj -m spin-willmore -n 0 -q -p boundary_tangent_angle=1.5707963267948966", 0);
+    CHECK_RUN("flow --method spin-willmore --list-params", 0);
+    CHECK(strstr(out_text, "boundary_tangent_angle [0] in [-1.5707963267948966, 1.5707963267948966]") != NULL);
+    CHECK_RUN("edit g/bar.obj --handles g/h.json -o g/o.obj --lambda 1.0000001", 1);
+    CHECK_ERR("--lambda: '1.0000001' is outside [0, 1]");
+
+    /* M5: a subnormal time step is a number below the smallest accepted one */
+    CHECK_RUN("flow g/in.obj -o g/o.obj -m spin-willmore --time-step 1e-320", 1);
+    CHECK_ERR("parameter 'time_step': 1e-320 is outside [1e-09, 10] (below the smallest accepted value)");
+    CHECK_RUN("flow g/in.obj -o g/o.obj -m implicit-mcf -p time_step=1e400", 1);
+    CHECK_ERR("parameter 'time_step': '1e400' is not a finite number");
+    CHECK_RUN("flow g/in.obj -o g/o.obj -m implicit-mcf -p time_step=fast", 1);
+    CHECK_ERR("parameter 'time_step': 'fast' is not a number");
+    CHECK_RUN("curve g/c.csv -o g/c2.csv --time-step 1e-320 --steps 1 -q", 0); /* the tool's own parser agrees */
+    CHECK_RUN("render g/in.obj -o g/s.png --view 1e999,0,1", 1);
+    CHECK_ERR("--view: expected X,Y,Z (3 finite numbers), got '1e999,0,1'");
+    CHECK_RUN("render g/in.obj -o g/s.png --view nan,0,1", 1);
+
+    /* unknown or ineffective options are usage errors, never ignored */
+    CHECK_RUN("generate cylinder --nx 5 -o g/cyl.obj", 1);
+    CHECK_ERR("curvflow: generate cylinder: --nx is not an option of cylinder (its options: --n-around, --n-along, "
+              "--radius, --height)");
+    CHECK_RUN("generate icosphere --seed 3 -o g/cyl.obj", 1);
+    CHECK_ERR("--seed is not an option of icosphere");
+    CHECK(!exists("g/cyl.obj"));
+    CHECK_RUN("render g/in.obj -o g/s.png --range 0,1", 1);
+    CHECK_ERR("--range is the colour range of --field; give --field too");
+    CHECK_RUN("render g/in.obj -o g/s.png --checker-count 4", 1);
+    CHECK_ERR("--checker-count sets the squares of --uv-checker; give --uv-checker too");
+    CHECK_RUN("edit g/bar.obj --handles g/h.json -o g/o.obj --energy arap --lambda 0.3", 1);
+    CHECK_ERR("--lambda weighs --energy hybrid; it has no effect with --energy arap");
+    CHECK_RUN("spin g/in.obj --rho x --bogus -o g/o.obj", 1);
+    CHECK_ERR("curvflow: unrecognized option '--bogus'");
+    CHECK_RUN("curve g/c.csv -o g/c2.csv --steps", 1);
+    CHECK_ERR("curvflow: option '--steps' requires an argument");
+
+    /* the log is written atomically: complete logs only; after a numerical
+     * failure it holds the steps up to the last good one */
+    CHECK_RUN("flow g/in.obj -o g/blown.obj -m explicit-mcf --time-step 10 --steps 20 --log g/blown.jsonl -q", 3);
+    CHECK(exists("g/blown.jsonl"));
+    static char log[1 << 16];
+    read_named("g/blown.jsonl", log, sizeof log);
+    CHECK(count_lines(log) >= 1 && strncmp(log, "{\"iteration\":0,", 14) == 0);
+}
+
+/* Read-only and non-regular targets, and symbolic links as targets. */
+static void test_existing_targets(void)
+{
+    static char before[1 << 16], after[1 << 16];
+    CHECK_RUN("generate icosphere --subdivisions 1 -o g/ro.obj", 0);
+    CHECK(chmod(in_dir("g/ro.obj"), 0444) == 0);
+    read_named("g/ro.obj", before, sizeof before);
+    CHECK_RUN("flow g/in.obj -o g/ro.obj -m implicit-mcf -n 1 -q", 2);
+    CHECK_ERR("curvflow: g/ro.obj: the existing file is read-only; --force replaces it");
+    CHECK_RUN("generate icosphere --subdivisions 2 -o g/ro.obj", 2);
+    CHECK_ERR("g/ro.obj: the existing file is read-only");
+    read_named("g/ro.obj", after, sizeof after);
+    CHECK(strcmp(before, after) == 0);
+    CHECK_RUN("generate icosphere --subdivisions 2 -o g/ro.obj --force", 0);
+    read_named("g/ro.obj", after, sizeof after);
+    CHECK(strcmp(before, after) != 0);
+    struct stat sb;
+    CHECK(stat(in_dir("g/ro.obj"), &sb) == 0 && (sb.st_mode & 0777) == 0444); /* it stays read-only */
+
+    /* a FIFO (or a device) is never replaced by a regular file */
+    CHECK(mkfifo(in_dir("g/fifo.obj"), 0666) == 0);
+    CHECK_RUN("generate icosphere -o g/fifo.obj --force", 2);
+    CHECK_ERR("g/fifo.obj: exists and is not a regular file; refusing to replace it");
+    CHECK(lstat(in_dir("g/fifo.obj"), &sb) == 0 && S_ISFIFO(sb.st_mode));
+    CHECK_RUN("render g/in.obj -o g", 2);
+    CHECK_ERR("curvflow: g: is a directory");
+
+    /* a symbolic link is written through: the link stays, its target changes */
+    CHECK(mkdir(in_dir("g/real"), 0777) == 0);
+    CHECK_RUN("generate icosphere --subdivisions 1 -o g/real/t.obj", 0);
+    CHECK(symlink("real/t.obj", in_dir("g/link.obj")) == 0);
+    CHECK_RUN("flow g/in.obj -o g/link.obj -m implicit-mcf -n 2 -q", 0);
+    CHECK(lstat(in_dir("g/link.obj"), &sb) == 0 && S_ISLNK(sb.st_mode));
+    cf_context *ctx = cft_context();
+    cf_mesh *m = NULL;
+    CHECK_OK(ctx, cf_load_mesh(ctx, in_dir("g/real/t.obj"), &m));
+    cf_mesh *in = NULL;
+    CHECK_OK(ctx, cf_load_mesh(ctx, in_dir("g/in.obj"), &in));
+    if (m && in) /* the flow's result, not the icosphere written before */
+        CHECK(memcmp(cf_mesh_positions(m), cf_mesh_positions(in), 3 * sizeof(double)) != 0);
+    cf_mesh_destroy(&m);
+    cf_mesh_destroy(&in);
+    cf_context_destroy(&ctx);
+    CHECK(symlink("real/new.png", in_dir("g/dangling.png")) == 0); /* creates what the link names */
+    CHECK_RUN("render g/in.obj -o g/dangling.png --size 8x8", 0);
+    CHECK(lstat(in_dir("g/dangling.png"), &sb) == 0 && S_ISLNK(sb.st_mode));
+    CHECK(exists("g/real/new.png"));
+}
+
+/* Temporary files of a run killed without a chance to clean up (SIGKILL)
+ * are removed by the next run that writes the same output, if their pid
+ * no longer runs. */
+static void test_stale_temp_files(void)
+{
+    pid_t dead = fork();
+    if (dead == 0) _exit(0);
+    CHECK(dead > 0 && waitpid(dead, NULL, 0) == dead);
+    char stale[256], live[256];
+    snprintf(stale, sizeof stale, "g/.st.obj.tmp-%ld-42", (long)dead);
+    snprintf(live, sizeof live, "g/.st.obj.tmp-%ld-43", (long)getpid()); /* this test runs: kept */
+    write_text(stale, "partial");
+    write_text(live, "partial");
+    CHECK_RUN("generate icosphere --subdivisions 1 -o g/st.obj", 0);
+    CHECK_ERR("curvflow: removed 1 temporary file of an ended run next to g/st.obj");
+    CHECK(!exists(stale) && exists(live));
+    unlink(in_dir(live));
+}
+
+/* Files whose names start with ".<name>.tmp" in folder `sub` of the test folder. */
+static int temp_files_in(const char *sub)
+{
+    DIR *d = opendir(in_dir(sub));
+    if (!d) return -1;
+    int n = 0;
+    struct dirent *e;
+    while ((e = readdir(d)) != NULL) n += e->d_name[0] == '.' && strstr(e->d_name, ".tmp-") != NULL;
+    closedir(d);
+    return n;
+}
+
+/* SIGINT, SIGTERM and SIGHUP sent to a long flow: it dies of the signal,
+ * its temporary log is removed, and the previous log stays as it was. */
+static void test_signals_remove_temp_files(void)
+{
+    CHECK_RUN("generate icosphere --subdivisions 3 -o g/sig_in.obj", 0);
+    const int sigs[] = {SIGINT, SIGTERM, SIGHUP};
+    for (int k = 0; k < 3; ++k) {
+        write_text("g/sig.jsonl", "old log\n");
+        fflush(NULL);
+        pid_t pid = fork();
+        CHECK(pid >= 0);
+        if (pid < 0) return;
+        if (pid == 0) {
+            /* the default dispositions a shell would give a foreground job */
+            sigset_t none;
+            sigemptyset(&none);
+            sigprocmask(SIG_SETMASK, &none, NULL);
+            for (int i = 0; i < 3; ++i) signal(sigs[i], SIG_DFL);
+            int null = open("/dev/null", O_WRONLY);
+            if (chdir(dir) != 0 || null < 0) _exit(127);
+            dup2(null, 1);
+            dup2(null, 2);
+            execl(CF_TEST_CLI, CF_TEST_CLI, "flow", "g/sig_in.obj", "-o", "g/sig.obj", "-m", "explicit-mcf", "-t",
+                  "0.01", "-p", "rescale=true", "-n", "1000000000", "--log", "g/sig.jsonl", "-q", (char *)NULL);
+            _exit(127);
+        }
+        /* wait (up to a minute, polling) until the run writes its temporary log */
+        int seen = 0;
+        for (int t = 0; t < 6000 && !seen; ++t) {
+            seen = temp_files_in("g") > 0;
+            if (!seen) nanosleep(&(struct timespec){0, 10000000}, NULL);
+        }
+        CHECK(seen);
+        kill(pid, sigs[k]);
+        int status = 0;
+        CHECK(waitpid(pid, &status, 0) == pid);
+        ++cft_checks;
+        if (!(WIFSIGNALED(status) && WTERMSIG(status) == sigs[k]))
+            cft_fail(__FILE__, __LINE__, "signal %d: status %#x (exited %d with %d)", sigs[k], status,
+                     WIFEXITED(status), WIFEXITED(status) ? WEXITSTATUS(status) : -1);
+        CHECK(temp_files_in("g") == 0);
+        static char log[64];
+        read_named("g/sig.jsonl", log, sizeof log);
+        CHECK(strcmp(log, "old log\n") == 0);
+        CHECK(!exists("g/sig.obj"));
+    }
+}
+
 int main(void)
 {
     snprintf(dir, sizeof dir, "%s/cli_%ld", CF_TEST_BINARY_DIR, (long)getpid());
@@ -535,6 +849,10 @@ int main(void)
     CFT_RUN(test_demo);
     CFT_RUN(test_render);
     CFT_RUN(test_curve);
+    CFT_RUN(test_misuse_reproducers);
+    CFT_RUN(test_existing_targets);
+    CFT_RUN(test_stale_temp_files);
+    CFT_RUN(test_signals_remove_temp_files);
     CFT_RUN(test_no_temp_files);
     int rc = cft_finish();
     if (rc == 0) remove_dir(dir);

@@ -408,6 +408,29 @@ cf_status cf_flow_create(cf_context *ctx, const cf_mesh *mesh, const double *pos
 /* After a failed step: put the last good state back, let the method
  * resynchronise, and keep the step's status and message (prefixed with the
  * iteration). */
+/* A successful step leaves a surface that passes the mesh check's geometric
+ * tests (the connectivity cannot change): no zero-area face (the check's
+ * scale-free test) and no face shrunk below the range of lengths. Otherwise
+ * the state written as the result would not load again. */
+static cf_status check_faces(cf_flow *flow)
+{
+    const cf_mesh *mesh = flow->mesh;
+    const double *x = flow->positions;
+    for (int32_t f = 0; f < mesh->nf; ++f) {
+        const int32_t *t = mesh->triangles + 3 * (int64_t)f;
+        double longest2 = 0.0;
+        double area = cfi_triangle_area(x + 3 * (int64_t)t[0], x + 3 * (int64_t)t[1], x + 3 * (int64_t)t[2], &longest2);
+        if (longest2 < CF_MIN_EDGE_LENGTH * CF_MIN_EDGE_LENGTH)
+            return cfi_error(flow->ctx, CF_ERR_NUMERICAL,
+                             "face %d: shrank below the range of lengths (%.0e); the result would not load again", f,
+                             CF_MIN_EDGE_LENGTH);
+        if (!(area > CFI_ZERO_AREA_RATIO * longest2))
+            return cfi_error(flow->ctx, CF_ERR_NUMERICAL,
+                             "face %d: degenerated to zero area (the result would fail the mesh check)", f);
+    }
+    return CF_OK;
+}
+
 static cf_status fail_step(cf_flow *flow, cf_status status, int64_t iteration)
 {
     cf_context *ctx = flow->ctx;
@@ -438,10 +461,14 @@ cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info)
     cf_status st = flow->method->step(flow, &step);
     if (st != CF_OK) {
         if (ctx->last_status == CF_OK) cfi_error(ctx, st, "%s step failed (%s)", flow->method->name, cf_status_name(st));
+        /* the input passed the mesh check at creation: a face that degenerates
+         * during a step is a numerical failure of the flow, not bad input */
+        if (st == CF_ERR_DEGENERATE_FACE || st == CF_ERR_BAD_MESH) st = CF_ERR_NUMERICAL;
         return fail_step(flow, st, iteration);
     }
     if (check_positions(ctx, flow->positions, nv, CF_ERR_NUMERICAL, "position") != CF_OK)
         return fail_step(flow, CF_ERR_NUMERICAL, iteration);
+    if (check_faces(flow) != CF_OK) return fail_step(flow, CF_ERR_NUMERICAL, iteration);
     if (!isfinite(step.energy)) {
         cfi_error(ctx, CF_ERR_NUMERICAL, "energy is %s", isnan(step.energy) ? "NaN" : "infinite");
         return fail_step(flow, CF_ERR_NUMERICAL, iteration);

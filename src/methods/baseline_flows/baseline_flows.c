@@ -63,8 +63,11 @@ typedef struct baseline_state {
 static const char *const mass_choices[] = {"barycentric", "voronoi", NULL};
 
 static const cf_param_desc baseline_params[] = {
-    {"time_step", CF_PARAM_DOUBLE, offsetof(cf_baseline_options, time_step), 1e-15, 1e6, NULL,
-     "scale-free time step (explicit: units of h^2 or h^4, implicit: of area or area^2)"},
+    {"time_step", CF_PARAM_DOUBLE, offsetof(cf_baseline_options, time_step), 0.0, 1e6, NULL,
+     "scale-free time step (explicit: units of h^2 or h^4, 0 = auto: 0.9 of forward Euler's stability limit "
+     "on the current mesh; implicit: units of area or area^2). implicit-mcf and implicit-bilaplacian move "
+     "vertices along the normal only and degenerate triangles within a few steps on most real meshes "
+     "(docs/flowcli.md); conformal-mcf or spin-willmore keep them"},
     {"mass", CF_PARAM_CHOICE, offsetof(cf_baseline_options, mass), 0, 1, mass_choices,
      "lumped mass matrix: barycentric or voronoi (mixed Voronoi, Meyer 2003)"},
     {"rescale", CF_PARAM_BOOL, offsetof(cf_baseline_options, rescale), 0, 1, NULL,
@@ -82,10 +85,10 @@ cf_status cf_baseline_options_default(cf_flow_kind kind, cf_baseline_options *o)
     o->rescale = 0;
     o->tolerance = 0.0;
     switch (kind) {
-    case CF_FLOW_EXPLICIT_MCF: o->time_step = 0.1; break;           /* ~1/3 of the stability limit */
+    case CF_FLOW_EXPLICIT_MCF: o->time_step = 0.0; break;           /* auto: 0.9 of the stability limit */
     case CF_FLOW_IMPLICIT_MCF: o->time_step = 1e-3; break;          /* a sphere loses ~5 % of R^2 per step */
     case CF_FLOW_CONFORMAL_MCF: o->time_step = 1e-3; break;
-    case CF_FLOW_EXPLICIT_BILAPLACIAN: o->time_step = 0.01; break;  /* ~1/5 of the stability limit */
+    case CF_FLOW_EXPLICIT_BILAPLACIAN: o->time_step = 0.0; break;   /* auto */
     case CF_FLOW_IMPLICIT_BILAPLACIAN: o->time_step = 1e-5; break;
     default: return CF_ERR_INVALID_ARG;
     }
@@ -261,8 +264,10 @@ static cf_status baseline_create(cf_flow *flow, const void *options)
     const cf_mesh *mesh = flow->mesh;
     const cf_baseline_options *opt = options;
     cf_flow_kind kind = kind_of(flow);
-    if (!(opt->time_step > 0.0) || !isfinite(opt->time_step))
-        return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter 'time_step': must be positive, got %g", opt->time_step);
+    int explicit_kind = kind == CF_FLOW_EXPLICIT_MCF || kind == CF_FLOW_EXPLICIT_BILAPLACIAN;
+    if (!(opt->time_step > 0.0 || (explicit_kind && opt->time_step == 0.0)) || !isfinite(opt->time_step))
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter 'time_step': must be positive%s, got %g",
+                         explicit_kind ? " (or 0: auto)" : "", opt->time_step);
     if (opt->mass != CF_MASS_LUMPED_BARYCENTRIC && opt->mass != CF_MASS_LUMPED_VORONOI)
         return cfi_error(ctx, CF_ERR_UNSUPPORTED, "parameter 'mass': only lumped (barycentric, voronoi) is supported");
     if (!(opt->tolerance >= 0.0))
@@ -442,6 +447,30 @@ static cf_status explain_not_posdef(cf_flow *flow)
                      flow->method->name, degrees, worst_face);
 }
 
+/* Forward Euler on x' = -M^-1 L x is stable for tau <= 2 / mu_max, mu_max
+ * the largest eigenvalue of M^-1 L (similar to M^-1/2 L M^-1/2, so real);
+ * on x' = -(M^-1 L)^2 x for tau <= 2 / mu_max^2. Gershgorin's bound
+ * mu_max <= max_i sum_j |L_ij| / M_i is cheap (one pass over L) and never
+ * below mu_max: the auto step (time_step = 0) takes 0.9 of the step it gives
+ * for MCF and 0.5 for the bi-Laplacian (whose energy is not exactly the one
+ * the linear step descends once L and M move: bunny_scan_35k rose by 5e-5 at
+ * step 5 with 0.9), recomputed every step since L and M change.
+ * On a near-equilateral mesh it is about 1/4 of h^2 (MCF); slivers and
+ * small triangles lower it, which is what makes explicit flows slow. */
+static double explicit_auto_tau(const baseline_state *s, cf_flow_kind kind)
+{
+    const cf_sparse *l = s->l;
+    double bound = 0.0;
+    for (int32_t j = 0; j < l->ncols; ++j) {
+        double sum = 0.0;
+        for (int32_t p = l->colptr[j]; p < l->colptr[j + 1]; ++p) sum += fabs(l->values[p]);
+        double r = sum / s->mass[j]; /* L is symmetric: column sums are row sums */
+        if (r > bound) bound = r;
+    }
+    if (!(bound > 0.0)) return 0.0;
+    return kind == CF_FLOW_EXPLICIT_MCF ? 0.9 * 2.0 / bound : 0.5 * 2.0 / (bound * bound);
+}
+
 static cf_status explicit_step(cf_flow *flow, cf_flow_info *info)
 {
     baseline_state *s = flow->impl;
@@ -449,6 +478,12 @@ static cf_status explicit_step(cf_flow *flow, cf_flow_info *info)
     double t0 = cfi_now_seconds();
     cf_status st = assemble(flow, s);
     if (st != CF_OK) return st;
+    if (s->opt.time_step == 0.0) {
+        s->tau = explicit_auto_tau(s, kind_of(flow));
+        if (!(s->tau > 0.0) || !isfinite(s->tau))
+            return cfi_error(flow->ctx, CF_ERR_NUMERICAL, "%s: no stable time step on this mesh (Laplacian bound %g)",
+                             flow->method->name, s->tau);
+    }
     if (kind_of(flow) == CF_FLOW_EXPLICIT_MCF) {
         info->assemble_seconds = cfi_now_seconds() - t0;
         double t1 = cfi_now_seconds();

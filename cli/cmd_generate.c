@@ -18,12 +18,13 @@
 
 typedef enum gen_option {
     O_SUBDIV, O_RADIUS, O_SEED, O_AMPLITUDE, O_MAJOR, O_MINOR, O_NMAJOR, O_NMINOR, O_NX, O_NY, O_NZ, O_WIDTH,
-    O_HEIGHT, O_DEPTH, O_NAROUND, O_NALONG, O_SIZE, O_N, O_PATTERN, O_RESOLUTION, O_COUNT
+    O_HEIGHT, O_DEPTH, O_NAROUND, O_NALONG, O_SIZE, O_N, O_PATTERN, O_RESOLUTION, O_LIMBS, O_LENGTH, O_COUNT
 } gen_option;
 
 static const char *const option_names[O_COUNT] = {
     "subdivisions", "radius", "seed", "amplitude", "major-radius", "minor-radius", "n-major", "n-minor",
-    "nx", "ny", "nz", "width", "height", "depth", "n-around", "n-along", "size", "n", "pattern", "resolution"};
+    "nx", "ny", "nz", "width", "height", "depth", "n-around", "n-along", "size", "n", "pattern", "resolution",
+    "limbs", "length"};
 
 /* One option of a kind: its default and, for an integer, the range the
  * generator accepts (generate.h / src/mesh/generate.c; tests/cli checks
@@ -49,6 +50,8 @@ typedef struct gen_kind {
 static const gen_kind kinds[] = {
     {"icosphere", NULL, {INT(O_SUBDIV, 3, 0, 9), LEN(O_RADIUS, 1)}, 2},
     {"bumpy-sphere", "per-corner uv", {INT(O_SUBDIV, 4, 0, 9), LEN(O_AMPLITUDE, 0.25), INT(O_SEED, 1, 0, 4294967295LL)}, 3},
+    {"limb-sphere", "per-corner uv; the demo's eight-armed star, W/4pi 5.78",
+     {INT(O_SUBDIV, 5, 0, 9), INT(O_LIMBS, 8, 1, CF_LIMB_SPHERE_MAX_LIMBS), LEN(O_LENGTH, 1.4), LEN(O_WIDTH, 0.22)}, 4},
     {"torus", NULL,
      {LEN(O_MAJOR, 1), LEN(O_MINOR, 0.4), INT(O_NMAJOR, 48, 3, 100000), INT(O_NMINOR, 24, 3, 100000)}, 4},
     {"grid", NULL, {INT(O_NX, 16, 1, 46000), INT(O_NY, 16, 1, 46000), LEN(O_WIDTH, 1), LEN(O_HEIGHT, 1)}, 4},
@@ -190,6 +193,8 @@ int cli_generate(int argc, char **argv)
         st = cf_generate_icosphere(ctx, I(O_SUBDIV), v[O_RADIUS], &mesh);
     else if (strcmp(k, "bumpy-sphere") == 0)
         st = cf_generate_bumpy_sphere(ctx, I(O_SUBDIV), v[O_AMPLITUDE], (uint32_t)v[O_SEED], &mesh);
+    else if (strcmp(k, "limb-sphere") == 0)
+        st = cf_generate_limb_sphere(ctx, I(O_SUBDIV), I(O_LIMBS), v[O_LENGTH], v[O_WIDTH], &mesh);
     else if (strcmp(k, "torus") == 0)
         st = cf_generate_torus(ctx, v[O_MAJOR], v[O_MINOR], I(O_NMAJOR), I(O_NMINOR), &mesh);
     else if (strcmp(k, "grid") == 0)

@@ -494,8 +494,8 @@ cf_status cf_generate_cylinder(cf_context *ctx, int32_t n_around, int32_t n_alon
     cf_status st = check_out(ctx, out);
     if (st != CF_OK) return st;
     if (n_around < 3 || n_along < 1 || n_around > 100000 || n_along > 100000)
-        return cfi_error(ctx, CF_ERR_INVALID_ARG, "cylinder resolution %d around x %d along: need >= 3 x >= 1",
-                         n_around, n_along);
+        return cfi_error(ctx, CF_ERR_INVALID_ARG,
+                         "cylinder resolution %d around x %d along: need [3, 100000] x [1, 100000]", n_around, n_along);
     if (!positive_finite(radius) || !positive_finite(height))
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "cylinder radius %g and height %g must be positive", radius,
                          height);

@@ -647,6 +647,7 @@ static void test_misuse_reproducers(void)
         cf_context_set_log(ctx, NULL, NULL, CF_LOG_ERROR);
         cf_mesh *m = NULL;
         CHECK_STATUS(cf_generate_cylinder(ctx, 100001, 1, 1.0, 1.0, &m), CF_ERR_INVALID_ARG);
+        CHECK(strstr(cf_context_message(ctx), "need [3, 100000] x [1, 100000]") != NULL); /* was "need >= 3 x >= 1" */
         CHECK_STATUS(cf_generate_cylinder(ctx, 3, 100001, 1.0, 1.0, &m), CF_ERR_INVALID_ARG);
         CHECK_STATUS(cf_generate_grid(ctx, 46001, 1, 1.0, 1.0, &m), CF_ERR_INVALID_ARG);
         CHECK_STATUS(cf_generate_bar(ctx, 2001, 1, 1, 1.0, 1.0, 1.0, 0, &m), CF_ERR_INVALID_ARG);

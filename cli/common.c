@@ -321,6 +321,7 @@ static const struct {
     [CLI_FILE_LOG] = {"log", {".jsonl", NULL, NULL, NULL}, ".jsonl"},
     [CLI_FILE_TABLE] = {"table", {".csv", NULL, NULL, NULL}, ".csv"},
     [CLI_FILE_HTML] = {"report", {".html", ".htm", NULL, NULL}, ".html"},
+    [CLI_FILE_JSON] = {"JSON", {".json", NULL, NULL, NULL}, ".json"},
 };
 
 /* The extension of the last path component ("" when it has none). */

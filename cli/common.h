@@ -82,7 +82,8 @@ typedef enum cli_file_kind {
     CLI_FILE_CURVE,      /* .csv .txt .svg */
     CLI_FILE_LOG,        /* .jsonl (JSON lines) */
     CLI_FILE_TABLE,      /* .csv (the side file of an OBJ with fields) */
-    CLI_FILE_HTML        /* .html .htm (the report) */
+    CLI_FILE_HTML,       /* .html .htm (the report) */
+    CLI_FILE_JSON        /* .json (a run's description) */
 } cli_file_kind;
 
 enum { CLI_MAX_FILES = 12 };

@@ -40,6 +40,7 @@
 #ifndef CURVFLOW_STRETCH_BEND_EDIT_H
 #define CURVFLOW_STRETCH_BEND_EDIT_H
 
+#include "curvflow/constraints.h"
 #include "curvflow/curvflow.h"
 #include "curvflow/flow.h"
 #include "curvflow/mesh.h"
@@ -70,50 +71,11 @@ typedef enum cf_edit_mass {
 
 /* ---- Handles ------------------------------------------------------------ */
 
-/* Constrained vertices with their target positions. A fixed vertex has its
- * current position as target. Created by the library, read-only for the
- * caller. Vertices are unique and sorted ascending. */
-typedef struct cf_handle_set {
-    int32_t count;        /* constrained vertices */
-    int32_t *vertices;    /* count, ascending */
-    double *targets;      /* 3 count */
-    int32_t moved_count;  /* how many targets differ from the positions the set was built on (informational) */
-    cf_context *ctx;
-} cf_handle_set;
-
-/* Copies `count` vertices and their targets (3 count) into a new set,
- * sorting them. Statuses: CF_ERR_INVALID_ARG (negative index, a vertex
- * given twice, NULL arrays with count > 0), CF_ERR_NONFINITE (a target),
- * CF_ERR_NOMEM. */
-CF_API cf_status cf_handle_set_create(cf_context *ctx, int32_t count, const int32_t *vertices, const double *targets,
-                                      cf_handle_set **out);
-CF_API void cf_handle_set_destroy(cf_handle_set **handles);
-
-/* Reads a JSON handle file (format in docs/edit.md):
- *   { "sets": [
- *       { "name": "feet", "box": { "min": [x,y,z], "max": [x,y,z] }, "fixed": true },
- *       { "name": "head", "relative_box": { "min": [0,0.9,0], "max": [1,1,1] },
- *         "transform": { "translate": [0,0.1,0],
- *                        "rotate": { "axis": [0,0,1], "angle_degrees": 30, "center": [0,0,0] },
- *                        "scale": 1.0 } },
- *       { "name": "tip", "vertices": [12, 40], "targets": [[0,0,1], [0,1,1]] } ] }
- * Each set selects vertices by "vertices" (index list), "box" (axis-aligned,
- * absolute coordinates, inclusive) or "relative_box" (fractions of the
- * bounding box of `positions`), and gives exactly one of "fixed": true,
- * "targets" (one position per listed vertex) or "transform" (applied as
- * x -> c + scale R(axis, angle) (x - c) + translate, c = rotation centre,
- * default the set's centroid). Selection and transforms use `positions`
- * (3 nv; NULL = the mesh's rest positions), so a handle file can be applied
- * to a deformed state. A vertex in two sets is an error.
- * Statuses: CF_ERR_IO (cannot read), CF_ERR_PARSE (malformed JSON with
- * line:column, unknown key, wrong type, unknown vertex index with its value
- * and the set's name, empty set, overlapping sets, every vertex constrained),
- * CF_ERR_NOMEM. The message starts with the path. */
-CF_API cf_status cf_handle_set_read_json(cf_context *ctx, const cf_mesh *mesh, const double *positions,
-                                         const char *path, cf_handle_set **out);
-/* As above from a string; `source_name` prefixes messages (may be NULL). */
-CF_API cf_status cf_handle_set_parse_json(cf_context *ctx, const cf_mesh *mesh, const double *positions,
-                                          const char *text, const char *source_name, cf_handle_set **out);
+/* The handles are a cf_handle_set (vertices with target positions) of the
+ * constraints module (curvflow/constraints.h, included here): made from
+ * arrays (cf_handle_set_create), from a point set and a rigid transform
+ * (cf_handle_set_from_points) or read from a JSON handle file
+ * (cf_handle_set_read_json). */
 
 /* ---- Options and flow ---------------------------------------------------- */
 

@@ -1,10 +1,12 @@
 /*
- * Handle sets for mesh editing (Zhao & Gortler, Sec. 4.1: positional vertex
- * constraints): creation from arrays and the JSON handle file reader
- * (jansson). Format and decisions in docs/edit.md.
+ * The JSON constraint file (the editing tool's "handle file"; format and
+ * decisions in docs/edit.md): sets of vertices selected by index list, box
+ * or relative box, each with a target rule (fixed, explicit targets, or a
+ * rigid transform plus uniform scale). Read into a cf_handle_set, or into a
+ * cf_point_set when only the selection matters. The only user of jansson in
+ * the library (its include directory and link are private to this module).
  */
-#include "core/core.h"
-#include "curvflow/stretch_bend_edit.h"
+#include "constraints/constraints_internal.h"
 #include "mesh/mesh_internal.h"
 
 #include <jansson.h>
@@ -13,96 +15,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-void cf_handle_set_destroy(cf_handle_set **handles)
-{
-    if (!handles || !*handles) return;
-    cf_handle_set *h = *handles;
-    cf_context *ctx = h->ctx;
-    CFI_FREE(ctx, h->vertices, (size_t)h->count);
-    CFI_FREE(ctx, h->targets, 3 * (size_t)h->count);
-    cfi_free(ctx, h, sizeof *h);
-    *handles = NULL;
-}
-
-static cf_handle_set *alloc_set(cf_context *ctx, int32_t count)
-{
-    cf_handle_set *h = cfi_malloc(ctx, sizeof *h);
-    if (!h) return NULL;
-    memset(h, 0, sizeof *h);
-    h->ctx = ctx;
-    h->count = count;
-    h->vertices = CFI_ALLOC(ctx, int32_t, (size_t)(count > 0 ? count : 0));
-    h->targets = CFI_ALLOC(ctx, double, 3 * (size_t)(count > 0 ? count : 0));
-    if (count > 0 && (!h->vertices || !h->targets)) {
-        cf_handle_set_destroy(&h);
-        return NULL;
-    }
-    return h;
-}
-
-cf_status cf_handle_set_create(cf_context *ctx, int32_t count, const int32_t *vertices, const double *targets,
-                               cf_handle_set **out)
-{
-    if (!ctx) return CF_ERR_INVALID_ARG;
-    if (!out) return cfi_error(ctx, CF_ERR_INVALID_ARG, "handle set output is NULL");
-    *out = NULL;
-    if (count < 0) return cfi_error(ctx, CF_ERR_INVALID_ARG, "handle count %d is negative", (int)count);
-    if (count > 0 && (!vertices || !targets))
-        return cfi_error(ctx, CF_ERR_INVALID_ARG, "handle vertices or targets are NULL");
-    for (int32_t k = 0; k < count; ++k) {
-        if (vertices[k] < 0)
-            return cfi_error(ctx, CF_ERR_INVALID_ARG, "handle %d: vertex index %d is negative", k, vertices[k]);
-        for (int d = 0; d < 3; ++d) {
-            double t = targets[3 * k + d];
-            if (!isfinite(t))
-                return cfi_error(ctx, CF_ERR_NONFINITE, "handle %d (vertex %d): target is not finite", k, vertices[k]);
-            if (fabs(t) > CF_MAX_COORDINATE)
-                return cfi_error(ctx, CF_ERR_NONFINITE,
-                                 "handle %d (vertex %d): target coordinate %.3g is out of range (|x| > %.0e)", k,
-                                 vertices[k], t, CF_MAX_COORDINATE);
-        }
-    }
-    cf_handle_set *h = alloc_set(ctx, count);
-    if (!h) return CF_ERR_NOMEM;
-    /* Insertion by a counting pass would need the vertex count; sort the
-     * (vertex, slot) pairs instead, by a simple merge-free insertion into
-     * place (handle sets are small compared to meshes, but use qsort on an
-     * index array to stay O(n log n)). */
-    int32_t *order = CFI_ALLOC(ctx, int32_t, (size_t)(count > 0 ? count : 1));
-    if (!order) {
-        cf_handle_set_destroy(&h);
-        return CF_ERR_NOMEM;
-    }
-    for (int32_t k = 0; k < count; ++k) order[k] = k;
-    /* Shell sort on the vertex index (no global state for a qsort comparator). */
-    for (int32_t gap = count / 2; gap > 0; gap /= 2)
-        for (int32_t i = gap; i < count; ++i) {
-            int32_t t = order[i], j = i;
-            while (j >= gap && vertices[order[j - gap]] > vertices[t]) {
-                order[j] = order[j - gap];
-                j -= gap;
-            }
-            order[j] = t;
-        }
-    cf_status st = CF_OK;
-    for (int32_t k = 0; k < count; ++k) {
-        h->vertices[k] = vertices[order[k]];
-        memcpy(h->targets + 3 * k, targets + 3 * (size_t)order[k], 3 * sizeof(double));
-        if (k > 0 && h->vertices[k] == h->vertices[k - 1]) {
-            st = cfi_error(ctx, CF_ERR_INVALID_ARG, "vertex %d is constrained twice", h->vertices[k]);
-            break;
-        }
-    }
-    CFI_FREE(ctx, order, (size_t)(count > 0 ? count : 1));
-    if (st != CF_OK) {
-        cf_handle_set_destroy(&h);
-        return st;
-    }
-    h->moved_count = count;
-    *out = h;
-    return CF_OK;
-}
-
 /* ---- JSON ---------------------------------------------------------------- */
 
 typedef struct json_reader {
@@ -110,6 +22,7 @@ typedef struct json_reader {
     const cf_mesh *mesh;
     const double *x;
     const char *src;
+    int selection_only;  /* point-set reading: the target rule is optional */
     int32_t *owner;      /* nv: set index owning the vertex, -1 */
     double *target;      /* 3 nv */
     int32_t *members;    /* nv scratch: vertices of the current set */
@@ -134,16 +47,6 @@ static int read_vec3(json_t *a, double out[3])
     return 1;
 }
 
-/* Rotation matrix (row-major) for a unit axis and an angle (Rodrigues). */
-static void axis_angle(const double axis[3], double angle, double r[9])
-{
-    double c = cos(angle), s = sin(angle), t = 1.0 - c;
-    double x = axis[0], y = axis[1], z = axis[2];
-    r[0] = t * x * x + c;     r[1] = t * x * y - s * z; r[2] = t * x * z + s * y;
-    r[3] = t * x * y + s * z; r[4] = t * y * y + c;     r[5] = t * y * z - s * x;
-    r[6] = t * x * z - s * y; r[7] = t * y * z + s * x; r[8] = t * z * z + c;
-}
-
 static cf_status select_box(json_reader *r, const char *name, json_t *box, int relative, int32_t *n)
 {
     double lo[3], hi[3];
@@ -151,28 +54,7 @@ static cf_status select_box(json_reader *r, const char *name, json_t *box, int r
     if (!json_is_object(box) || !read_vec3(jmin, lo) || !read_vec3(jmax, hi))
         return jerr(r, name, relative ? "\"relative_box\"" : "\"box\"",
                     " must be an object with \"min\" and \"max\" arrays of 3 finite numbers");
-    int32_t nv = r->mesh->nv;
-    if (relative) {
-        double bmin[3] = {INFINITY, INFINITY, INFINITY}, bmax[3] = {-INFINITY, -INFINITY, -INFINITY};
-        for (int32_t v = 0; v < nv; ++v)
-            for (int d = 0; d < 3; ++d) {
-                bmin[d] = fmin(bmin[d], r->x[3 * v + d]);
-                bmax[d] = fmax(bmax[d], r->x[3 * v + d]);
-            }
-        for (int d = 0; d < 3; ++d) {
-            double ext = bmax[d] - bmin[d];
-            /* A small slack so that fractions 0 and 1 include the extreme
-             * vertices despite rounding. */
-            lo[d] = bmin[d] + lo[d] * ext - 1e-12 * (ext + 1.0);
-            hi[d] = bmin[d] + hi[d] * ext + 1e-12 * (ext + 1.0);
-        }
-    }
-    int32_t count = 0;
-    for (int32_t v = 0; v < nv; ++v) {
-        const double *p = r->x + 3 * v;
-        if (p[0] >= lo[0] && p[0] <= hi[0] && p[1] >= lo[1] && p[1] <= hi[1] && p[2] >= lo[2] && p[2] <= hi[2])
-            r->members[count++] = v;
-    }
+    int32_t count = cfi_select_box(r->mesh->nv, r->x, lo, hi, relative, r->members);
     *n = count;
     return CF_OK;
 }
@@ -186,10 +68,17 @@ static cf_status read_set(json_reader *r, json_t *set, size_t index, char *name_
         return jerr(r, name_buf, "a set must be a JSON object", NULL);
     }
     json_t *jname = json_object_get(set, "name");
-    if (jname && json_is_string(jname))
+    if (jname && json_is_string(jname)) {
         snprintf(name_buf, name_cap, "%s", json_string_value(jname));
-    else
+    } else {
         snprintf(name_buf, name_cap, "#%zu", index);
+        /* issue 15: silently ignored input gets a warning */
+        if (jname)
+            cfi_log(ctx, CF_LOG_WARNING, "%s: set #%zu: \"name\" is not a string; the set is called #%zu", r->src,
+                    index, index);
+        else
+            cfi_log(ctx, CF_LOG_WARNING, "%s: set #%zu has no \"name\"; messages call it #%zu", r->src, index, index);
+    }
     const char *name = name_buf;
     const char *key;
     json_t *val;
@@ -231,7 +120,8 @@ static cf_status read_set(json_reader *r, json_t *set, size_t index, char *name_
            *jtr = json_object_get(set, "transform");
     if (jfixed && !json_is_true(jfixed))
         return jerr(r, name, "\"fixed\" may only be true (omit it for moving sets)", NULL);
-    if ((jfixed != NULL) + (jt != NULL) + (jtr != NULL) != 1)
+    int rules = (jfixed != NULL) + (jt != NULL) + (jtr != NULL);
+    if (rules > 1 || (rules == 0 && !r->selection_only))
         return jerr(r, name, "give exactly one of \"fixed\": true, \"targets\", \"transform\"", NULL);
     int32_t set_id = (int32_t)index;
     for (int32_t k = 0; k < n; ++k) {
@@ -243,7 +133,7 @@ static cf_status read_set(json_reader *r, json_t *set, size_t index, char *name_
                              r->src, name, v, (int)r->owner[v]);
         r->owner[v] = set_id;
     }
-    if (jfixed) {
+    if (jfixed || rules == 0) {
         for (int32_t k = 0; k < n; ++k) memcpy(r->target + 3 * r->members[k], r->x + 3 * r->members[k], 3 * sizeof(double));
         return CF_OK;
     }
@@ -268,17 +158,19 @@ static cf_status read_set(json_reader *r, json_t *set, size_t index, char *name_
         if (strcmp(key, "translate") && strcmp(key, "rotate") && strcmp(key, "scale") && strcmp(key, "center"))
             return jerr(r, name, "unknown transform key: ", key);
     }
-    double t[3] = {0, 0, 0}, c[3] = {0, 0, 0}, rot[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, s = 1.0;
+    cf_rigid_transform tr;
+    cf_rigid_transform_identity(&tr);
+    double *c = tr.center;
     for (int32_t k = 0; k < n; ++k)
         for (int d = 0; d < 3; ++d) c[d] += r->x[3 * r->members[k] + d] / n;
     json_t *jtt = json_object_get(jtr, "translate"), *jr = json_object_get(jtr, "rotate"),
            *js = json_object_get(jtr, "scale"), *jc = json_object_get(jtr, "center");
-    if (jtt && !read_vec3(jtt, t)) return jerr(r, name, "\"translate\" must be 3 finite numbers", NULL);
+    if (jtt && !read_vec3(jtt, tr.translation)) return jerr(r, name, "\"translate\" must be 3 finite numbers", NULL);
     if (jc && !read_vec3(jc, c)) return jerr(r, name, "\"center\" must be 3 finite numbers", NULL);
     if (js) {
         if (!json_is_number(js) || !(json_number_value(js) > 0.0) || !isfinite(json_number_value(js)))
             return jerr(r, name, "\"scale\" must be a positive number", NULL);
-        s = json_number_value(js);
+        tr.scale = json_number_value(js);
     }
     if (jr) {
         double axis[3];
@@ -290,14 +182,11 @@ static cf_status read_set(json_reader *r, json_t *set, size_t index, char *name_
         double len = sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
         if (!(len > 0.0)) return jerr(r, name, "rotation axis is the zero vector", NULL);
         for (int d = 0; d < 3; ++d) axis[d] /= len;
-        axis_angle(axis, json_number_value(jd) * 3.14159265358979323846 / 180.0, rot);
+        cfi_axis_angle_matrix(axis, json_number_value(jd) * 3.14159265358979323846 / 180.0, tr.rotation);
     }
     for (int32_t k = 0; k < n; ++k) {
-        const double *p = r->x + 3 * r->members[k];
-        double q[3] = {p[0] - c[0], p[1] - c[1], p[2] - c[2]};
         double *o = r->target + 3 * r->members[k];
-        for (int d = 0; d < 3; ++d)
-            o[d] = c[d] + s * (rot[3 * d] * q[0] + rot[3 * d + 1] * q[1] + rot[3 * d + 2] * q[2]) + t[d];
+        cfi_rigid_apply_point(&tr, r->x + 3 * r->members[k], o);
         if (cfi_first_unusable_point(o, 1, 3) >= 0)
             return cfi_error(ctx, CF_ERR_PARSE,
                              "%s: set '%s': the transform moves vertex %d to (%.3g, %.3g, %.3g), beyond the range of "
@@ -307,6 +196,62 @@ static cf_status read_set(json_reader *r, json_t *set, size_t index, char *name_
     return CF_OK;
 }
 
+/* Parses `text` into r (owner and target per vertex). Warns about
+ * top-level keys other than "sets". */
+static cf_status parse(json_reader *r, const char *text)
+{
+    cf_context *ctx = r->ctx;
+    json_error_t jerror;
+    json_t *root = json_loads(text, JSON_REJECT_DUPLICATES, &jerror);
+    if (!root)
+        return cfi_error(ctx, CF_ERR_PARSE, "%s:%d:%d: malformed JSON: %s", r->src, jerror.line, jerror.column,
+                         jerror.text);
+    int32_t nv = r->mesh->nv;
+    cf_status st = CF_OK;
+    json_t *sets = json_is_object(root) ? json_object_get(root, "sets") : NULL;
+    if (!json_is_array(sets)) {
+        st = jerr(r, NULL, "expected an object with a \"sets\" array", NULL);
+        goto done;
+    }
+    {
+        /* issue 15: silently ignored input gets a warning */
+        const char *key;
+        json_t *val;
+        json_object_foreach(root, key, val) {
+            if (strcmp(key, "sets") != 0)
+                cfi_log(ctx, CF_LOG_WARNING, "%s: unknown top-level key '%s' ignored (only \"sets\" is read)", r->src,
+                        key);
+        }
+    }
+    if (json_array_size(sets) == 0) {
+        st = jerr(r, NULL, r->selection_only ? "\"sets\" is empty: no vertex selected" : "\"sets\" is empty: no handle vertex",
+                  NULL);
+        goto done;
+    }
+    r->owner = CFI_ALLOC(ctx, int32_t, (size_t)nv);
+    r->target = CFI_ALLOC(ctx, double, 3 * (size_t)nv);
+    r->members = CFI_ALLOC(ctx, int32_t, (size_t)nv);
+    if (!r->owner || !r->target || !r->members) {
+        st = CF_ERR_NOMEM;
+        goto done;
+    }
+    for (int32_t v = 0; v < nv; ++v) r->owner[v] = -1;
+    char name[128];
+    for (size_t k = 0; k < json_array_size(sets) && st == CF_OK; ++k)
+        st = read_set(r, json_array_get(sets, k), k, name, sizeof name);
+done:
+    json_decref(root);
+    return st;
+}
+
+static void reader_free(json_reader *r)
+{
+    int32_t nv = r->mesh->nv;
+    CFI_FREE(r->ctx, r->owner, (size_t)nv);
+    CFI_FREE(r->ctx, r->target, 3 * (size_t)nv);
+    CFI_FREE(r->ctx, r->members, (size_t)nv);
+}
+
 cf_status cf_handle_set_parse_json(cf_context *ctx, const cf_mesh *mesh, const double *positions, const char *text,
                                    const char *source_name, cf_handle_set **out)
 {
@@ -314,34 +259,9 @@ cf_status cf_handle_set_parse_json(cf_context *ctx, const cf_mesh *mesh, const d
     if (!out || !mesh || !text) return cfi_error(ctx, CF_ERR_INVALID_ARG, "handle file: NULL argument");
     *out = NULL;
     const char *src = source_name ? source_name : "handles";
-    json_error_t jerror;
-    json_t *root = json_loads(text, JSON_REJECT_DUPLICATES, &jerror);
-    if (!root)
-        return cfi_error(ctx, CF_ERR_PARSE, "%s:%d:%d: malformed JSON: %s", src, jerror.line, jerror.column,
-                         jerror.text);
     int32_t nv = mesh->nv;
-    json_reader r = {ctx, mesh, positions ? positions : mesh->positions, src, NULL, NULL, NULL};
-    cf_status st = CF_OK;
-    json_t *sets = json_is_object(root) ? json_object_get(root, "sets") : NULL;
-    if (!json_is_array(sets)) {
-        st = jerr(&r, NULL, "expected an object with a \"sets\" array", NULL);
-        goto done;
-    }
-    if (json_array_size(sets) == 0) {
-        st = jerr(&r, NULL, "\"sets\" is empty: no handle vertex", NULL);
-        goto done;
-    }
-    r.owner = CFI_ALLOC(ctx, int32_t, (size_t)nv);
-    r.target = CFI_ALLOC(ctx, double, 3 * (size_t)nv);
-    r.members = CFI_ALLOC(ctx, int32_t, (size_t)nv);
-    if (!r.owner || !r.target || !r.members) {
-        st = CF_ERR_NOMEM;
-        goto done;
-    }
-    for (int32_t v = 0; v < nv; ++v) r.owner[v] = -1;
-    char name[128];
-    for (size_t k = 0; k < json_array_size(sets) && st == CF_OK; ++k)
-        st = read_set(&r, json_array_get(sets, k), k, name, sizeof name);
+    json_reader r = {ctx, mesh, positions ? positions : mesh->positions, src, 0, NULL, NULL, NULL};
+    cf_status st = parse(&r, text);
     if (st != CF_OK) goto done;
     int32_t count = 0, moved = 0;
     for (int32_t v = 0; v < nv; ++v) {
@@ -357,7 +277,7 @@ cf_status cf_handle_set_parse_json(cf_context *ctx, const cf_mesh *mesh, const d
         st = cfi_error(ctx, CF_ERR_PARSE, "%s: all %d vertices are constrained; nothing is left to deform", src, nv);
         goto done;
     }
-    cf_handle_set *h = alloc_set(ctx, count);
+    cf_handle_set *h = cfi_handle_set_alloc(ctx, count);
     if (!h) {
         st = CF_ERR_NOMEM;
         goto done;
@@ -372,21 +292,46 @@ cf_status cf_handle_set_parse_json(cf_context *ctx, const cf_mesh *mesh, const d
     h->moved_count = moved;
     *out = h;
 done:
-    CFI_FREE(ctx, r.owner, (size_t)nv);
-    CFI_FREE(ctx, r.target, 3 * (size_t)nv);
-    CFI_FREE(ctx, r.members, (size_t)nv);
-    json_decref(root);
+    reader_free(&r);
     return st;
 }
 
-cf_status cf_handle_set_read_json(cf_context *ctx, const cf_mesh *mesh, const double *positions, const char *path,
-                                  cf_handle_set **out)
+cf_status cf_point_set_parse_json(cf_context *ctx, const cf_mesh *mesh, const double *positions, const char *text,
+                                  const char *source_name, cf_point_set **out)
 {
     if (!ctx) return CF_ERR_INVALID_ARG;
-    if (!path || !out || !mesh) return cfi_error(ctx, CF_ERR_INVALID_ARG, "handle file: NULL argument");
+    if (!out || !mesh || !text) return cfi_error(ctx, CF_ERR_INVALID_ARG, "point set file: NULL argument");
     *out = NULL;
+    int32_t nv = mesh->nv;
+    json_reader r = {ctx, mesh, positions ? positions : mesh->positions, source_name ? source_name : "points", 1,
+                     NULL, NULL, NULL};
+    cf_status st = parse(&r, text);
+    if (st == CF_OK) {
+        int32_t count = 0;
+        for (int32_t v = 0; v < nv; ++v) count += r.owner[v] >= 0;
+        cf_point_set *p = cfi_point_set_alloc(ctx, count);
+        if (p) {
+            int32_t k = 0;
+            for (int32_t v = 0; v < nv; ++v)
+                if (r.owner[v] >= 0) p->vertices[k++] = v;
+            *out = p;
+        } else {
+            st = CF_ERR_NOMEM;
+        }
+    }
+    reader_free(&r);
+    return st;
+}
+
+/* The whole file, NUL-terminated, in a buffer of *cap bytes (freed by the
+ * caller with that size). A NUL byte inside is an error (the JSON reader
+ * would stop there). */
+static cf_status read_text(cf_context *ctx, const char *path, const char *what, char **out, size_t *out_cap)
+{
+    *out = NULL;
+    *out_cap = 0;
     FILE *f = fopen(path, "rb");
-    if (!f) return cfi_error(ctx, CF_ERR_IO, "%s: cannot open handle file", path);
+    if (!f) return cfi_error(ctx, CF_ERR_IO, "%s: cannot open %s", path, what);
     size_t cap = 4096, len = 0;
     char *buf = cfi_malloc(ctx, cap);
     cf_status st = buf ? CF_OK : CF_ERR_NOMEM;
@@ -410,9 +355,41 @@ cf_status cf_handle_set_read_json(cf_context *ctx, const cf_mesh *mesh, const do
     fclose(f);
     if (st == CF_OK) {
         buf[len] = '\0';
-        if (strlen(buf) != len) st = cfi_error(ctx, CF_ERR_PARSE, "%s: the handle file contains a NUL byte", path);
+        if (strlen(buf) != len) st = cfi_error(ctx, CF_ERR_PARSE, "%s: the %s contains a NUL byte", path, what);
     }
+    if (st != CF_OK) {
+        if (buf) cfi_free(ctx, buf, cap);
+        return st;
+    }
+    *out = buf;
+    *out_cap = cap;
+    return CF_OK;
+}
+
+cf_status cf_handle_set_read_json(cf_context *ctx, const cf_mesh *mesh, const double *positions, const char *path,
+                                  cf_handle_set **out)
+{
+    if (!ctx) return CF_ERR_INVALID_ARG;
+    if (!path || !out || !mesh) return cfi_error(ctx, CF_ERR_INVALID_ARG, "handle file: NULL argument");
+    *out = NULL;
+    char *buf = NULL;
+    size_t cap = 0;
+    cf_status st = read_text(ctx, path, "handle file", &buf, &cap);
     if (st == CF_OK) st = cf_handle_set_parse_json(ctx, mesh, positions, buf, path, out);
+    if (buf) cfi_free(ctx, buf, cap);
+    return st;
+}
+
+cf_status cf_point_set_read_json(cf_context *ctx, const cf_mesh *mesh, const double *positions, const char *path,
+                                 cf_point_set **out)
+{
+    if (!ctx) return CF_ERR_INVALID_ARG;
+    if (!path || !out || !mesh) return cfi_error(ctx, CF_ERR_INVALID_ARG, "point set file: NULL argument");
+    *out = NULL;
+    char *buf = NULL;
+    size_t cap = 0;
+    cf_status st = read_text(ctx, path, "point set file", &buf, &cap);
+    if (st == CF_OK) st = cf_point_set_parse_json(ctx, mesh, positions, buf, path, out);
     if (buf) cfi_free(ctx, buf, cap);
     return st;
 }

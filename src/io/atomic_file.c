@@ -31,10 +31,12 @@
  * it stays async-signal-safe (lock-free atomics, no allocation, no stdio).
  * With every slot busy a write still works, it is only not removed on a
  * signal (16 simultaneous atomic writes in one process are not expected). */
+_Static_assert(ATOMIC_INT_LOCK_FREE == 2, "the signal handler needs lock-free atomic int");
 enum { TEMP_SLOTS = 16, TEMP_PATH_MAX = 4096 };
 enum { SLOT_FREE = 0, SLOT_FILLING = 1, SLOT_LIVE = 2 };
 static struct {
     atomic_int state;
+    pid_t owner; /* a forked child inherits the table but not the files' ownership */
     char path[TEMP_PATH_MAX];
 } temp_slots[TEMP_SLOTS];
 
@@ -46,6 +48,7 @@ static int registry_add(const char *tmp_path)
         int expected = SLOT_FREE;
         if (atomic_compare_exchange_strong(&temp_slots[i].state, &expected, SLOT_FILLING)) {
             memcpy(temp_slots[i].path, tmp_path, n + 1);
+            temp_slots[i].owner = getpid();
             atomic_store(&temp_slots[i].state, SLOT_LIVE);
             return i;
         }
@@ -60,8 +63,10 @@ static void registry_remove(int slot)
 
 void cf_atomic_remove_pending(void)
 {
+    pid_t self = getpid(); /* async-signal-safe, as are unlink and lock-free atomics */
     for (int i = 0; i < TEMP_SLOTS; ++i)
-        if (atomic_load(&temp_slots[i].state) == SLOT_LIVE) (void)unlink(temp_slots[i].path);
+        if (atomic_load(&temp_slots[i].state) == SLOT_LIVE && temp_slots[i].owner == self)
+            (void)unlink(temp_slots[i].path);
 }
 
 /* ---- paths ----------------------------------------------------------------- */

@@ -262,6 +262,31 @@ static void test_signal_removes_pending(void)
     }
 }
 
+/* A forked child inherits the registry but not the files: its clean-up
+ * (e.g. in its own signal handler) leaves the parent's write alone. */
+static void test_fork_keeps_parent_files(void)
+{
+    cf_context *ctx = cft_context();
+    char path[4096];
+    snprintf(path, sizeof path, "%s", cft_temp_path(".ply"));
+    cfi_atomic_file f;
+    CHECK_OK(ctx, cfi_atomic_open(ctx, path, &f));
+    fflush(NULL);
+    pid_t pid = fork();
+    if (pid == 0) {
+        cf_atomic_remove_pending();
+        _exit(iot_temp_files(path) == 1 ? 0 : 1);
+    }
+    int status = 0;
+    CHECK(pid > 0 && waitpid(pid, &status, 0) == pid && WIFEXITED(status) && WEXITSTATUS(status) == 0);
+    CHECK(iot_temp_files(path) == 1);
+    CHECK_OK(ctx, cfi_atomic_commit(ctx, &f));
+    CHECK(access(path, F_OK) == 0 && iot_temp_files(path) == 0);
+    remove(path);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 /* Temporary files of ended processes next to a target are removed; those
  * of running processes (this one, its parent) and of other targets stay. */
 static void test_remove_stale(void)
@@ -302,6 +327,7 @@ int main(void)
     CFT_RUN(test_symlink_written_through);
     CFT_RUN(test_streaming_writer);
     CFT_RUN(test_signal_removes_pending);
+    CFT_RUN(test_fork_keeps_parent_files);
     CFT_RUN(test_remove_stale);
     return cft_finish();
 }

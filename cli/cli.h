@@ -23,5 +23,6 @@ int cli_render(int argc, char **argv);
 int cli_spin(int argc, char **argv);   /* cli/cmd_spin.c  (Crane 2013 SpinXForm) */
 int cli_curve(int argc, char **argv);  /* cli/cmd_curve.c (Crane 2013 isometric curve flow) */
 int cli_edit(int argc, char **argv);   /* cli/cmd_edit.c  (Zhao & Gortler editing) */
+int cli_report(int argc, char **argv); /* cli/cmd_report.c (one-file HTML report) */
 
 #endif

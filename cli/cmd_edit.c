@@ -7,6 +7,7 @@
  */
 #define _GNU_SOURCE
 #include "common.h"
+#include "report.h"
 #include "curvflow/io.h"
 #include "curvflow/stretch_bend_edit.h"
 
@@ -37,6 +38,7 @@ static void usage(FILE *out)
             "  -l, --log FILE.jsonl  JSONL log, one object per iteration (energy terms stretch, bend),\n"
             "                        written atomically when the run ends\n"
             "  -q, --quiet           no status lines\n"
+            "      --report FILE.html  also write the one-file HTML report of the edit (docs/report.md)\n"
             "  -f, --force           replace read-only output files\n"
             "  -h, --help            show this help\n\n"
             "Example:\n"
@@ -50,7 +52,7 @@ static void usage(FILE *out)
 
 int cli_edit(int argc, char **argv)
 {
-    enum { OPT_MASS = 256, OPT_NO_SCALE_FREE };
+    enum { OPT_MASS = 256, OPT_NO_SCALE_FREE, OPT_REPORT };
     long long anderson = -1;
     static const struct option longopts[] = {
         {"handles", required_argument, NULL, 'H'},    {"energy", required_argument, NULL, 'e'},
@@ -60,10 +62,11 @@ int cli_edit(int argc, char **argv)
         {"output", required_argument, NULL, 'o'},     {"log", required_argument, NULL, 'l'},
         {"quiet", no_argument, NULL, 'q'},            {"help", no_argument, NULL, 'h'},
         {"anderson", required_argument, NULL, 'a'},   {"force", no_argument, NULL, 'f'},
+        {"report", required_argument, NULL, OPT_REPORT},
         {NULL, 0, NULL, 0}};
     const char *cmd = "edit";
     const char *handles_path = NULL, *energy = "hybrid", *output = NULL, *log_path = NULL, *start_path = NULL;
-    const char *mass = "voronoi";
+    const char *mass = "voronoi", *report_path = NULL;
     double lambda = 0.5, tol = 1e-6;
     long long iterations = 100;
     bool quiet = false, scale_free = true, force = false, lambda_given = false;
@@ -93,6 +96,7 @@ int cli_edit(int argc, char **argv)
         case OPT_NO_SCALE_FREE: scale_free = false; break;
         case 'o': output = optarg; break;
         case 'l': log_path = optarg; break;
+        case OPT_REPORT: report_path = optarg; break;
         case 'q': quiet = true; break;
         case 'f': force = true; break;
         case 'h': usage(stdout); return CLI_EXIT_OK;
@@ -111,6 +115,8 @@ int cli_edit(int argc, char **argv)
     cli_files_input(&files, "--start", start_path);
     cli_files_output(&files, "-o", output, CLI_FILE_MESH);
     if (log_path) cli_files_output(&files, "--log", log_path, CLI_FILE_LOG);
+    if (report_path) cli_files_output(&files, "--report", report_path, CLI_FILE_HTML);
+    if (report_path && !cli_report_available()) return CLI_EXIT_INPUT;
 
     cf_context *ctx = cli_context(false);
     if (!ctx) return CLI_EXIT_NUMERICAL;
@@ -149,6 +155,7 @@ int cli_edit(int argc, char **argv)
     const double *start = NULL;
     cli_progress progress;
     cli_progress_init(&progress, energy, iterations, quiet);
+    cli_report_log report_log = {0};
     code = cli_load_mesh(ctx, input, &mesh);
     if (code != CLI_EXIT_OK) goto done;
     if (start_path) {
@@ -183,7 +190,18 @@ int cli_edit(int argc, char **argv)
         goto done;
     }
     bool completed = false;
+    double started = cli_now();
+    if (report_path && (code = cli_report_log_capture(&report_log, &progress, log_path)) != CLI_EXIT_OK) goto done;
     code = cli_run_flow_and_write(ctx, flow, &progress, log_path, iterations, input, mesh, output, &completed);
+    if (report_path) {
+        const char *extra[] = {"handles", handles_path, start_path ? "start" : NULL, start_path, NULL};
+        cli_report_run run;
+        cli_report_run_init(&run);
+        run.command = "edit", run.method = energy, run.input_path = input, run.output_path = output;
+        run.log_path = log_path, run.options = &options, run.extra = extra, run.steps_requested = iterations;
+        run.quiet = quiet, run.seconds_run = cli_now() - started;
+        code = cli_report_after_run(ctx, report_path, &run, mesh, flow, &report_log, code);
+    }
     if (completed && !quiet) {
         const cf_flow_info *last = cf_flow_last_info(flow);
         if (kind == CF_EDIT_ARAP || kind == CF_EDIT_ARAP_RIMS)
@@ -196,6 +214,7 @@ int cli_edit(int argc, char **argv)
     }
 done:
     cli_progress_finish(&progress);
+    cli_report_log_free(&report_log);
     cf_flow_destroy(&flow);
     cf_handle_set_destroy(&handles);
     cf_mesh_destroy(&start_mesh);

@@ -7,6 +7,7 @@
  */
 #define _GNU_SOURCE
 #include "common.h"
+#include "report.h"
 #include "curvflow/io.h"
 #include "curvflow/spin_willmore.h"
 #include "curvflow/stretch_bend_edit.h"
@@ -35,6 +36,8 @@ static void usage(FILE *out)
             "                        written atomically when the run ends (also after a numerical failure)\n"
             "  -q, --quiet           no status lines\n"
             "  -f, --force           replace read-only output files\n"
+            "      --report FILE.html  also write the one-file HTML report of the run (docs/report.md):\n"
+            "                        3D view of IN and OUT with per-face Q, energy and residual curves\n"
             "      --handles FILE    handle file of --method stretch-bend-edit (format in docs/edit.md;\n"
             "                        `curvflow edit` has the editing options)\n"
             "      --boundary-targets FILE\n"
@@ -142,7 +145,7 @@ static int read_boundary_targets(const char *path, const cf_mesh *mesh, double *
 
 int cli_flow(int argc, char **argv)
 {
-    enum { OPT_LIST_METHODS = 256, OPT_LIST_PARAMS, OPT_BOUNDARY_TARGETS, OPT_HANDLES };
+    enum { OPT_LIST_METHODS = 256, OPT_LIST_PARAMS, OPT_BOUNDARY_TARGETS, OPT_HANDLES, OPT_REPORT };
     static const struct option longopts[] = {
         {"method", required_argument, NULL, 'm'}, {"steps", required_argument, NULL, 'n'},
         {"time-step", required_argument, NULL, 't'}, {"param", required_argument, NULL, 'p'},
@@ -151,10 +154,11 @@ int cli_flow(int argc, char **argv)
         {"list-params", no_argument, NULL, OPT_LIST_PARAMS}, {"help", no_argument, NULL, 'h'},
         {"boundary-targets", required_argument, NULL, OPT_BOUNDARY_TARGETS},
         {"handles", required_argument, NULL, OPT_HANDLES}, {"force", no_argument, NULL, 'f'},
+        {"report", required_argument, NULL, OPT_REPORT},
         {NULL, 0, NULL, 0}};
     const char *cmd = "flow";
     const char *method = NULL, *output = NULL, *log_path = NULL, *time_step = NULL, *targets_path = NULL;
-    const char *handles_path = NULL;
+    const char *handles_path = NULL, *report_path = NULL;
     long long steps = 10;
     bool quiet = false, want_methods = false, want_params = false, force = false;
     /* --param values are applied after the method is known */
@@ -178,6 +182,7 @@ int cli_flow(int argc, char **argv)
         case OPT_LIST_PARAMS: want_params = true; break;
         case OPT_BOUNDARY_TARGETS: targets_path = optarg; break;
         case OPT_HANDLES: handles_path = optarg; break;
+        case OPT_REPORT: report_path = optarg; break;
         case 'f': force = true; break;
         case 'h': usage(stdout); free(param_args); return CLI_EXIT_OK;
         default: free(param_args); return cli_option_error(cmd, c, argv);
@@ -219,6 +224,8 @@ int cli_flow(int argc, char **argv)
     cli_files_input(&files, "--handles", handles_path);
     cli_files_output(&files, "-o", output, CLI_FILE_MESH);
     if (log_path) cli_files_output(&files, "--log", log_path, CLI_FILE_LOG);
+    if (report_path) cli_files_output(&files, "--report", report_path, CLI_FILE_HTML);
+    if (report_path && !cli_report_available()) { free(param_args); return CLI_EXIT_INPUT; }
 
     cf_context *ctx = cli_context(false);
     if (!ctx) { free(param_args); return CLI_EXIT_NUMERICAL; }
@@ -261,6 +268,7 @@ int cli_flow(int argc, char **argv)
     cf_flow *flow = NULL;
     cli_progress progress;
     cli_progress_init(&progress, method, steps, quiet);
+    cli_report_log report_log = {0};
     code = cli_load_mesh(ctx, input, &mesh);
     if (code != CLI_EXIT_OK) goto done;
     if (targets_path) {
@@ -290,7 +298,17 @@ int cli_flow(int argc, char **argv)
         goto done;
     }
     bool completed = false;
+    double started = cli_now();
+    if (report_path && (code = cli_report_log_capture(&report_log, &progress, log_path)) != CLI_EXIT_OK) goto done;
     code = cli_run_flow_and_write(ctx, flow, &progress, log_path, steps, input, mesh, output, &completed);
+    if (report_path) {
+        cli_report_run run;
+        cli_report_run_init(&run);
+        run.command = "flow", run.method = method, run.input_path = input, run.output_path = output;
+        run.log_path = log_path, run.options = &options, run.steps_requested = steps, run.quiet = quiet;
+        run.seconds_run = cli_now() - started;
+        code = cli_report_after_run(ctx, report_path, &run, mesh, flow, &report_log, code);
+    }
     if (completed && !quiet) {
         const cf_flow_info *last = cf_flow_last_info(flow);
         fprintf(stderr, "curvflow: %s: %lld steps, energy %.9g, area drift %+.3e, volume drift %+.3e; wrote %s\n",
@@ -298,6 +316,7 @@ int cli_flow(int argc, char **argv)
     }
 done:
     cli_progress_finish(&progress);
+    cli_report_log_free(&report_log);
     cf_flow_destroy(&flow);
     cf_handle_set_destroy(&handles);
     cf_mesh_destroy(&mesh);

@@ -20,11 +20,12 @@ static const command commands[] = {
     {"generate", cli_generate, "write a built-in mesh (icosphere, torus, bumpy-sphere, grid, ...)"},
     {"flow", cli_flow, "run any flow method on a mesh (--list-methods)"},
     {"compare", cli_compare, "quasi-conformal error and area distortion between two meshes"},
-    {"demo", cli_demo, "the main job on a built-in bumpy sphere"},
+    {"demo", cli_demo, "the main job on a built-in eight-armed star, with its HTML report"},
     {"render", cli_render, "render a mesh to PNG (uv checkerboard, per-face field colours)"},
     {"spin", cli_spin, "spin transformation from a curvature change (Crane 2013)"},
     {"curve", cli_curve, "isometric flow of planar curves (Crane 2013)"},
     {"edit", cli_edit, "stretching + bending mesh editing (Zhao & Gortler)"},
+    {"report", cli_report, "one-file HTML report of a run: 3D view, Q map, energy curves"},
 };
 #define COMMAND_COUNT (sizeof commands / sizeof commands[0])
 

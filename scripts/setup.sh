@@ -11,6 +11,10 @@ CURVFLOW_PACKAGES="build-essential cmake ninja-build pkg-config libsuitesparse-d
 # the Python package (python/, docs/python.md): numpy, the tests, the Dask batch
 # runner, and the local install (venv + pip --no-build-isolation, no PyPI)
 CURVFLOW_PACKAGES="$CURVFLOW_PACKAGES python3-numpy python3-pytest python3-distributed python3-setuptools python3-wheel python3-venv"
+# the HTML report's viewer (report/, docs/report.md) is bundled at build time by
+# npm + esbuild: Debian's nodejs and npm unless the machine has node and npm already
+command -v node >/dev/null 2>&1 || CURVFLOW_PACKAGES="$CURVFLOW_PACKAGES nodejs"
+command -v npm >/dev/null 2>&1 || CURVFLOW_PACKAGES="$CURVFLOW_PACKAGES npm"
 
 curvflow_install_packages() {
     local missing=""

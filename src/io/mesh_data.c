@@ -4,8 +4,8 @@
  * cf_read_mesh_file / cf_read_mesh_memory / cf_load_mesh.
  */
 #include "io/io_internal.h"
+#include "io/text.h"
 
-#include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -324,47 +324,6 @@ cf_status cf_read_mesh_memory(cf_context *ctx, const void *bytes, size_t size, c
     return st;
 }
 
-/* Reads a whole file into a context buffer with a NUL after the last byte. */
-static cf_status slurp(cf_context *ctx, const char *path, char **out, size_t *size_out, size_t *cap_out)
-{
-    *out = NULL;
-    FILE *fp = fopen(path, "rb");
-    if (!fp) return cfi_error(ctx, CF_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
-    size_t cap = 1 << 16, size = 0;
-    char *buf = cfi_malloc(ctx, cap);
-    if (!buf) {
-        fclose(fp);
-        return cfi_error(ctx, CF_ERR_NOMEM, "%s: out of memory reading the file", path);
-    }
-    for (;;) {
-        if (cap - size < 2) {
-            if (cap > SIZE_MAX / 2) break;
-            char *p = cfi_realloc(ctx, buf, cap, cap * 2);
-            if (!p) {
-                cfi_free(ctx, buf, cap);
-                fclose(fp);
-                return cfi_error(ctx, CF_ERR_NOMEM, "%s: out of memory reading %zu bytes", path, cap * 2);
-            }
-            buf = p;
-            cap *= 2;
-        }
-        size_t got = fread(buf + size, 1, cap - size - 1, fp);
-        size += got;
-        if (got == 0) break;
-    }
-    int err = ferror(fp) ? errno : 0;
-    fclose(fp);
-    if (err || size + 1 > cap) {
-        cfi_free(ctx, buf, cap);
-        return cfi_error(ctx, CF_ERR_IO, "%s: cannot read: %s", path, err ? strerror(err) : "file too large");
-    }
-    buf[size] = '\0';
-    *out = buf;
-    *size_out = size;
-    *cap_out = cap;
-    return CF_OK;
-}
-
 cf_status cf_read_mesh_file(cf_context *ctx, const char *path, cf_mesh_data **out)
 {
     if (!ctx) return CF_ERR_INVALID_ARG;
@@ -375,7 +334,7 @@ cf_status cf_read_mesh_file(cf_context *ctx, const char *path, cf_mesh_data **ou
     if (st != CF_OK) return st;
     char *buf = NULL;
     size_t size = 0, cap = 0;
-    st = slurp(ctx, path, &buf, &size, &cap);
+    st = cfi_read_whole_file(ctx, path, &buf, &size, &cap);
     if (st != CF_OK) return st;
     st = dispatch(ctx, buf, size, format, path, out);
     cfi_free(ctx, buf, cap);

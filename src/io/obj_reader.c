@@ -2,7 +2,9 @@
  * Wavefront OBJ reader: v, vt and f (v, v/vt, v/vt/vn, v//vn, negative
  * relative indices); polygons are fan-triangulated with one warning.
  * vn, vp, comments, o, g, s, usemtl, mtllib are ignored; any other keyword
- * is ignored with a single warning.
+ * is ignored with a single warning, as are v lines with values beyond
+ * x y z [w] / x y z r g b. Lines come from the shared text input
+ * (io/text.h: any length, byte-order mark skipped, NUL bytes refused).
  *
  * Decisions where the format is loose:
  *  - an index must refer to a v/vt defined on an earlier line (the usual
@@ -15,6 +17,7 @@
  *    well-formed line cannot be detected.
  */
 #include "io/io_internal.h"
+#include "io/text.h"
 
 #include <math.h>
 #include <stdarg.h>
@@ -37,6 +40,7 @@ typedef struct obj_reader {
     int uv_mode;          /* -1 undecided, 0 no uv, 1 per-corner uv */
     bool uv_dropped;
     bool warned_unknown;
+    bool warned_vertex_values;
 } obj_reader;
 
 /* Records an error for the current line; a malformed (CF_ERR_PARSE) last
@@ -81,7 +85,28 @@ static cf_status parse_vertex(obj_reader *r, obj_line *ln)
         if (!cfi_parse_double(s, e, &x[k]))
             return fail(r, ln, CF_ERR_PARSE, "vertex %d: bad number '%.*s'", r->nv, (int)(e - s > 40 ? 40 : e - s), s);
     }
-    /* Extra values (w, or r g b colours) are ignored. */
+    /* x y z w (the spec) and x y z r g b (the colour extension of many
+     * writers) are ignored silently; any other count, or a token that is not
+     * a number, is input we would drop without a word: say so once. */
+    int extra = 0;
+    const char *first_s = NULL, *first_e = NULL;
+    bool all_numbers = true;
+    while (next_token(ln, &s, &e)) {
+        double v;
+        if (extra == 0) {
+            first_s = s;
+            first_e = e;
+        }
+        all_numbers = all_numbers && cfi_parse_double(s, e, &v);
+        ++extra;
+    }
+    if ((extra == 2 || extra > 3 || !all_numbers) && !r->warned_vertex_values) {
+        cfi_log(r->ctx, CF_LOG_WARNING,
+                "%s: line %lld: vertex %d has %d values, expected x y z [w] or x y z r g b; the values after z "
+                "('%.*s' ...) are ignored (further such lines silently)",
+                r->name, (long long)ln->number, r->nv, 3 + extra, cfi_tok_len(first_s, first_e), first_s);
+        r->warned_vertex_values = true;
+    }
     if (!isfinite(x[0]) || !isfinite(x[1]) || !isfinite(x[2]))
         return fail(r, ln, CF_ERR_NONFINITE, "vertex %d has a non-finite coordinate", r->nv);
     if (r->nv >= CFI_MAX_ELEMENTS) return fail(r, ln, CF_ERR_PARSE, "too many vertices");
@@ -138,10 +163,11 @@ static cf_status parse_corner(obj_reader *r, obj_line *ln, const char *s, const 
     if (!cfi_parse_int(s, vend, &iv)) return fail(r, ln, CF_ERR_PARSE, "bad face index '%.*s'", tl, s);
     *vt = -1;
     bool has_vt = false;
+    const char *tend = e;
     if (slash1) {
         const char *t = slash1 + 1;
         const char *slash2 = memchr(t, '/', (size_t)(e - t));
-        const char *tend = slash2 ? slash2 : e;
+        tend = slash2 ? slash2 : e;
         if (tend > t) {
             if (!cfi_parse_int(t, tend, &it)) return fail(r, ln, CF_ERR_PARSE, "bad face index '%.*s'", tl, s);
             has_vt = true;
@@ -152,17 +178,19 @@ static cf_status parse_corner(obj_reader *r, obj_line *ln, const char *s, const 
         if (slash2 && !cfi_parse_int(slash2 + 1, e, &in))
             return fail(r, ln, CF_ERR_PARSE, "bad face index '%.*s'", tl, s);
     }
+    /* Out-of-range indices are quoted as written: a 26-digit index has
+     * saturated in iv and would print as some other number. */
     int64_t rv = resolve(iv, r->nv);
     if (rv < 0)
-        return fail(r, ln, CF_ERR_INDEX_RANGE, "vertex index %lld out of range (%d vertices defined so far)",
-                    (long long)iv, r->nv);
+        return fail(r, ln, CF_ERR_INDEX_RANGE, "vertex index %.*s out of range (%d vertices defined so far)",
+                    cfi_tok_len(s, vend), s, r->nv);
     *v = (int32_t)rv;
     if (has_vt) {
         int64_t rt = resolve(it, r->nvt);
         if (rt < 0)
             return fail(r, ln, CF_ERR_INDEX_RANGE,
-                        "texture index %lld out of range (%d texture coordinates defined so far)", (long long)it,
-                        r->nvt);
+                        "texture index %.*s out of range (%d texture coordinates defined so far)",
+                        cfi_tok_len(slash1 + 1, tend), slash1 + 1, r->nvt);
         *vt = (int32_t)rt;
     }
     return CF_OK;
@@ -224,18 +252,18 @@ cf_status cfi_read_obj(cf_context *ctx, const char *buf, size_t size, const char
     r.ctx = ctx;
     r.name = name;
     r.uv_mode = -1;
+    cf_status st = cfi_text_check_nul(ctx, name, buf, 0, size);
+    if (st != CF_OK) return st;
     cfi_builder_init(&r.b, ctx);
-    const char *p = buf, *end = buf + size;
+    cfi_text text;
+    cfi_text_init(&text, buf, size);
     obj_line ln;
     memset(&ln, 0, sizeof ln);
-    cf_status st = CF_OK;
-    while (p < end && st == CF_OK) {
-        const char *nl = memchr(p, '\n', (size_t)(end - p));
-        ln.p = p;
-        ln.end = nl ? nl : end;
-        ln.number++;
-        ln.last_unterminated = nl == NULL;
-        p = nl ? nl + 1 : end;
+    while (st == CF_OK && cfi_text_next(&text)) {
+        ln.p = text.s;
+        ln.end = text.e;
+        ln.number = text.line;
+        ln.last_unterminated = text.unterminated;
         const char *s, *e;
         if (!next_token(&ln, &s, &e) || *s == '#') continue;
         if (is_word(s, e, "v")) {

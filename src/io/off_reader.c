@@ -6,8 +6,15 @@
  * "n i_0 ... i_{n-1} [colour...]" with 0-based indices. '#' starts a
  * comment. The reader is line-based: one vertex or face per line, as every
  * OFF writer we know produces. Polygons are fan-triangulated.
+ *
+ * The header's counts are checked against the lines in both directions:
+ * after the last face only blank and comment lines may follow, and a line
+ * of the wrong kind where the counts put a vertex or a face is reported as
+ * the mismatch ("header declares 3 vertices, file holds 4") rather than as
+ * whatever that line fails to be.
  */
 #include "io/io_internal.h"
+#include "io/text.h"
 
 #include <math.h>
 #include <stdarg.h>
@@ -17,7 +24,8 @@
 typedef struct off_reader {
     cf_context *ctx;
     const char *name;
-    const char *p, *buf_end;    /* next line starts at p */
+    cfi_text tx;                /* lines of the file */
+    const char *ls;             /* start of the current line */
     const char *lp, *lend;      /* cursor and end of the current line (comment stripped) */
     int64_t line;
     bool last_unterminated;
@@ -41,13 +49,11 @@ static cf_status fail(off_reader *r, cf_status st, const char *fmt, ...)
  * skipped); false at the end of the file. */
 static bool next_line(off_reader *r)
 {
-    while (r->p < r->buf_end) {
-        const char *nl = memchr(r->p, '\n', (size_t)(r->buf_end - r->p));
-        r->lp = r->p;
-        r->lend = nl ? nl : r->buf_end;
-        r->last_unterminated = nl == NULL;
-        r->p = nl ? nl + 1 : r->buf_end;
-        r->line++;
+    while (cfi_text_next(&r->tx)) {
+        r->ls = r->lp = r->tx.s;
+        r->lend = r->tx.e;
+        r->last_unterminated = r->tx.unterminated;
+        r->line = r->tx.line;
         const char *hash = memchr(r->lp, '#', (size_t)(r->lend - r->lp));
         if (hash) r->lend = hash;
         const char *q = r->lp;
@@ -59,33 +65,138 @@ static bool next_line(off_reader *r)
 
 static bool next_token(off_reader *r, const char **s, const char **e)
 {
-    const char *p = r->lp;
-    while (p < r->lend && cfi_is_space(*p)) ++p;
-    if (p >= r->lend) {
-        r->lp = p;
-        return false;
-    }
-    *s = p;
-    while (p < r->lend && !cfi_is_space(*p)) ++p;
-    *e = p;
-    r->lp = p;
-    return true;
+    return cfi_text_token(&r->lp, r->lend, NULL, s, e);
 }
 
-static int tok_len(const char *s, const char *e) { return (int)(e - s > 40 ? 40 : e - s); }
+static int tok_len(const char *s, const char *e) { return cfi_tok_len(s, e); }
+
+/* ---- shapes of lines, to name a count mismatch ------------------------------------ */
+
+/* Tokens of [s, e). */
+static int64_t count_tokens(const char *s, const char *e)
+{
+    int64_t n = 0;
+    const char *ts, *te;
+    while (cfi_text_token(&s, e, NULL, &ts, &te)) ++n;
+    return n;
+}
+
+/* A face line: "n i_0 ... i_{n-1}" with n >= 3 non-negative integer
+ * indices, then at most 4 colour values. */
+static bool face_shaped(const char *s, const char *e)
+{
+    const char *ts, *te;
+    int64_t n = 0, v = 0;
+    if (!cfi_text_token(&s, e, NULL, &ts, &te) || !cfi_parse_int(ts, te, &n) || n < 3) return false;
+    for (int64_t k = 0; k < n; ++k)
+        if (!cfi_text_token(&s, e, NULL, &ts, &te) || !cfi_parse_int(ts, te, &v) || v < 0) return false;
+    return count_tokens(s, e) <= 4;
+}
+
+/* A vertex line like the first one: the same number of tokens, all numbers. */
+static bool vertex_shaped(const char *s, const char *e, int64_t vertex_tokens)
+{
+    const char *ts, *te;
+    int64_t n = 0;
+    double x;
+    while (cfi_text_token(&s, e, NULL, &ts, &te)) {
+        if (!cfi_parse_double(ts, te, &x)) return false;
+        ++n;
+    }
+    return n == vertex_tokens;
+}
+
+/* Number of lines from the current one on (blank and comment lines
+ * skipped) that are face lines (face) or vertex lines of vertex_tokens
+ * values, up to the first that is not. *then_face (may be NULL) tells
+ * whether that next line is a face line. The reader is not moved. */
+static int64_t count_shaped(const off_reader *r, bool face, int64_t vertex_tokens, bool *then_face)
+{
+    off_reader c = *r;
+    int64_t n = 0;
+    bool more = true;
+    do {
+        if (face ? !face_shaped(c.ls, c.lend) : !vertex_shaped(c.ls, c.lend, vertex_tokens)) break;
+        ++n;
+    } while ((more = next_line(&c)));
+    if (then_face) *then_face = more && face_shaped(c.ls, c.lend);
+    return n;
+}
 
 /* Reads "nv nf [ne]" from the current line's remaining tokens. */
 static cf_status read_counts(off_reader *r, int64_t *nv, int64_t *nf)
 {
-    const char *s, *e;
+    const char *s[2], *e[2];
     int64_t c[2];
     for (int k = 0; k < 2; ++k) {
-        if (!next_token(r, &s, &e)) return fail(r, CF_ERR_PARSE, "expected vertex and face counts");
-        if (!cfi_parse_int(s, e, &c[k]) || c[k] < 0)
-            return fail(r, CF_ERR_PARSE, "bad count '%.*s'", tok_len(s, e), s);
+        if (!next_token(r, &s[k], &e[k])) return fail(r, CF_ERR_PARSE, "expected vertex and face counts");
+        if (!cfi_parse_int(s[k], e[k], &c[k]) || c[k] < 0)
+            return fail(r, CF_ERR_PARSE, "bad count '%.*s'", tok_len(s[k], e[k]), s[k]);
     }
+    if (c[0] > CFI_MAX_ELEMENTS || c[1] > CFI_MAX_ELEMENTS) /* quoted as written: they may have saturated */
+        return fail(r, CF_ERR_PARSE, "counts %.*s vertices, %.*s faces are too large", tok_len(s[0], e[0]), s[0],
+                    tok_len(s[1], e[1]), s[1]);
     *nv = c[0];
     *nf = c[1];
+    return CF_OK;
+}
+
+/* Called after the coordinates of vertex i were read: a line that has
+ * another number of values than vertex 0's and reads as a face means the
+ * header declares more vertices than the file holds (else the face would
+ * be taken for a vertex, its extra values ignored as colours). */
+static cf_status check_vertex_line(off_reader *r, int64_t i, int64_t nv, int64_t vertex_tokens)
+{
+    /* only the values after z are counted (none in plain OFF): the line is
+     * parsed again only in the rare case that it differs */
+    if (i == 0 || 3 + count_tokens(r->lp, r->lend) == vertex_tokens || !face_shaped(r->ls, r->lend)) return CF_OK;
+    return fail(r, CF_ERR_PARSE, "header declares %lld vertices, file holds %lld (this line is a face)",
+                (long long)nv, (long long)i);
+}
+
+/* After an error on the line of face f: if that line is no face but a
+ * vertex line (face 0), and the lines after the vertex lines are faces,
+ * the header declared too few vertices; the original error otherwise (a
+ * cut face "3 0 1" also looks like a vertex). */
+static cf_status diagnose_face_line(off_reader *r, cf_status st, int64_t f, int64_t nv, int64_t vertex_tokens)
+{
+    if (st == CF_ERR_NOMEM || f != 0 || nv == 0 || face_shaped(r->ls, r->lend) ||
+        !vertex_shaped(r->ls, r->lend, vertex_tokens))
+        return st;
+    bool then_face = false;
+    int64_t extra = count_shaped(r, false, vertex_tokens, &then_face);
+    if (!then_face) return st;
+    return fail(r, CF_ERR_PARSE, "header declares %lld vertices, file holds %lld", (long long)nv,
+                (long long)(nv + extra));
+}
+
+static cf_status read_face(off_reader *r, cfi_mesh_builder *b, int64_t f, int64_t nv)
+{
+    cf_context *ctx = r->ctx;
+    const char *s, *e;
+    int64_t n;
+    if (!next_token(r, &s, &e) || !cfi_parse_int(s, e, &n))
+        return fail(r, CF_ERR_PARSE, "face %lld: bad vertex count", (long long)f);
+    if (n < 3) return fail(r, CF_ERR_PARSE, "face %lld has %lld vertices", (long long)f, (long long)n);
+    int32_t v0 = -1, vp = -1;
+    for (int64_t k = 0; k < n; ++k) {
+        int64_t v;
+        if (!next_token(r, &s, &e))
+            return fail(r, CF_ERR_PARSE, "face %lld: %lld of %lld vertex indices", (long long)f, (long long)k,
+                        (long long)n);
+        if (!cfi_parse_int(s, e, &v))
+            return fail(r, CF_ERR_PARSE, "face %lld: bad index '%.*s'", (long long)f, tok_len(s, e), s);
+        if (v < 0 || v >= nv) /* quoted as written: a huge index has saturated in v */
+            return fail(r, CF_ERR_INDEX_RANGE, "face %lld: vertex index %.*s out of range [0, %lld)", (long long)f,
+                        tok_len(s, e), s, (long long)nv);
+        if (k == 0) v0 = (int32_t)v;
+        else if (k >= 2) {
+            if (b->triangles.count / 3 >= CFI_MAX_ELEMENTS) return fail(r, CF_ERR_PARSE, "too many triangles");
+            if (cfi_push_int3(ctx, &b->triangles, v0, vp, (int32_t)v) != CF_OK) return CF_ERR_NOMEM;
+        }
+        vp = (int32_t)v;
+    }
+    if (n > 3) b->polygon_count++;
     return CF_OK;
 }
 
@@ -114,60 +225,50 @@ static cf_status read_body(off_reader *r, cfi_mesh_builder *b)
     }
     cf_status st = read_counts(r, &nv, &nf);
     if (st != CF_OK) return st;
-    if (nv > CFI_MAX_ELEMENTS || nf > CFI_MAX_ELEMENTS)
-        return fail(r, CF_ERR_PARSE, "counts %lld vertices, %lld faces are too large", (long long)nv, (long long)nf);
     /* Each vertex line takes at least 6 bytes ("0 0 0\n"), each face line 8
      * ("3 0 1 2\n"): reject a header promising far more than the file can
      * hold before allocating anything for it (half the minimum, so that a
      * file cut a little short still gets the precise message below). */
-    size_t remaining = (size_t)(r->buf_end - r->p);
+    size_t remaining = (size_t)(r->tx.end - r->tx.p);
     if ((uint64_t)nv * 3 + (uint64_t)nf * 4 > (uint64_t)remaining + 1)
         return fail(r, CF_ERR_TRUNCATED, "header declares %lld vertices and %lld faces but only %zu bytes follow",
                     (long long)nv, (long long)nf, remaining);
     if (cfi_buf_reserve(ctx, &b->positions, (size_t)nv * 3) != CF_OK) return CF_ERR_NOMEM;
     if (cfi_buf_reserve(ctx, &b->triangles, (size_t)nf * 3) != CF_OK) return CF_ERR_NOMEM;
     double *pos = b->positions.data;
+    int64_t vertex_tokens = 0; /* values on the line of vertex 0 */
     for (int64_t i = 0; i < nv; ++i) {
         if (!next_line(r))
-            return cfi_error(ctx, CF_ERR_TRUNCATED, "%s: file ends after %lld of %lld vertices", r->name,
-                             (long long)i, (long long)nv);
+            return cfi_error(ctx, CF_ERR_TRUNCATED, "%s: header declares %lld vertices, file holds %lld", r->name,
+                             (long long)nv, (long long)i);
+        if (i == 0) vertex_tokens = count_tokens(r->ls, r->lend);
         for (int k = 0; k < 3; ++k) {
             if (!next_token(r, &s, &e))
                 return fail(r, CF_ERR_PARSE, "vertex %lld has %d coordinates, expected 3", (long long)i, k);
             if (!cfi_parse_double(s, e, &pos[3 * i + k]))
                 return fail(r, CF_ERR_PARSE, "vertex %lld: bad number '%.*s'", (long long)i, tok_len(s, e), s);
         }
+        if ((st = check_vertex_line(r, i, nv, vertex_tokens)) != CF_OK) return st;
         if (!isfinite(pos[3 * i]) || !isfinite(pos[3 * i + 1]) || !isfinite(pos[3 * i + 2]))
             return fail(r, CF_ERR_NONFINITE, "vertex %lld has a non-finite coordinate", (long long)i);
         b->positions.count += 3;
     }
     for (int64_t f = 0; f < nf; ++f) {
         if (!next_line(r))
-            return cfi_error(ctx, CF_ERR_TRUNCATED, "%s: file ends after %lld of %lld faces", r->name, (long long)f,
-                             (long long)nf);
-        int64_t n;
-        if (!next_token(r, &s, &e) || !cfi_parse_int(s, e, &n))
-            return fail(r, CF_ERR_PARSE, "face %lld: bad vertex count", (long long)f);
-        if (n < 3) return fail(r, CF_ERR_PARSE, "face %lld has %lld vertices", (long long)f, (long long)n);
-        int32_t v0 = -1, vp = -1;
-        for (int64_t k = 0; k < n; ++k) {
-            int64_t v;
-            if (!next_token(r, &s, &e))
-                return fail(r, CF_ERR_PARSE, "face %lld: %lld of %lld vertex indices", (long long)f, (long long)k,
-                            (long long)n);
-            if (!cfi_parse_int(s, e, &v))
-                return fail(r, CF_ERR_PARSE, "face %lld: bad index '%.*s'", (long long)f, tok_len(s, e), s);
-            if (v < 0 || v >= nv)
-                return fail(r, CF_ERR_INDEX_RANGE, "face %lld: vertex index %lld out of range [0, %lld)",
-                            (long long)f, (long long)v, (long long)nv);
-            if (k == 0) v0 = (int32_t)v;
-            else if (k >= 2) {
-                if (b->triangles.count / 3 >= CFI_MAX_ELEMENTS) return fail(r, CF_ERR_PARSE, "too many triangles");
-                if (cfi_push_int3(ctx, &b->triangles, v0, vp, (int32_t)v) != CF_OK) return CF_ERR_NOMEM;
-            }
-            vp = (int32_t)v;
-        }
-        if (n > 3) b->polygon_count++;
+            return cfi_error(ctx, CF_ERR_TRUNCATED, "%s: header declares %lld faces, file holds %lld", r->name,
+                             (long long)nf, (long long)f);
+        if ((st = read_face(r, b, f, nv)) != CF_OK) return diagnose_face_line(r, st, f, nv, vertex_tokens);
+    }
+    /* After the last face only blank lines and comments may follow: more
+     * faces than declared would otherwise be dropped without a word. */
+    if (next_line(r)) {
+        if (face_shaped(r->ls, r->lend))
+            return fail(r, CF_ERR_PARSE, "header declares %lld faces, file holds %lld", (long long)nf,
+                        (long long)(nf + count_shaped(r, true, 0, NULL)));
+        const char *ts = r->lp, *te = r->lp;
+        next_token(r, &ts, &te);
+        return fail(r, CF_ERR_PARSE, "data after the last face ('%.*s'; the header declares %lld faces)",
+                    tok_len(ts, te), ts, (long long)nf);
     }
     return CF_OK;
 }
@@ -178,11 +279,12 @@ cf_status cfi_read_off(cf_context *ctx, const char *buf, size_t size, const char
     memset(&r, 0, sizeof r);
     r.ctx = ctx;
     r.name = name;
-    r.p = buf;
-    r.buf_end = buf + size;
+    cf_status st = cfi_text_check_nul(ctx, name, buf, 0, size);
+    if (st != CF_OK) return st;
+    cfi_text_init(&r.tx, buf, size);
     cfi_mesh_builder b;
     cfi_builder_init(&b, ctx);
-    cf_status st = read_body(&r, &b);
+    st = read_body(&r, &b);
     if (st != CF_OK) {
         cfi_builder_free(&b);
         return st;

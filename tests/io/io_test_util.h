@@ -131,10 +131,13 @@ static inline int iot_temp_files(const char *path)
 static inline bool iot_has(const char *msg, const char *part) { return !part || strstr(msg, part) != NULL; }
 
 /* Reads `text` as `fmt` from memory and checks status and a message part. */
-#define IOT_EXPECT(ctx, fmt, text, status, part) \
+#define IOT_EXPECT(ctx, fmt, text, status, part) IOT_EXPECT_N(ctx, fmt, text, strlen(text), status, part)
+
+/* The same for `size` bytes (which may hold NUL bytes). */
+#define IOT_EXPECT_N(ctx, fmt, text, size, status, part) \
     do { \
         cf_mesh_data *iot_d_ = NULL; \
-        CHECK_STATUS(cf_read_mesh_memory((ctx), (text), strlen(text), (fmt), "t", &iot_d_), (status)); \
+        CHECK_STATUS(cf_read_mesh_memory((ctx), (text), (size), (fmt), "t", &iot_d_), (status)); \
         if (!iot_has(cf_context_message(ctx), (part))) \
             cft_fail(__FILE__, __LINE__, "message '%s' lacks '%s'", cf_context_message(ctx), (part)); \
         if ((status) != CF_OK) CHECK(iot_d_ == NULL); \

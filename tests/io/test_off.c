@@ -50,9 +50,9 @@ static void test_errors(void)
                "header declares 100000000 vertices and 1 faces but only 6 bytes follow");
     IOT_EXPECT(ctx, CF_FORMAT_OFF, "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2 \n\n\n\n", CF_OK, NULL);
     IOT_EXPECT(ctx, CF_FORMAT_OFF, "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n\n\n\n\n\n", CF_ERR_TRUNCATED,
-               "t: file ends after 1 of 2 faces");
+               "t: header declares 2 faces, file holds 1");
     IOT_EXPECT(ctx, CF_FORMAT_OFF, "OFF\n4 1 0\n0 0 0\n1 0 0\n0 1 0\n\n\n\n\n\n\n\n\n\n\n\n", CF_ERR_TRUNCATED,
-               "file ends after 3 of 4 vertices");
+               "t: header declares 4 vertices, file holds 3");
     IOT_EXPECT(ctx, CF_FORMAT_OFF, "OFF\n3 1 0\n0 0 0\n1 0\n0 1 0\n3 0 1 2\n", CF_ERR_PARSE,
                "t: line 4: vertex 1 has 2 coordinates, expected 3");
     IOT_EXPECT(ctx, CF_FORMAT_OFF, "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1", CF_ERR_TRUNCATED,

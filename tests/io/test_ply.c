@@ -275,7 +275,11 @@ static void test_errors(void)
     IOT_EXPECT(ctx, CF_FORMAT_PLY, HDR "0 0 0\n1 0 0\n0 1 0\n3 0 1.5 2\n", CF_ERR_PARSE, "bad vertex index 1.5");
     IOT_EXPECT(ctx, CF_FORMAT_PLY, HDR "0 0 0\n1 0 0\n0 1 0\n", CF_ERR_TRUNCATED, NULL);
     IOT_EXPECT(ctx, CF_FORMAT_PLY, HDR "0 0 0\n1 0 0\n0 1 0\n3 0 1", CF_ERR_TRUNCATED, "file ends inside face 0");
-    IOT_EXPECT(ctx, CF_FORMAT_PLY, HDR "0 0 0\n1 0 0\n0 1 0\n3 0 1 2 3 4 5 6 7 8 9", CF_OK, NULL); /* trailing data */
+    /* data beyond the header's properties is an error (issue 15, S1: it was accepted) */
+    IOT_EXPECT(ctx, CF_FORMAT_PLY, HDR "0 0 0\n1 0 0\n0 1 0\n3 0 1 2 3 4 5 6 7 8 9", CF_ERR_PARSE,
+               "t: line 13: face 0 has 11 values, its properties take 4");
+    IOT_EXPECT(ctx, CF_FORMAT_PLY, HDR "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 4 5 6 7 8 9", CF_ERR_PARSE,
+               "t: line 14: data after the last element ('3')");
     IOT_EXPECT(ctx, CF_FORMAT_PLY, HDR "0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n", CF_ERR_NONFINITE,
                "line 11: vertex 1 has a non-finite coordinate");
     IOT_EXPECT(ctx, CF_FORMAT_PLY, HDR "0 0 0\n1 0 z\n0 1 0\n3 0 1 2\n", CF_ERR_PARSE, "line 11: vertex 1: bad number 'z'");

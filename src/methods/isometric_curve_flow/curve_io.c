@@ -2,14 +2,16 @@
  * Polyline files for the isometric curve flow (curvflow/curve_flow.h):
  * CSV ("x,y" or "x y" per line) and a small SVG subset (first polygon /
  * polyline "points", or first path "d" with M, L, H, V, Z in absolute and
- * relative form). Writing goes through the atomic text writer of io.
+ * relative form). Text goes through the library's shared text input
+ * (io/text.h: byte-order mark skipped, NUL bytes refused with their offset,
+ * lines of any length); writing through the atomic text writer of io.
  */
 #include "curvflow/curve_flow.h"
 #include "curvflow/io.h"
 #include "core/core.h"
+#include "io/text.h"
 
 #include <ctype.h>
-#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -42,71 +44,41 @@ static cf_status push(pbuf *b, double x, double y)
     return CF_OK;
 }
 
-static cf_status read_file(cf_context *ctx, const char *path, char **text, size_t *size, size_t *length)
+/* One "x,y" (or "x y", "x;y") point per line; '#' comment lines and blank
+ * lines are skipped, a first line that holds no numbers is a header. A third
+ * column is ignored with one warning per file (a z or a label would
+ * otherwise vanish without a word). */
+static cf_status parse_csv(pbuf *b, const char *path, const char *text, size_t length)
 {
-    FILE *fp = fopen(path, "rb");
-    if (!fp) return cfi_error(ctx, CF_ERR_IO, "%s: cannot open (%s)", path, strerror(errno));
-    size_t cap = 4096, n = 0;
-    char *buf = cfi_malloc(ctx, cap);
-    if (!buf) {
-        fclose(fp);
-        return CF_ERR_NOMEM;
-    }
-    for (;;) {
-        if (n + 1 >= cap) {
-            char *nb = cfi_realloc(ctx, buf, cap, 2 * cap);
-            if (!nb) {
-                cfi_free(ctx, buf, cap);
-                fclose(fp);
-                return CF_ERR_NOMEM;
-            }
-            buf = nb;
-            cap *= 2;
+    cfi_text t;
+    cfi_text_init(&t, text, length);
+    bool warned = false;
+    while (cfi_text_next(&t)) {
+        const char *p = t.s, *s1, *e1, *s2, *e2, *s3, *e3;
+        if (!cfi_text_token(&p, t.e, ",;", &s1, &e1) || *s1 == '#') continue;
+        double x = 0.0, y = 0.0;
+        char *end = NULL;
+        bool ok = cfi_text_token(&p, t.e, ",;", &s2, &e2);
+        if (ok) {
+            x = strtod(s1, &end);
+            ok = end == e1;
         }
-        size_t r = fread(buf + n, 1, cap - 1 - n, fp);
-        n += r;
-        if (r == 0) break;
-    }
-    int err = ferror(fp);
-    fclose(fp);
-    if (err) {
-        cfi_free(ctx, buf, cap);
-        return cfi_error(ctx, CF_ERR_IO, "%s: read error", path);
-    }
-    buf[n] = '\0';
-    *text = buf;
-    *size = cap;
-    *length = n;
-    return CF_OK;
-}
-
-static cf_status parse_csv(pbuf *b, const char *path, char *text)
-{
-    int line = 0;
-    char *s = text;
-    while (*s) {
-        char *end = strchr(s, '\n');
-        if (end) *end = '\0';
-        ++line;
-        char *q = s;
-        while (isspace((unsigned char)*q)) ++q;
-        if (*q && *q != '#') {
-            char *e1;
-            double x = strtod(q, &e1);
-            char *r = e1;
-            while (isspace((unsigned char)*r) || *r == ',' || *r == ';') ++r;
-            char *e2;
-            double y = strtod(r, &e2);
-            if (e1 == q || e2 == r) {
-                if (b->count == 0 && line == 1) goto next;   /* header line */
-                return cfi_error(b->ctx, CF_ERR_PARSE, "%s:%d: expected two numbers \"x,y\"", path, line);
-            }
-            cf_status st = push(b, x, y);
-            if (st != CF_OK) return st;
+        if (ok) {
+            y = strtod(s2, &end);
+            ok = end == e2;
         }
-    next:
-        if (!end) break;
-        s = end + 1;
+        if (!ok) {
+            if (b->count == 0 && t.line == 1) continue; /* header line */
+            return cfi_error(b->ctx, CF_ERR_PARSE, "%s:%lld: expected two numbers \"x,y\"", path, (long long)t.line);
+        }
+        if (!warned && cfi_text_token(&p, t.e, ",;", &s3, &e3) && *s3 != '#') {
+            cfi_log(b->ctx, CF_LOG_WARNING,
+                    "%s: line %lld: a third column ('%.*s') is ignored (x,y expected; further ones silently)", path,
+                    (long long)t.line, cfi_tok_len(s3, e3), s3);
+            warned = true;
+        }
+        cf_status st = push(b, x, y);
+        if (st != CF_OK) return st;
     }
     return CF_OK;
 }
@@ -218,11 +190,11 @@ static int has_suffix(const char *path, const char *suffix)
  * `name` in messages; a NUL byte inside the text is refused. */
 static cf_status parse_text(cf_context *ctx, char *text, size_t length, const char *name, int svg, cf_curve **out)
 {
-    if (strlen(text) != length)
-        return cfi_error(ctx, CF_ERR_PARSE, "%s: byte %zu is a NUL byte (not a text file?)", name, strlen(text));
-    cf_status st = CF_OK;
+    cf_status st = cfi_text_check_nul(ctx, name, text, 0, length);
+    if (st != CF_OK) return st;
     pbuf b = {ctx, NULL, 0, 0};
     if (svg) {
+        text += cfi_bom_length(text, length);
         char *attr = svg_attribute(text, "polygon", "points");
         if (attr) {
             st = parse_points(&b, name, attr);
@@ -234,7 +206,7 @@ static cf_status parse_text(cf_context *ctx, char *text, size_t length, const ch
             st = cfi_error(ctx, CF_ERR_PARSE, "%s: no <polygon>, <polyline> or <path> found", name);
         }
     } else {
-        st = parse_csv(&b, name, text);
+        st = parse_csv(&b, name, text, length);
     }
     if (st == CF_OK && b.count >= 2 && b.xy[0] == b.xy[2 * b.count - 2] && b.xy[1] == b.xy[2 * b.count - 1]) --b.count;
     if (st == CF_OK && b.count < 3) st = cfi_error(ctx, CF_ERR_PARSE, "%s: need at least 3 points, found %lld", name, (long long)b.count);
@@ -268,7 +240,7 @@ cf_status cf_curve_read(cf_context *ctx, const char *path, cf_curve **out)
     *out = NULL;
     char *text = NULL;
     size_t cap = 0, length = 0;
-    cf_status st = read_file(ctx, path, &text, &cap, &length);
+    cf_status st = cfi_read_whole_file(ctx, path, &text, &length, &cap);
     if (st != CF_OK) return st;
     st = parse_text(ctx, text, length, path, has_suffix(path, ".svg"), out);
     cfi_free(ctx, text, cap);

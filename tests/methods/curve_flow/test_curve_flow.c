@@ -294,7 +294,7 @@ static void test_files(void)
     cf_curve_destroy(&c);
     const char with_nul[] = "0,0\n1,0\0\n1,1\n";
     CHECK_STATUS(cf_curve_read_memory(ctx, with_nul, sizeof with_nul - 1, 0, "nul.csv", &c), CF_ERR_PARSE);
-    CHECK(strstr(cf_context_message(ctx), "nul.csv: byte 7 is a NUL byte") != NULL);
+    CHECK(strstr(cf_context_message(ctx), "nul.csv: line 2: NUL byte at offset 7") != NULL);
     CHECK_STATUS(cf_curve_read_memory(ctx, "0,0\n1,x\n", 8, 0, "bad.csv", &c), CF_ERR_PARSE);
     CHECK(strstr(cf_context_message(ctx), "bad.csv:2:") != NULL);
     CHECK(c == NULL);

@@ -84,63 +84,14 @@ static int list_params(cf_flow_kind kind)
 }
 
 /* Reads --boundary-targets: lines "VERTEX X Y Z", each boundary vertex of
- * mesh exactly once; fills targets (3 nv, zero elsewhere). Returns an exit
- * code; messages name the file and line. */
-static int read_boundary_targets(const char *path, const cf_mesh *mesh, double *targets)
+ * mesh exactly once, a nonzero finite direction; fills targets (3 nv, zero
+ * elsewhere). The library's reader (any line length, '#' comments, BOM)
+ * names the file and line; every bad file is an input error (2). */
+static int read_boundary_targets(cf_context *ctx, const char *path, const cf_mesh *mesh, double *targets)
 {
-    FILE *fp = fopen(path, "r");
-    if (!fp) {
-        fprintf(stderr, "curvflow: %s: cannot open (%s)\n", path, strerror(errno));
-        return CLI_EXIT_INPUT;
-    }
-    int32_t nv = cf_mesh_vertex_count(mesh);
-    const uint8_t *on_boundary = cf_mesh_vertex_on_boundary(mesh);
-    unsigned char *seen = calloc((size_t)nv, 1);
-    if (!seen) {
-        fclose(fp);
-        return CLI_EXIT_NUMERICAL;
-    }
-    int code = CLI_EXIT_OK;
-    char line[4096];
-    long lineno = 0;
-    while (code == CLI_EXIT_OK && fgets(line, sizeof line, fp)) {
-        ++lineno;
-        char *hash = strchr(line, '#');
-        if (hash) *hash = '\0';
-        char *p = line, *end;
-        while (*p == ' ' || *p == '\t' || *p == '\r' || *p == '\n') ++p;
-        if (!*p) continue;
-        long v = strtol(p, &end, 10);
-        double d[3];
-        int ok = end != p;
-        for (int c = 0; ok && c < 3; ++c) {
-            p = end;
-            d[c] = strtod(p, &end);
-            ok = end != p;
-        }
-        while (ok && (*end == ' ' || *end == '\t' || *end == '\r' || *end == '\n')) ++end;
-        if (!ok || *end) {
-            fprintf(stderr, "curvflow: %s:%ld: expected 'VERTEX X Y Z'\n", path, lineno);
-            code = CLI_EXIT_INPUT;
-        } else if (v < 0 || v >= nv || !on_boundary[v]) {
-            fprintf(stderr, "curvflow: %s:%ld: vertex %ld is not a boundary vertex of the mesh\n", path, lineno, v);
-            code = CLI_EXIT_INPUT;
-        } else if (seen[v]) {
-            fprintf(stderr, "curvflow: %s:%ld: vertex %ld is listed twice\n", path, lineno, v);
-            code = CLI_EXIT_INPUT;
-        } else {
-            seen[v] = 1;
-            for (int c = 0; c < 3; ++c) targets[3 * v + c] = d[c];
-        }
-    }
-    fclose(fp);
-    for (int32_t i = 0; code == CLI_EXIT_OK && i < nv; ++i)
-        if (on_boundary[i] && !seen[i]) {
-            fprintf(stderr, "curvflow: %s: boundary vertex %d has no target (every boundary vertex needs one)\n", path, i);
-            code = CLI_EXIT_INPUT;
-        }
-    free(seen);
-    return code;
+    cf_status st = cf_read_vertex_directions_file(ctx, path, cf_mesh_vertex_count(mesh),
+                                                  cf_mesh_vertex_on_boundary(mesh), "boundary vertex", targets);
+    return st == CF_OK ? CLI_EXIT_OK : cli_fail(ctx, path, st);
 }
 
 int cli_flow(int argc, char **argv)
@@ -278,7 +229,7 @@ int cli_flow(int argc, char **argv)
             code = CLI_EXIT_NUMERICAL;
             goto done;
         }
-        code = read_boundary_targets(targets_path, mesh, targets);
+        code = read_boundary_targets(ctx, targets_path, mesh, targets);
         if (code != CLI_EXIT_OK) goto done;
         ((cf_spin_willmore_options *)cf_flow_options_method(&options))->boundary_targets = targets;
     }

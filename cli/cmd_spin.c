@@ -2,8 +2,9 @@
  * curvflow spin IN --rho FILE|NAME -o OUT
  * SpinXForm (Crane, Pinkall, Schroeder 2011/2013): spin transformation of a
  * mesh from a prescribed change of mean curvature rho per vertex, read from
- * a text file (one value per vertex, whitespace or newline separated, '#'
- * comments) or from a PLY vertex property of that name.
+ * a text file (one value per vertex, separated by whitespace, commas or
+ * newlines, '#' comments; read by cf_read_vertex_scalars_file) or from a PLY
+ * vertex property of that name.
  */
 #define _GNU_SOURCE
 #include "cli.h"
@@ -11,7 +12,6 @@
 #include "curvflow/io.h"
 #include "curvflow/spin_willmore.h"
 
-#include <errno.h>
 #include <getopt.h>
 #include <stdlib.h>
 #include <string.h>
@@ -30,47 +30,6 @@ static void usage(FILE *out)
             "  -f, --force      replace a read-only OUT\n"
             "Exit status: 0 ok, 1 usage error, 2 invalid input or an output that cannot or must not\n"
             "be written, 3 numerical failure.\n");
-}
-
-/* Reads nv numbers from a text file; returns 0 or an exit code. */
-static int read_values(const char *path, int32_t nv, double *out)
-{
-    FILE *fp = fopen(path, "r");
-    if (!fp) {
-        fprintf(stderr, "curvflow: %s: cannot open (%s)\n", path, strerror(errno));
-        return CLI_EXIT_INPUT;
-    }
-    int32_t count = 0;
-    char line[4096];
-    int lineno = 0;
-    while (fgets(line, sizeof line, fp)) {
-        ++lineno;
-        char *s = line;
-        for (;;) {
-            while (*s == ' ' || *s == '\t' || *s == ',' || *s == '\r' || *s == '\n') ++s;
-            if (!*s || *s == '#') break;
-            char *end;
-            double v = strtod(s, &end);
-            if (end == s) {
-                fprintf(stderr, "curvflow: %s:%d: expected a number\n", path, lineno);
-                fclose(fp);
-                return CLI_EXIT_INPUT;
-            }
-            if (count >= nv) {
-                fprintf(stderr, "curvflow: %s: more than %d values (one per vertex expected)\n", path, nv);
-                fclose(fp);
-                return CLI_EXIT_INPUT;
-            }
-            out[count++] = v;
-            s = end;
-        }
-    }
-    fclose(fp);
-    if (count != nv) {
-        fprintf(stderr, "curvflow: %s: %d values, expected one per vertex (%d)\n", path, count, nv);
-        return CLI_EXIT_INPUT;
-    }
-    return CLI_EXIT_OK;
 }
 
 int cli_spin(int argc, char **argv)
@@ -135,8 +94,12 @@ int cli_spin(int argc, char **argv)
     if (prop) {
         memcpy(rho, prop->values, (size_t)nv * sizeof(double));
     } else {
-        code = read_values(rho_arg, nv, rho);
-        if (code != CLI_EXIT_OK) goto done;
+        /* the library's reader: lines of any length, '#' comments, BOM, file:line messages */
+        st = cf_read_vertex_scalars_file(ctx, rho_arg, nv, rho);
+        if (st != CF_OK) {
+            code = cli_fail(ctx, rho_arg, st);
+            goto done;
+        }
     }
     for (int32_t i = 0; i < nv; ++i) rho[i] *= scale;
     st = cf_spin_transform(ctx, mesh, NULL, rho, x);

@@ -109,6 +109,44 @@ CF_API cf_status cf_read_mesh_memory(cf_context *ctx, const void *bytes, size_t 
  * e.g. "beetle.obj: face 12: edge (3, 9) is shared by 3 faces". */
 CF_API cf_status cf_load_mesh(cf_context *ctx, const char *path, cf_mesh **out);
 
+/* ---- per-vertex values from text files ------------------------------------
+ * The inputs of `curvflow spin --rho FILE` and `curvflow flow
+ * --boundary-targets FILE`. Lines may have any length; a UTF-8 byte-order
+ * mark at the start is skipped; '#' starts a comment that runs to the end of
+ * its line; a NUL byte is refused (CF_ERR_PARSE naming its offset). Messages
+ * name the file and line: "rho.txt: line 3: bad number 'x'". The _memory
+ * variants read `size` bytes (need not be NUL-terminated; `name`, may be
+ * NULL, stands for the file); the _file variants add CF_ERR_IO. */
+
+/* One number per vertex, in vertex order, separated by whitespace, commas
+ * or line breaks (one per line, all on one comma-separated line, or any
+ * mix). `out` (caller-allocated) receives vertex_count doubles. Statuses:
+ * CF_ERR_PARSE (a token that is not a number; more or fewer values than
+ * vertex_count), CF_ERR_NONFINITE (nan, inf, or a number that overflows),
+ * CF_ERR_NOMEM, CF_ERR_INVALID_ARG. */
+CF_API cf_status cf_read_vertex_scalars_file(cf_context *ctx, const char *path, int32_t vertex_count, double *out);
+CF_API cf_status cf_read_vertex_scalars_memory(cf_context *ctx, const void *bytes, size_t size, const char *name,
+                                               int32_t vertex_count, double *out);
+
+/* A direction per chosen vertex: one line "VERTEX X Y Z" (0-based vertex
+ * index, whitespace-separated) for each vertex with required[v] != 0
+ * (`required`: vertex_count bytes; NULL = every vertex), each exactly once;
+ * a line for any other vertex is an error that calls it "not a
+ * <required_name> of the mesh" (e.g. "boundary vertex"; NULL: "vertex").
+ * A direction must be finite, within |c| <= CF_MAX_COORDINATE, and not zero
+ * (largest component >= CF_MIN_EDGE_LENGTH): it gets normalised. `out`
+ * (caller-allocated) receives 3 vertex_count doubles, xyz, zero for
+ * vertices not listed. Statuses: CF_ERR_PARSE (malformed line, vertex not
+ * required, listed twice or missing, zero direction), CF_ERR_INDEX_RANGE
+ * (vertex index outside [0, vertex_count), quoted as written),
+ * CF_ERR_NONFINITE (NaN, Inf, beyond CF_MAX_COORDINATE), CF_ERR_NOMEM,
+ * CF_ERR_INVALID_ARG. */
+CF_API cf_status cf_read_vertex_directions_file(cf_context *ctx, const char *path, int32_t vertex_count,
+                                                const uint8_t *required, const char *required_name, double *out);
+CF_API cf_status cf_read_vertex_directions_memory(cf_context *ctx, const void *bytes, size_t size, const char *name,
+                                                  int32_t vertex_count, const uint8_t *required,
+                                                  const char *required_name, double *out);
+
 /* A named scalar field attached to the output. */
 typedef enum cf_field_location {
     CF_FIELD_VERTEX = 0, /* vertex_count values */

@@ -359,6 +359,51 @@ static cf_status run_checks(checker *c, const cf_mesh_desc *d, scratch *s)
 
     sort_halfedges(tri, s);
 
+    /* 4b. duplicated faces: two faces on the same three vertices (any
+     * rotation, either orientation). Checked before the edges because a
+     * duplicate otherwise shows as a non-manifold edge or an orientation
+     * conflict (or, two opposite faces alone, as a valid closed surface),
+     * none of which names the actual mistake. Two such faces share the edge
+     * of their two smallest vertices: within that edge's halfedge group,
+     * sort the faces by their third vertex. Reports the pair with the lowest
+     * face indices. */
+    {
+        int32_t bf1 = -1, bf2 = -1;
+        int32_t *key = s->tmp, *val = s->uf; /* free until step 6 */
+        for (int32_t i = 0; i < s->nh_ok;) {
+            int32_t j = group_end(tri, s, i), m = 0;
+            for (int32_t k = i; j - i > 1 && k < j; ++k) {
+                int32_t h = s->order[k], third = tri[cfi_he_prev(h)];
+                if (third < he_hi(tri, h)) continue; /* (lo, hi) is not this face's smallest pair */
+                key[m] = third;
+                val[m++] = cfi_he_face(h);
+            }
+            if (m > 1) heap_sort_pairs(key, val, m);
+            for (int32_t k = 1; k < m; ++k) {
+                if (key[k] != key[k - 1]) continue;
+                int32_t first = k - 1;
+                while (first > 0 && key[first - 1] == key[k]) --first;
+                if (bf1 < 0 || val[first] < bf1 || (val[first] == bf1 && val[k] < bf2)) {
+                    bf1 = val[first];
+                    bf2 = val[k];
+                }
+            }
+            i = j;
+        }
+        if (bf1 >= 0) {
+            const int32_t *a = tri + 3 * (size_t)bf1, *b = tri + 3 * (size_t)bf2;
+            bool same = false;
+            for (int q = 0; q < 3; ++q) same |= a[0] == b[q] && a[1] == b[(q + 1) % 3];
+            int32_t lo = a[0] < a[1] ? (a[0] < a[2] ? a[0] : a[2]) : (a[1] < a[2] ? a[1] : a[2]);
+            int32_t hi = a[0] > a[1] ? (a[0] > a[2] ? a[0] : a[2]) : (a[1] > a[2] ? a[1] : a[2]);
+            int32_t mid = a[0] + a[1] + a[2] - lo - hi;
+            int32_t count = 0;
+            defect(c, &count, CF_ERR_BAD_MESH, "faces %d and %d are the same triangle (vertices %d, %d, %d; %s orientation)",
+                   bf1, bf2, lo, mid, hi, same ? "same" : "opposite");
+            if (!c->report) return c->first;
+        }
+    }
+
     /* 5. edges with more than two faces; report the face that first makes
      * an edge exceed two (the third-lowest face index of its group). */
     {

@@ -325,8 +325,17 @@ def run_batch(manifest, method, out, steps=10, time_step=None, params=None, fmt=
     if report:
         for rec in ordered:
             if rec.get("output") and rec.get("status") == "ok":
+                req = rec.get("request", {})
+                params = [[k, str(v)] for k, v in sorted(req.get("params", {}).items())]
+                if req.get("time_step") is not None:
+                    params.insert(0, ["time_step", repr(req["time_step"])])
+                run = {"command": "python3 -m curvflow.batch", "method": req.get("method"), "input": rec["input"],
+                       "output": rec["output"], "log": rec.get("log"), "steps_requested": req.get("steps"),
+                       "steps_done": rec.get("steps"), "parameters": params,
+                       "seconds": {"run": rec.get("flow_seconds")} if rec.get("flow_seconds") else {}}
                 try:
-                    curvflow.report(rec["input"], rec["output"], log=rec.get("log"),
+                    curvflow.report(rec["input"], rec["output"], log=rec.get("log"), run=run,
+                                    title="%s: %s" % (rec["mesh"], req.get("method")),
                                     out=os.path.join(out, rec["mesh"] + ".html"))
                 except curvflow.CurvflowError as e:
                     if not quiet:

@@ -666,7 +666,7 @@ def write_text_atomic(path, text):
 def write_log(path, log):
     """Writes a flow log (list of dicts from curvflow.flow) as JSONL, one
     object per step in the CLI's --log layout, atomically."""
-    lines = [json.dumps(entry, allow_nan=False) for entry in log]
+    lines = [json.dumps(entry, allow_nan=False, separators=(",", ":")) for entry in log]
     write_text_atomic(path, "".join(line + "\n" for line in lines))
 
 

@@ -6,10 +6,12 @@ carrying a second implementation. When the library gains a C entry point
 for the report, only this function changes; callers (curvflow.batch's
 --report, scripts) keep the same signature.
 """
+import json
 import os
 import pathlib
 import shutil
 import subprocess
+import tempfile
 
 from .errors import UnsupportedError, UsageError
 
@@ -31,25 +33,41 @@ def cli_path():
     return shutil.which("curvflow")
 
 
-def report(input_path, output_path=None, log=None, out="report.html", timeout=None):
+def report(input_path, output_path=None, log=None, out="report.html", run=None, title=None, timeout=None):
     """Writes the HTML report of a run: `input_path` is the input mesh (or a
     run directory), `output_path` the result mesh, `log` the JSONL log
-    (curvflow.write_log or the CLI's --log), `out` the HTML file. Returns
-    `out`. Raises UnsupportedError when the curvflow tool in use has no
-    `report` command, UsageError with the tool's message when it fails."""
+    (curvflow.write_log or the CLI's --log), `run` the run description (a
+    path, or a dict with the keys of the demo's run.json: method, input,
+    output, steps_requested, steps_done, message, parameters as [name, value]
+    pairs, seconds {"run": ...}), `title` the page title, `out` the HTML
+    file. Returns `out`. Raises UnsupportedError when the curvflow tool in
+    use has no `report` command or no viewer, UsageError with the tool's
+    message when it fails."""
     exe = cli_path()
     if exe is None:
         raise UnsupportedError("curvflow.report: no curvflow executable found (set CURVFLOW_CLI)")
+    probe = subprocess.run([exe, "report", "--help"], capture_output=True, text=True)
+    if probe.returncode != 0:
+        raise UnsupportedError("curvflow.report: %s has no 'report' command" % exe)
     args = [exe, "report", os.fspath(input_path)]
     if output_path is not None:
         args.append(os.fspath(output_path))
     if log is not None:
         args += ["--log", os.fspath(log)]
+    if title is not None:
+        args += ["--title", title]
     args += ["-o", os.fspath(out)]
-    probe = subprocess.run([exe, "report", "--help"], capture_output=True, text=True)
-    if probe.returncode != 0:
-        raise UnsupportedError("curvflow.report: %s has no 'report' command yet" % exe)
-    run = subprocess.run(args, capture_output=True, text=True, timeout=timeout)
-    if run.returncode != 0:
-        raise UsageError("curvflow report failed (exit %d): %s" % (run.returncode, run.stderr.strip()))
+    with tempfile.TemporaryDirectory() as tmp:
+        if isinstance(run, dict):
+            path = os.path.join(tmp, "run.json")
+            with open(path, "w", encoding="utf-8") as fp:
+                json.dump(run, fp)
+            args += ["--run", path]
+        elif run is not None:
+            args += ["--run", os.fspath(run)]
+        proc = subprocess.run(args, capture_output=True, text=True, timeout=timeout)
+    if proc.returncode != 0:
+        msg = proc.stderr.strip()
+        cls = UnsupportedError if "report viewer" in msg else UsageError
+        raise cls("curvflow report failed (exit %d): %s" % (proc.returncode, msg))
     return os.fspath(out)

@@ -111,7 +111,7 @@ def test_batch_two_workers(data, meshes):
     # rerun: completed meshes are skipped (files untouched), failed ones rerun
     mtimes = {p: p.stat().st_mtime_ns for p in out.glob("*.ply")}
     proc = run_batch(manifest, "--method", "implicit-mcf", "--steps", "4", "--out", out, "--workers", "2",
-                     "--timeout", "4", "--format", "ply")
+                     "--timeout", "4", "--format", "ply", "--report")
     assert proc.returncode == 2
     assert "%d of %d meshes already complete" % (len(ok), len(rows)) in proc.stdout
     rows2 = read_summary(out)
@@ -119,6 +119,10 @@ def test_batch_two_workers(data, meshes):
         assert rows2[name]["skipped"] == "True" and rows2[name]["status"] == "ok"
         assert (out / (name + ".ply")).stat().st_mtime_ns == mtimes[out / (name + ".ply")]
     assert rows2["crashy"]["status"] == "ok"  # no fault injected this time
+    # --report: one HTML report per completed mesh through curvflow.report (when the tool has the viewer)
+    if "report of" not in proc.stdout:
+        assert sorted(p.stem for p in out.glob("*.html")) == sorted(ok + ["crashy"])
+        assert "bumpy: implicit-mcf" in (out / "bumpy.html").read_text()
     assert rows2["truncated"]["status"] == "invalid-mesh"
 
 

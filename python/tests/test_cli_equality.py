@@ -114,6 +114,11 @@ def test_edit_equals_cli(cli, meshes, tmp_path, energy):
     b, _ = curvflow.edit(V, F, handles, energy=energy, iterations=12)
     c, _ = curvflow.flow(V, F, "stretch-bend-edit", steps=12, handles=hf, energy=energy)
     assert np.array_equal(a, expected) and np.array_equal(b, expected) and np.array_equal(c, expected)
+    # `curvflow flow --method stretch-bend-edit --handles FILE` is the same run
+    out_flow = tmp_path / "flow.obj"
+    run_cli(cli, "flow", meshes["bar"], "-o", out_flow, "--method", "stretch-bend-edit", "--handles", hf,
+            "--steps", "12", "-p", "energy=" + energy, "-q")
+    assert np.array_equal(curvflow.load(out_flow)[0], c)
     _compare_logs(read_jsonl(log), log_a)
     # explicit arrays: the vertices the file selects with the targets it gives
     moved = np.flatnonzero(np.any(expected != V, axis=1))

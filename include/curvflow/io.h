@@ -109,6 +109,14 @@ CF_API cf_status cf_read_mesh_memory(cf_context *ctx, const void *bytes, size_t 
  * e.g. "beetle.obj: face 12: edge (3, 9) is shared by 3 faces". */
 CF_API cf_status cf_load_mesh(cf_context *ctx, const char *path, cf_mesh **out);
 
+/* The check every text input of the library gets (meshes, polylines,
+ * per-vertex values), for readers outside io (the curve flow's CSV / SVG):
+ * *start (may be NULL) receives the offset of the text after a UTF-8
+ * byte-order mark at the start (3, else 0); a NUL byte in the `size` bytes
+ * is CF_ERR_PARSE "<name>: line L: NUL byte at offset K (not a text file?)",
+ * K counted from bytes[0]. `name` may be NULL ("<memory>"). */
+CF_API cf_status cf_text_check(cf_context *ctx, const void *bytes, size_t size, const char *name, size_t *start);
+
 /* ---- per-vertex values from text files ------------------------------------
  * The inputs of `curvflow spin --rho FILE` and `curvflow flow
  * --boundary-targets FILE`. Lines may have any length; a UTF-8 byte-order

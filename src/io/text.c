@@ -3,6 +3,7 @@
  * byte-order mark, NUL bytes, lines of any length, tokens.
  */
 #include "io/text.h"
+#include "curvflow/io.h"
 
 #include <errno.h>
 #include <stdio.h>
@@ -56,6 +57,18 @@ cf_status cfi_text_check_nul(cf_context *ctx, const char *name, const char *buf,
     size_t offset = (size_t)(nul - buf);
     return cfi_error(ctx, CF_ERR_PARSE, "%s: line %lld: NUL byte at offset %zu (not a text file?)", name,
                      (long long)cfi_text_line_of(buf, offset), offset);
+}
+
+cf_status cf_text_check(cf_context *ctx, const void *bytes, size_t size, const char *name, size_t *start)
+{
+    if (!ctx) return CF_ERR_INVALID_ARG;
+    if (!name) name = "<memory>";
+    if (start) *start = 0;
+    if (!bytes && size > 0) return cfi_error(ctx, CF_ERR_INVALID_ARG, "%s: text check: bytes is NULL", name);
+    if (size == 0) return CF_OK;
+    cf_status st = cfi_text_check_nul(ctx, name, bytes, 0, size);
+    if (st == CF_OK && start) *start = cfi_bom_length(bytes, size);
+    return st;
 }
 
 cf_status cfi_read_whole_file(cf_context *ctx, const char *path, char **out, size_t *size_out, size_t *cap_out)

@@ -2,16 +2,17 @@
  * Polyline files for the isometric curve flow (curvflow/curve_flow.h):
  * CSV ("x,y" or "x y" per line) and a small SVG subset (first polygon /
  * polyline "points", or first path "d" with M, L, H, V, Z in absolute and
- * relative form). Text goes through the library's shared text input
- * (io/text.h: byte-order mark skipped, NUL bytes refused with their offset,
- * lines of any length); writing through the atomic text writer of io.
+ * relative form). Files are read whole (lines of any length) and checked
+ * by io's cf_text_check as every text input of the library (byte-order mark
+ * skipped, NUL bytes refused with their offset); writing goes through the
+ * atomic text writer of io.
  */
 #include "curvflow/curve_flow.h"
 #include "curvflow/io.h"
 #include "core/core.h"
-#include "io/text.h"
 
 #include <ctype.h>
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -44,37 +45,95 @@ static cf_status push(pbuf *b, double x, double y)
     return CF_OK;
 }
 
+static cf_status read_file(cf_context *ctx, const char *path, char **text, size_t *size, size_t *length)
+{
+    FILE *fp = fopen(path, "rb");
+    if (!fp) return cfi_error(ctx, CF_ERR_IO, "%s: cannot open (%s)", path, strerror(errno));
+    size_t cap = 4096, n = 0;
+    char *buf = cfi_malloc(ctx, cap);
+    if (!buf) {
+        fclose(fp);
+        return CF_ERR_NOMEM;
+    }
+    for (;;) {
+        if (n + 1 >= cap) {
+            char *nb = cfi_realloc(ctx, buf, cap, 2 * cap);
+            if (!nb) {
+                cfi_free(ctx, buf, cap);
+                fclose(fp);
+                return CF_ERR_NOMEM;
+            }
+            buf = nb;
+            cap *= 2;
+        }
+        size_t r = fread(buf + n, 1, cap - 1 - n, fp);
+        n += r;
+        if (r == 0) break;
+    }
+    int err = ferror(fp);
+    fclose(fp);
+    if (err) {
+        cfi_free(ctx, buf, cap);
+        return cfi_error(ctx, CF_ERR_IO, "%s: read error", path);
+    }
+    buf[n] = '\0';
+    *text = buf;
+    *size = cap;
+    *length = n;
+    return CF_OK;
+}
+
+/* CSV separators: whitespace, ',' and ';'. */
+static bool csv_sep(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f' || c == ',' || c == ';'; }
+
+/* Next CSV token of [*p, e); false when none is left. */
+static bool csv_token(const char **p, const char *e, const char **ts, const char **te)
+{
+    const char *q = *p;
+    while (q < e && csv_sep(*q)) ++q;
+    *ts = q;
+    while (q < e && !csv_sep(*q)) ++q;
+    *te = q;
+    *p = q;
+    return *ts < q;
+}
+
+static int tok_len(const char *s, const char *e) { return (int)(e - s > 64 ? 64 : e - s); }
+
 /* One "x,y" (or "x y", "x;y") point per line; '#' comment lines and blank
  * lines are skipped, a first line that holds no numbers is a header. A third
  * column is ignored with one warning per file (a z or a label would
- * otherwise vanish without a word). */
+ * otherwise vanish without a word). Lines have any length: they are ranges
+ * of the whole text (NUL-terminated, so strtod stops at its end). */
 static cf_status parse_csv(pbuf *b, const char *path, const char *text, size_t length)
 {
-    cfi_text t;
-    cfi_text_init(&t, text, length);
     bool warned = false;
-    while (cfi_text_next(&t)) {
-        const char *p = t.s, *s1, *e1, *s2, *e2, *s3, *e3;
-        if (!cfi_text_token(&p, t.e, ",;", &s1, &e1) || *s1 == '#') continue;
+    const char *end = text + length;
+    int64_t line = 0;
+    for (const char *s = text; s < end;) {
+        const char *nl = memchr(s, '\n', (size_t)(end - s)), *e = nl ? nl : end, *p = s, *s1, *e1, *s2, *e2, *s3, *e3;
+        s = nl ? nl + 1 : end;
+        ++line;
+        if (!csv_token(&p, e, &s1, &e1) || *s1 == '#') continue;
         double x = 0.0, y = 0.0;
-        char *end = NULL;
-        bool ok = cfi_text_token(&p, t.e, ",;", &s2, &e2);
+        char *stop = NULL;
+        bool ok = csv_token(&p, e, &s2, &e2);
         if (ok) {
-            x = strtod(s1, &end);
-            ok = end == e1;
+            x = strtod(s1, &stop);
+            ok = stop == e1;
         }
         if (ok) {
-            y = strtod(s2, &end);
-            ok = end == e2;
+            y = strtod(s2, &stop);
+            ok = stop == e2;
         }
         if (!ok) {
-            if (b->count == 0 && t.line == 1) continue; /* header line */
-            return cfi_error(b->ctx, CF_ERR_PARSE, "%s:%lld: expected two numbers \"x,y\"", path, (long long)t.line);
+            if (b->count == 0 && line == 1) continue; /* header line */
+            return cfi_error(b->ctx, CF_ERR_PARSE, "%s:%lld: expected two numbers \"x,y\"", path, (long long)line);
         }
-        if (!warned && cfi_text_token(&p, t.e, ",;", &s3, &e3) && *s3 != '#') {
+        if (!warned && csv_token(&p, e, &s3, &e3) && *s3 != '#') {
             cfi_log(b->ctx, CF_LOG_WARNING,
                     "%s: line %lld: a third column ('%.*s') is ignored (x,y expected; further ones silently)", path,
-                    (long long)t.line, cfi_tok_len(s3, e3), s3);
+                    (long long)line, tok_len(s3, e3), s3);
             warned = true;
         }
         cf_status st = push(b, x, y);
@@ -190,11 +249,13 @@ static int has_suffix(const char *path, const char *suffix)
  * `name` in messages; a NUL byte inside the text is refused. */
 static cf_status parse_text(cf_context *ctx, char *text, size_t length, const char *name, int svg, cf_curve **out)
 {
-    cf_status st = cfi_text_check_nul(ctx, name, text, 0, length);
+    size_t start = 0;
+    cf_status st = cf_text_check(ctx, text, length, name, &start);
     if (st != CF_OK) return st;
+    text += start;
+    length -= start;
     pbuf b = {ctx, NULL, 0, 0};
     if (svg) {
-        text += cfi_bom_length(text, length);
         char *attr = svg_attribute(text, "polygon", "points");
         if (attr) {
             st = parse_points(&b, name, attr);
@@ -240,7 +301,7 @@ cf_status cf_curve_read(cf_context *ctx, const char *path, cf_curve **out)
     *out = NULL;
     char *text = NULL;
     size_t cap = 0, length = 0;
-    cf_status st = cfi_read_whole_file(ctx, path, &text, &length, &cap);
+    cf_status st = read_file(ctx, path, &text, &cap, &length);
     if (st != CF_OK) return st;
     st = parse_text(ctx, text, length, path, has_suffix(path, ".svg"), out);
     cfi_free(ctx, text, cap);

@@ -266,6 +266,14 @@ static void test_curve_text(void)
     CHECK_OK(ctx, cf_curve_read_memory(ctx, svg, sizeof svg - 1, 1, NULL, &c));
     CHECK(c && c->count == 3);
     cf_curve_destroy(&c);
+    /* the public check the curve reader uses */
+    size_t start = 99;
+    CHECK_OK(ctx, cf_text_check(ctx, csv, sizeof csv - 1, NULL, &start));
+    CHECK(start == 3);
+    CHECK_OK(ctx, cf_text_check(ctx, "", 0, NULL, &start));
+    CHECK(start == 0);
+    CHECK_STATUS(cf_text_check(ctx, "a\n\0", 3, NULL, &start), CF_ERR_PARSE);
+    CHECK(iot_has(cf_context_message(ctx), "<memory>: line 2: NUL byte at offset 2"));
     static const char nul[] = "0,0\n1,0\n1\0,1\n";
     CHECK_STATUS(cf_curve_read_memory(ctx, nul, sizeof nul - 1, 0, "n.csv", &c), CF_ERR_PARSE);
     CHECK(iot_has(cf_context_message(ctx), "n.csv: line 3: NUL byte at offset 9"));

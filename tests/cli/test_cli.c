@@ -436,6 +436,14 @@ static void test_demo(void)
     read_file(in_dir("demo/log.jsonl"), log, sizeof log);
     CHECK(count_lines(log) == 4);
     CHECK_RUN("demo --output-dir ico.obj", 2); /* a file, not a folder */
+    /* the demo's outputs pass the common output check before any work: a
+     * read-only file of an earlier demo is kept unless --force */
+    CHECK(chmod(in_dir("demo/q.png"), 0444) == 0);
+    CHECK_RUN("demo --output-dir demo --steps 1 --quiet", 2);
+    CHECK(strstr(err_text, "curvflow: demo/q.png: the existing file is read-only; --force replaces it") != NULL);
+    read_file(in_dir("demo/log.jsonl"), log, sizeof log);
+    CHECK(count_lines(log) == 4); /* not rerun: still the log of the first run */
+    CHECK(chmod(in_dir("demo/q.png"), 0644) == 0);
     CHECK_RUN("demo extra", 1);
 }
 

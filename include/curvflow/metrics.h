@@ -117,6 +117,30 @@ CF_API cf_status cf_point_to_surface_distance(cf_context *ctx, int32_t n, const 
 CF_API cf_status cf_aligned_surface_distance(cf_context *ctx, const cf_mesh *mesh, const double *a, const double *b,
                                              int with_scale, double *max_dist, double *rms_dist, double *scale);
 
+/* ---- mesh quality summary ------------------------------------------------- */
+
+/* The corner-angle and face-area figures of `curvflow info` (and of the
+ * Python package's curvflow.info). Angles in radians; medians are the
+ * element n / 2 of the sorted values (upper median); "below 10 degrees"
+ * compares angle * 180 / pi < 10. */
+typedef struct cf_mesh_quality {
+    double min_angle, median_angle, max_angle;      /* over all 3 nf corners */
+    double fraction_angles_below_10_degrees;        /* of all corners */
+    double median_face_min_angle;                   /* over faces, of each face's smallest angle */
+    double fraction_faces_min_below_10_degrees;     /* faces whose smallest angle is below 10 degrees */
+    double total_area;                              /* face areas summed in face order */
+    double min_face_area, median_face_area, max_face_area;
+    double willmore_over_4pi;                       /* cf_willmore_energy / 4 pi; NaN with boundary loops */
+    double volume;                                  /* cf_enclosed_volume; NaN with boundary loops */
+} cf_mesh_quality;
+
+/* Fills `out` for `mesh` at `positions` (3 nv; NULL = the rest positions).
+ * Statuses: CF_OK, CF_ERR_INVALID_ARG (NULL mesh or out), CF_ERR_NONFINITE
+ * (a coordinate NaN, infinite or beyond CF_MAX_COORDINATE, naming the
+ * vertex), CF_ERR_NOMEM; out is untouched on failure. */
+CF_API cf_status cf_mesh_quality_compute(cf_context *ctx, const cf_mesh *mesh, const double *positions,
+                                         cf_mesh_quality *out);
+
 #ifdef __cplusplus
 }
 #endif

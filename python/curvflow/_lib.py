@@ -130,6 +130,13 @@ class ShapeSummary(Structure):
                 ("sphere_max_deviation", c_double), ("sphere_rms_deviation", c_double)]
 
 
+class MeshQuality(Structure):
+    _fields_ = [(name, c_double) for name in (
+        "min_angle", "median_angle", "max_angle", "fraction_angles_below_10_degrees", "median_face_min_angle",
+        "fraction_faces_min_below_10_degrees", "total_area", "min_face_area", "median_face_area", "max_face_area",
+        "willmore_over_4pi", "volume")]
+
+
 PROGRESS_FN = CFUNCTYPE(c_int, c_void_p, POINTER(FlowInfo))
 LOG_FN = CFUNCTYPE(None, c_void_p, c_int, c_char_p)
 
@@ -254,6 +261,7 @@ def _declare(lib):
     f("cf_log_area_distortion", S, P, P, P, P, P, POINTER(Stats))
     f("cf_angle_change", S, P, P, P, P, P, POINTER(Stats))
     f("cf_shape_summary_compute", S, P, P, P, POINTER(ShapeSummary))
+    f("cf_mesh_quality_compute", S, P, P, P, POINTER(MeshQuality))
     # ops.h
     f("cf_corner_angles", S, P, P, P, P)
     f("cf_face_areas", S, P, P, P, P)

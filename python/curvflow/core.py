@@ -18,7 +18,7 @@ import math
 import os
 import signal
 import threading
-from ctypes import byref, c_double, c_int, c_int32, c_void_p, POINTER
+from ctypes import byref, c_int, c_int32, c_void_p, POINTER
 
 import numpy as np
 
@@ -678,11 +678,6 @@ def read_log(path):
 
 # ---- info ------------------------------------------------------------------------
 
-def _upper_median(sorted_values):
-    # the CLI's (and ../shared/meshes/CHECKS.tsv's) median: element n // 2
-    return float(sorted_values[len(sorted_values) // 2]) if len(sorted_values) else float("nan")
-
-
 def info(V_or_path, F=None):
     """Mesh summary as `curvflow info --json`: counts, texture coordinates,
     the validation report (every defect counted), and for a valid mesh
@@ -704,7 +699,6 @@ def info(V_or_path, F=None):
             out["polygons_triangulated"] = d.polygon_count
             out["texture_coordinates"] = ("none" if d.uv_count == 0 else
                                           "per-corner" if d.uv_triangles else "per-vertex")
-            V = _copy_out(d.positions, (d.vertex_count, 3))
         else:
             V, Fa = _vertices(V_or_path), _faces(F)
             desc = _desc(V, Fa)
@@ -729,41 +723,17 @@ def info(V_or_path, F=None):
                         ("boundary_loops", "boundary_loop_count"), ("euler_characteristic", "euler_characteristic"),
                         ("genus", "genus")):
             out[key] = getattr(L, "cf_mesh_" + fn)(m)
-        nf = out["faces"]
-        x = L.cf_mesh_positions(m)
-        angles, areas = np.empty(3 * nf), np.empty(nf)
-        ctx.check(L.cf_corner_angles(ctx.ptr, m, x, angles.ctypes.data))
-        ctx.check(L.cf_face_areas(ctx.ptr, m, x, areas.ctypes.data))
+        q = _lib.MeshQuality()
+        ctx.check(L.cf_mesh_quality_compute(ctx.ptr, m, None, byref(q)))
         deg = 180.0 / math.pi
-        face_min = np.sort(angles.reshape(nf, 3).min(axis=1))
-        s = np.sort(angles)
-        out["angles"] = {"min_degrees": s[0] * deg, "median_degrees": _upper_median(s) * deg,
-                         "max_degrees": s[-1] * deg,
-                         "fraction_below_10_degrees": float(np.count_nonzero(angles * deg < 10.0)) / s.size,
-                         "median_face_min_degrees": _upper_median(face_min) * deg,
-                         "fraction_faces_min_below_10_degrees":
-                             float(np.count_nonzero(face_min * deg < 10.0)) / nf}
-        a = np.sort(areas)
-        out["face_areas"] = {"total": _sum(areas), "min": a[0],
-                             "median": _upper_median(a), "max": a[-1], "max_over_min": a[-1] / a[0]}
-        if out["boundary_loops"] == 0:
-            w, vol = c_double(), c_double()
-            ctx.check(L.cf_willmore_energy(ctx.ptr, m, x, byref(w)))
-            ctx.check(L.cf_enclosed_volume(ctx.ptr, m, x, byref(vol)))
-            out["willmore_over_4pi"] = w.value / (4.0 * math.pi)
-            out["volume"] = vol.value
-        else:
-            out["willmore_over_4pi"] = None
-            out["volume"] = None
-        for group in (out["angles"], out["face_areas"]):
-            for k, v in group.items():
-                group[k] = float(v)
+        out["angles"] = {"min_degrees": q.min_angle * deg, "median_degrees": q.median_angle * deg,
+                         "max_degrees": q.max_angle * deg,
+                         "fraction_below_10_degrees": q.fraction_angles_below_10_degrees,
+                         "median_face_min_degrees": q.median_face_min_angle * deg,
+                         "fraction_faces_min_below_10_degrees": q.fraction_faces_min_below_10_degrees}
+        out["face_areas"] = {"total": q.total_area, "min": q.min_face_area, "median": q.median_face_area,
+                             "max": q.max_face_area, "max_over_min": q.max_face_area / q.min_face_area}
+        closed = out["boundary_loops"] == 0
+        out["willmore_over_4pi"] = q.willmore_over_4pi if closed else None
+        out["volume"] = q.volume if closed else None
         return out
-
-
-def _sum(values):
-    # sequential sum in face order, as the CLI adds the areas
-    total = 0.0
-    for v in values.tolist():
-        total += v
-    return total

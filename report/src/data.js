@@ -49,6 +49,10 @@ export function loadReportData(doc) {
   };
   for (let i = 0; i < mesh.triangles.length; ++i)
     if (mesh.triangles[i] >= nv) throw new Error(`report data: face ${Math.floor(i / 3)} uses vertex ${mesh.triangles[i]} >= ${nv}`);
+  if (mesh.uv && mesh.uvTriangles)
+    for (let i = 0; i < mesh.uvTriangles.length; ++i)
+      if (2 * mesh.uvTriangles[i] + 1 >= mesh.uv.length)
+        throw new Error(`report data: corner ${i} uses uv ${mesh.uvTriangles[i]} >= ${mesh.uv.length / 2}`);
   const fields = {};
   for (const [name, b64] of Object.entries(data.fields || {})) fields[name] = decodeF32(b64, nf, name);
   return { data, mesh, fields };

@@ -37,6 +37,11 @@ extern "C" {
 
 /* Corner angles: angles[3 f + k] is the angle of face f at corner k. */
 CF_API cf_status cf_corner_angles(cf_context *ctx, const cf_mesh *mesh, const double *positions, double *angles);
+/* One of them: the angle (radians, in [0, pi]) at corner `corner` (0..2) of
+ * the triangle with vertex indices triangle[0..2] into positions (3 nv), as
+ * atan2(|u x v|, u . v), accurate near 0 and pi. No checks (a kernel for
+ * loops that already validated their input). */
+CF_API double cf_corner_angle(const double *positions, const int32_t triangle[3], int corner);
 
 /* Cotangents of corner angles, same layout (cot[3f+k] is the cotangent at
  * corner k, i.e. of the angle opposite halfedge 3f + (k+1)%3). */
@@ -64,6 +69,23 @@ CF_API cf_status cf_vertex_areas(cf_context *ctx, const cf_mesh *mesh, const dou
 /* Positive semi-definite cotan Laplacian L (nv x nv, symmetric, both
  * triangles stored, sorted, one-pass assembly). */
 CF_API cf_status cf_cotan_laplacian(cf_context *ctx, const cf_mesh *mesh, const double *positions, cf_sparse **out);
+
+/* The same L for flows that change the geometry every step: the pattern is
+ * built once and the values are refilled in place without allocating.
+ * cf_cotan_laplacian_slot_count(mesh) = nv + 2 ne is the size of the
+ * caller's slot_map (the diagonal entry of vertex v at v, entries (i, j) and
+ * (j, i) of edge e at nv + 2 e and nv + 2 e + 1); _with_slots builds L for
+ * `positions` as cf_cotan_laplacian does and fills slot_map; _refill
+ * overwrites L's values for new positions (same sign, PSD). The refill does
+ * not check positions for finiteness (the caller's step does; NaN gives
+ * NaN values) and fails with CF_ERR_DEGENERATE_FACE naming the face on a
+ * zero-area face (L then holds partial values). Statuses otherwise as
+ * cf_cotan_laplacian; CF_ERR_INVALID_ARG for NULL arguments. */
+CF_API int64_t cf_cotan_laplacian_slot_count(const cf_mesh *mesh);
+CF_API cf_status cf_cotan_laplacian_with_slots(cf_context *ctx, const cf_mesh *mesh, const double *positions,
+                                               cf_sparse **out, int64_t *slot_map);
+CF_API cf_status cf_cotan_laplacian_refill(cf_sparse *l, const cf_mesh *mesh, const double *positions,
+                                           const int64_t *slot_map);
 
 /* Cotan weights per edge, w_e = (cot a + cot b) / 2 (ne entries). This is
  * also the DEC Hodge star *1. */

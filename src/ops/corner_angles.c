@@ -26,3 +26,8 @@ cf_status cf_corner_cotangents(cf_context *ctx, const cf_mesh *mesh, const doubl
     }
     return CF_OK;
 }
+
+double cf_corner_angle(const double *positions, const int32_t triangle[3], int corner)
+{
+    return cfi_corner_angle(positions, triangle, corner);
+}

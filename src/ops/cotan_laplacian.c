@@ -96,6 +96,23 @@ cf_status cf_cotan_laplacian(cf_context *ctx, const cf_mesh *mesh, const double 
     return cfi_cotan_laplacian_pattern(ctx, mesh, positions, out, NULL);
 }
 
+/* Public face of the refill path (ops/cotan_laplacian.h stays private to
+ * ops; the layer check, tests/architecture, enforces it). */
+int64_t cf_cotan_laplacian_slot_count(const cf_mesh *mesh) { return cfi_cotan_laplacian_triplet_count(mesh); }
+
+cf_status cf_cotan_laplacian_with_slots(cf_context *ctx, const cf_mesh *mesh, const double *positions, cf_sparse **out,
+                                        int64_t *slot_map)
+{
+    if (!ctx) return CF_ERR_INVALID_ARG;
+    if (!slot_map) return cfi_error(ctx, CF_ERR_INVALID_ARG, "cotan_laplacian_with_slots: slot_map is NULL");
+    return cfi_cotan_laplacian_pattern(ctx, mesh, positions, out, slot_map);
+}
+
+cf_status cf_cotan_laplacian_refill(cf_sparse *l, const cf_mesh *mesh, const double *positions, const int64_t *slot_map)
+{
+    return cfi_cotan_laplacian_refill(l, mesh, positions, slot_map);
+}
+
 cf_status cfi_cotan_laplacian_apply(cf_context *ctx, const cf_mesh *mesh, const double *positions, int32_t dim,
                                     const double *x, double *y)
 {

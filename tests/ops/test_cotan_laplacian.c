@@ -184,6 +184,44 @@ static void test_refill(void)
     cf_context_destroy(&ctx);
 }
 
+/* The public refill path (what the flows use; ops/cotan_laplacian.h is
+ * private to ops) gives the values of the private one, bit for bit, and the
+ * single-corner angle equals cf_corner_angles. */
+static void test_public_refill(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *m = NULL;
+    CHECK_OK(ctx, cf_generate_bumpy_sphere(ctx, 2, 0.2, 5u, &m));
+    if (!m) return;
+    int32_t nv = cf_mesh_vertex_count(m), nf = cf_mesh_face_count(m);
+    int64_t n = cf_cotan_laplacian_slot_count(m);
+    CHECK(n == cfi_cotan_laplacian_triplet_count(m));
+    int64_t *slots = malloc(sizeof(int64_t) * n), *slots2 = malloc(sizeof(int64_t) * n);
+    cf_sparse *l = NULL, *l2 = NULL;
+    CHECK_STATUS(cf_cotan_laplacian_with_slots(ctx, m, cf_mesh_positions(m), &l, NULL), CF_ERR_INVALID_ARG);
+    CHECK_OK(ctx, cf_cotan_laplacian_with_slots(ctx, m, cf_mesh_positions(m), &l, slots));
+    CHECK_OK(ctx, cfi_cotan_laplacian_pattern(ctx, m, cf_mesh_positions(m), &l2, slots2));
+    double *y = malloc(sizeof(double) * 3 * nv);
+    for (int32_t i = 0; i < 3 * nv; ++i) y[i] = cf_mesh_positions(m)[i] * (1.0 + 0.05 * urand());
+    CHECK_OK(ctx, cf_cotan_laplacian_refill(l, m, y, slots));
+    CHECK_OK(ctx, cfi_cotan_laplacian_refill(l2, m, y, slots2));
+    for (int64_t k = 0; k < cf_sparse_nnz(l); ++k) CHECK(l->values[k] == l2->values[k]);
+    CHECK_STATUS(cf_cotan_laplacian_refill(l, m, y, NULL), CF_ERR_INVALID_ARG);
+    double *angles = malloc(sizeof(double) * 3 * nf);
+    CHECK_OK(ctx, cf_corner_angles(ctx, m, y, angles));
+    for (int32_t f = 0; f < nf; ++f)
+        for (int k = 0; k < 3; ++k) CHECK(cf_corner_angle(y, cf_mesh_triangles(m) + 3 * f, k) == angles[3 * f + k]);
+    cf_sparse_destroy(&l);
+    cf_sparse_destroy(&l2);
+    free(slots);
+    free(slots2);
+    free(y);
+    free(angles);
+    cf_mesh_destroy(&m);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 /* Relabelling the vertices permutes L: L'[p(i), p(j)] = L[i, j]. */
 static void test_relabelling(void)
 {
@@ -270,6 +308,7 @@ int main(void)
     CFT_RUN(test_flat_grid_linear_precision);
     CFT_RUN(test_grid_weights);
     CFT_RUN(test_refill);
+    CFT_RUN(test_public_refill);
     CFT_RUN(test_relabelling);
     CFT_RUN(test_failures);
     return cft_finish();

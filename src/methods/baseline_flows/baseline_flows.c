@@ -20,8 +20,6 @@
 #include "curvflow/linalg.h"
 #include "curvflow/ops.h"
 #include "methods/flow_internal.h"
-#include "ops/cotan_laplacian.h"
-#include "ops/ops_internal.h"
 
 #include <math.h>
 #include <stddef.h>
@@ -44,7 +42,7 @@ typedef struct baseline_state {
     int32_t nv;
     double tau;             /* actual time step (scaled, see the header) */
     cf_sparse *l;           /* cotan Laplacian of the current positions (pattern fixed) */
-    int64_t *slot_map;      /* nv + 2 ne slots of L's triplets (cfi_cotan_laplacian_triplet_count) */
+    int64_t *slot_map;      /* nv + 2 ne slots of L's triplets (cf_cotan_laplacian_slot_count) */
     int64_t slot_count;
     int64_t *l_diag;        /* nv: slot of L(i, i) */
     double *l0_values;      /* conformal MCF: L values of the initial mesh (nnz) */
@@ -125,7 +123,7 @@ static cf_status assemble_mass(cf_flow *flow, baseline_state *s)
 /* L and the lumped masses of the current positions. */
 static cf_status assemble(cf_flow *flow, baseline_state *s)
 {
-    cf_status st = cfi_cotan_laplacian_refill(s->l, flow->mesh, flow->positions, s->slot_map);
+    cf_status st = cf_cotan_laplacian_refill(s->l, flow->mesh, flow->positions, s->slot_map);
     if (st != CF_OK) return st;
     return assemble_mass(flow, s);
 }
@@ -279,7 +277,7 @@ static cf_status baseline_create(cf_flow *flow, const void *options)
     s->opt = *opt;
     s->nv = mesh->nv;
     size_t nv = (size_t)mesh->nv;
-    s->slot_count = cfi_cotan_laplacian_triplet_count(mesh);
+    s->slot_count = cf_cotan_laplacian_slot_count(mesh);
     s->slot_map = CFI_ALLOC(ctx, int64_t, s->slot_count);
     s->l_diag = CFI_ALLOC(ctx, int64_t, nv);
     s->a_diag = CFI_ALLOC(ctx, int64_t, nv);
@@ -294,7 +292,7 @@ static cf_status baseline_create(cf_flow *flow, const void *options)
     cf_status st = cf_vertex_areas(ctx, mesh, flow->positions, CF_DUAL_AREA_BARYCENTRIC, s->mass);
     if (st != CF_OK) return st;
     mass_centroid(s, flow->positions, s->centroid0);
-    st = cfi_cotan_laplacian_pattern(ctx, mesh, flow->positions, &s->l, s->slot_map);
+    st = cf_cotan_laplacian_with_slots(ctx, mesh, flow->positions, &s->l, s->slot_map);
     if (st != CF_OK) return st;
     st = find_diagonal(ctx, s->l, s->l_diag, "the Laplacian");
     if (st != CF_OK) return st;
@@ -428,7 +426,7 @@ static cf_status explain_not_posdef(cf_flow *flow)
     int32_t worst_face = -1;
     for (int32_t f = 0; f < mesh->nf; ++f) {
         for (int k = 0; k < 3; ++k) {
-            double angle = cfi_corner_angle(flow->positions, mesh->triangles + 3 * (size_t)f, k);
+            double angle = cf_corner_angle(flow->positions, mesh->triangles + 3 * (size_t)f, k);
             if (angle < worst) {
                 worst = angle;
                 worst_face = f;

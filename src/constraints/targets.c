@@ -190,11 +190,12 @@ cf_status cf_handle_set_from_points(cf_context *ctx, const cf_point_set *set, co
         if (transform) cfi_rigid_apply_point(transform, p, o);
         else memcpy(o, p, 3 * sizeof *o);
         if (cfi_first_unusable_point(o, 1, 3) >= 0) {
+            double where[3] = {o[0], o[1], o[2]}; /* o points into h, which is freed before the message */
             cf_handle_set_destroy(&h);
             return cfi_error(ctx, CF_ERR_NONFINITE,
                              "handle set from points: the transform moves vertex %d to (%.3g, %.3g, %.3g), beyond the "
                              "range of coordinates (|x| <= %.0e)",
-                             v, o[0], o[1], o[2], CF_MAX_COORDINATE);
+                             v, where[0], where[1], where[2], CF_MAX_COORDINATE);
         }
         moved += o[0] != p[0] || o[1] != p[1] || o[2] != p[2];
     }

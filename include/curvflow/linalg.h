@@ -309,10 +309,11 @@ CF_API cf_status cf_min_quad_create(cf_context *ctx, const cf_sparse *a, int32_t
  * factorisation succeeds. */
 CF_API cf_status cf_min_quad_factorize(cf_min_quad *q, const cf_sparse *a, const cf_sparse *aeq);
 
-/* Solves for nrhs columns. b, y, beq may be NULL (zero); x may equal b (it
- * must not overlap y or beq). Statuses: CF_ERR_INVALID_ARG (no successful
- * factorisation, NULL x), CF_ERR_NUMERICAL (a non-finite input entry, named,
- * or a non-finite solution). */
+/* Solves for nrhs columns. b, y, beq may be NULL (zero); the entries of b
+ * at known variables are not used. x may equal b (it must not overlap y or
+ * beq). Statuses: CF_ERR_INVALID_ARG (no successful factorisation, NULL x),
+ * CF_ERR_NUMERICAL (a non-finite entry of b at a free variable, of y or of
+ * beq, named; an overflowing right-hand side; a non-finite solution). */
 CF_API cf_status cf_min_quad_solve(cf_min_quad *q, int32_t nrhs, const double *b, const double *y, const double *beq,
                                    double *x);
 

@@ -60,6 +60,10 @@ struct cf_min_quad {
     int32_t factorized;
     /* work: nu x max_rhs right-hand side, solution, A_uk y; m for the constraints */
     double *ru, *su, *tu, *re, *te, *le;
+    /* tu holds A_uk y for y_cache (nk x tu_cols) when tu_valid: a solve with
+     * the same known values (an iteration with fixed handles) skips it */
+    double *y_cache;
+    int32_t tu_cols, tu_valid;
 };
 
 void cf_min_quad_options_default(cf_min_quad_options *options)
@@ -103,6 +107,7 @@ void cf_min_quad_destroy(cf_min_quad **q)
     CFI_FREE(ctx, s->ru, w);
     CFI_FREE(ctx, s->su, w);
     CFI_FREE(ctx, s->tu, w);
+    CFI_FREE(ctx, s->y_cache, nk * (size_t)s->opt.max_rhs);
     CFI_FREE(ctx, s->re, m);
     CFI_FREE(ctx, s->te, m);
     CFI_FREE(ctx, s->le, m);
@@ -110,8 +115,10 @@ void cf_min_quad_destroy(cf_min_quad **q)
     *q = NULL;
 }
 
-/* Values of A: finite, and symmetric up to MIN_QUAD_SYMMETRY_TOL (every
- * entry has its mirror: checked at create on the pattern). */
+/* A: finite, and symmetric up to MIN_QUAD_SYMMETRY_TOL of its largest
+ * entry. The pattern is checked too: every entry above the diagonal has its
+ * mirror and there are as many entries below as above (so the mirror map
+ * is a bijection); one binary search per entry above the diagonal. */
 static cf_status check_a_values(cf_context *ctx, const cf_sparse *a, const char *what)
 {
     int64_t nnz = cf_sparse_nnz(a);
@@ -123,17 +130,32 @@ static cf_status check_a_values(cf_context *ctx, const cf_sparse *a, const char 
     }
     double big = 0.0;
     for (int64_t p = 0; p < nnz; ++p) big = fmax(big, fabs(a->values[p]));
+    int64_t upper = 0, lower = 0;
     for (int32_t j = 0; j < a->ncols; ++j)
         for (int32_t p = a->colptr[j]; p < a->colptr[j + 1]; ++p) {
             int32_t i = a->rowind[p];
+            if (i > j) ++lower;
             if (i >= j) continue;
+            ++upper;
             int64_t t = cf_sparse_find(a, j, i);
-            if (CF_NEVER(t < 0)) return cfi_error(ctx, CF_ERR_INVALID_ARG, "%s: A(%d, %d) has no mirror", what, i, j);
+            if (t < 0)
+                return cfi_error(ctx, CF_ERR_INVALID_ARG,
+                                 "%s: A is not structurally symmetric: A(%d, %d) is stored, A(%d, %d) not", what, i, j,
+                                 j, i);
             if (fabs(a->values[p] - a->values[t]) > MIN_QUAD_SYMMETRY_TOL * big)
                 return cfi_error(ctx, CF_ERR_INVALID_ARG,
                                  "%s: A is not symmetric: A(%d, %d) = %.17g but A(%d, %d) = %.17g", what, i, j,
                                  a->values[p], j, i, a->values[t]);
         }
+    if (upper != lower) {
+        /* some entry below the diagonal has no mirror: name it */
+        for (int32_t j = 0; j < a->ncols; ++j)
+            for (int32_t p = a->colptr[j]; p < a->colptr[j + 1]; ++p)
+                if (a->rowind[p] > j && cf_sparse_find(a, j, a->rowind[p]) < 0)
+                    return cfi_error(ctx, CF_ERR_INVALID_ARG,
+                                     "%s: A is not structurally symmetric: A(%d, %d) is stored, A(%d, %d) not", what,
+                                     a->rowind[p], j, j, a->rowind[p]);
+    }
     return CF_OK;
 }
 
@@ -227,6 +249,7 @@ done:
 static cf_status refactor(cf_min_quad *s, const cf_sparse *a, const cf_sparse *aeq)
 {
     s->factorized = 0;
+    s->tu_valid = 0; /* A_uk changes */
     const struct col_split *ca = &s->a_split, *ce = &s->e_split;
     for (int64_t t = 0; t < ca->nblock; ++t) ca->block->values[t] = a->values[ca->src[t]];
     for (int64_t t = 0; t < ca->nknown; ++t) ca->kval[t] = a->values[ca->ksrc[t]];
@@ -274,13 +297,6 @@ cf_status cf_min_quad_create(cf_context *ctx, const cf_sparse *a, int32_t known_
     if (m > 0 && known_count == n)
         return cfi_error(ctx, CF_ERR_INVALID_ARG,
                          "min_quad create: every variable is known, none is left for the %d equality constraints", m);
-    /* structural symmetry (values are checked by check_a_values) */
-    for (int32_t j = 0; j < n; ++j)
-        for (int32_t p = a->colptr[j]; p < a->colptr[j + 1]; ++p)
-            if (cf_sparse_find(a, a->rowind[p], j) < 0 || cf_sparse_find(a, j, a->rowind[p]) < 0)
-                return cfi_error(ctx, CF_ERR_INVALID_ARG,
-                                 "min_quad create: A is not structurally symmetric: A(%d, %d) is stored, A(%d, %d) not",
-                                 a->rowind[p], j, j, a->rowind[p]);
     st = check_a_values(ctx, a, "min_quad create");
     if (st != CF_OK) return st;
 
@@ -309,12 +325,14 @@ cf_status cf_min_quad_create(cf_context *ctx, const cf_sparse *a, int32_t known_
     s->ru = CFI_ALLOC(ctx, double, w);
     s->su = CFI_ALLOC(ctx, double, w);
     s->tu = CFI_ALLOC(ctx, double, w);
+    s->y_cache = CFI_ALLOC(ctx, double, (size_t)s->nk * (size_t)opt.max_rhs);
     s->re = CFI_ALLOC(ctx, double, m);
     s->te = CFI_ALLOC(ctx, double, m);
     s->le = CFI_ALLOC(ctx, double, m);
     /* (zero-length arrays are one-byte allocations: every pointer is set) */
     if (!s->free_index || !s->free_var || !s->known_var || !s->known_slot || !s->a_colptr || !s->a_rowind ||
-        (aeq && (!s->e_colptr || !s->e_rowind)) || !s->ru || !s->su || !s->tu || !s->re || !s->te || !s->le) {
+        (aeq && (!s->e_colptr || !s->e_rowind)) || !s->ru || !s->su || !s->tu || !s->y_cache || !s->re || !s->te ||
+        !s->le) {
         st = CF_ERR_NOMEM;
         goto fail;
     }
@@ -437,29 +455,51 @@ cf_status cf_min_quad_solve(cf_min_quad *q, int32_t nrhs, const double *b, const
     if (nrhs < 0 || (nrhs > 0 && !x))
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "min_quad solve: %d right-hand sides, x %s", nrhs, x ? "given" : "NULL");
     if (!q->factorized) return cfi_error(ctx, CF_ERR_INVALID_ARG, "min_quad solve: no successful factorisation");
-    cf_status st = check_input(ctx, b, q->n, nrhs, "b");
-    if (st == CF_OK) st = check_input(ctx, y, q->nk, nrhs, "y");
+    /* b is checked on the way (its entries at known variables are not used) */
+    cf_status st = check_input(ctx, y, q->nk, nrhs, "y");
     if (st == CF_OK) st = check_input(ctx, beq, q->m, nrhs, "beq");
     if (st != CF_OK) return st;
     int32_t n = q->n, nu = q->nu, nk = q->nk, m = q->m;
     const struct col_split *ca = &q->a_split, *ce = &q->e_split;
     for (int32_t c0 = 0; c0 < nrhs; c0 += q->opt.max_rhs) {
         int32_t cols = nrhs - c0 < q->opt.max_rhs ? nrhs - c0 : q->opt.max_rhs;
-        /* t = A_uk y, accumulated by known column in ascending order */
-        memset(q->tu, 0, (size_t)nu * (size_t)cols * sizeof *q->tu);
-        for (int32_t c = 0; c < cols && y; ++c) {
-            const double *yc = y + (size_t)(c0 + c) * nk;
-            double *tc = q->tu + (size_t)c * nu;
-            for (int32_t k = 0; k < nk; ++k) {
-                double yk = yc[q->known_slot[k]];
-                for (int64_t t = ca->kptr[k]; t < ca->kptr[k + 1]; ++t) tc[ca->krow[t]] += ca->kval[t] * yk;
+        /* t = A_uk y, accumulated by known column in ascending order; kept
+         * while y does not change (y NULL is zero: t = 0) */
+        const double *ychunk = y ? y + (size_t)c0 * nk : NULL;
+        size_t ybytes = (size_t)nk * (size_t)cols * sizeof *y;
+        int same = q->tu_valid && q->tu_cols == cols &&
+                   (ychunk ? q->tu_valid == 1 && memcmp(q->y_cache, ychunk, ybytes) == 0 : q->tu_valid == 2);
+        if (!same) {
+            memset(q->tu, 0, (size_t)nu * (size_t)cols * sizeof *q->tu);
+            for (int32_t c = 0; c < cols && y; ++c) {
+                const double *yc = ychunk + (size_t)c * nk;
+                double *tc = q->tu + (size_t)c * nu;
+                for (int32_t k = 0; k < nk; ++k) {
+                    double yk = yc[q->known_slot[k]];
+                    for (int64_t t = ca->kptr[k]; t < ca->kptr[k + 1]; ++t) tc[ca->krow[t]] += ca->kval[t] * yk;
+                }
             }
+            if (ychunk) memcpy(q->y_cache, ychunk, ybytes);
+            q->tu_cols = cols;
+            q->tu_valid = ychunk ? 1 : 2;
         }
         for (int32_t c = 0; c < cols; ++c) {
             const double *bc = b ? b + (size_t)(c0 + c) * n : NULL;
             double *rc = q->ru + (size_t)c * nu;
             const double *tc = q->tu + (size_t)c * nu;
-            for (int32_t i = 0; i < nu; ++i) rc[i] = (bc ? -bc[q->free_var[i]] : 0.0) - tc[i];
+            double poison = 0.0; /* stays 0 unless an entry is NaN or infinite (x * 0 is NaN then) */
+            for (int32_t i = 0; i < nu; ++i) {
+                rc[i] = (bc ? -bc[q->free_var[i]] : 0.0) - tc[i];
+                poison += rc[i] * 0.0;
+            }
+            if (poison != 0.0 || poison != poison) {
+                for (int32_t i = 0; bc && i < nu; ++i)
+                    if (!isfinite(bc[q->free_var[i]]))
+                        return cfi_error(ctx, CF_ERR_NUMERICAL, "min_quad solve: b[%d] (column %d) is not finite",
+                                         q->free_var[i], c0 + c);
+                return cfi_error(ctx, CF_ERR_NUMERICAL, "min_quad solve: the right-hand side of column %d overflows",
+                                 c0 + c);
+            }
         }
         if (nu > 0 && m == 0) {
             st = cf_cholesky_solve(q->chol, cols, q->ru, q->su);

@@ -27,13 +27,14 @@ cf_quat cf_quat_add(cf_quat a, cf_quat b) { return cf_quat_make(a.w + b.w, a.x +
 cf_quat cf_quat_sub(cf_quat a, cf_quat b) { return cf_quat_make(a.w - b.w, a.x - b.x, a.y - b.y, a.z - b.z); }
 cf_quat cf_quat_scale(cf_quat a, double s) { return cf_quat_make(s * a.w, s * a.x, s * a.y, s * a.z); }
 
-/* (a0 + a)(b0 + b) = a0 b0 - a.b + a0 b + b0 a + a x b */
+/* (a0 + a)(b0 + b) = a0 b0 - a.b + a0 b + b0 a + a x b. A compound
+ * literal rather than cf_quat_make: an exported function is not inlined
+ * into its neighbours (it could be interposed), and this one sits in the
+ * ARAP local step's inner loop. */
 cf_quat cf_quat_mul(cf_quat a, cf_quat b)
 {
-    return cf_quat_make(a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z,
-                        a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
-                        a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x,
-                        a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w);
+    return (cf_quat){a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z, a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
+                     a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x, a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w};
 }
 
 cf_quat cf_quat_conj(cf_quat a) { return cf_quat_make(a.w, -a.x, -a.y, -a.z); }
@@ -119,7 +120,7 @@ cf_quat cf_quat_from_right_matrix(const double m[16])
                         0.25 * ((m[8] - m[2]) + (m[13] - m[7])), 0.25 * ((m[12] - m[3]) + (m[6] - m[9])));
 }
 
-cf_quat cf_quat_load(const double p[4]) { return p ? cf_quat_make(p[0], p[1], p[2], p[3]) : cf_quat_make(0.0, 0.0, 0.0, 0.0); }
+cf_quat cf_quat_load(const double p[4]) { return p ? (cf_quat){p[0], p[1], p[2], p[3]} : (cf_quat){0.0, 0.0, 0.0, 0.0}; }
 
 void cf_quat_store(cf_quat q, double p[4])
 {

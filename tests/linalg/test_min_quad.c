@@ -63,6 +63,15 @@ static void test_dirichlet_by_hand(void)
     CHECK_NEAR(x[1], 2.0, 0, 1e-15);
     CHECK_OK(ctx, cf_min_quad_solve(q, 1, NULL, NULL, NULL, x));
     CHECK(x[0] == 0.0 && x[1] == 0.0 && x[2] == 0.0);
+    /* new known values in the same array are seen (A_uk y is reused only
+     * while y is unchanged): x0 = 5, x2 = 3 gives x1 = 4 */
+    double y2[2] = {3, 1};
+    CHECK_OK(ctx, cf_min_quad_solve(q, 1, NULL, y2, NULL, x));
+    CHECK_NEAR(x[1], 2.0, 0, 1e-15);
+    y2[1] = 5;
+    CHECK_OK(ctx, cf_min_quad_solve(q, 1, NULL, y2, NULL, x));
+    CHECK_NEAR(x[1], 4.0, 0, 1e-15);
+    CHECK(x[0] == 5.0);
     cf_min_quad_destroy(&q);
     CHECK(q == NULL);
     cf_sparse_destroy(&a);
@@ -357,6 +366,11 @@ static void test_bad_input(void)
     u = from_dense(ctx, 3, 3, up, 0);
     CHECK_STATUS(cf_min_quad_create(ctx, u, 0, NULL, NULL, NULL, &q), CF_ERR_INVALID_ARG);
     CHECK(strstr(cf_context_message(ctx), "structurally symmetric") != NULL);
+    cf_sparse_destroy(&u);
+    const double low[9] = {2, -1, 0, 0, 2, -1, 0, 0, 2};
+    u = from_dense(ctx, 3, 3, low, 0);
+    CHECK_STATUS(cf_min_quad_create(ctx, u, 0, NULL, NULL, NULL, &q), CF_ERR_INVALID_ARG);
+    CHECK(strstr(cf_context_message(ctx), "A(1, 0) is stored, A(0, 1) not") != NULL);
     cf_sparse_destroy(&u);
     /* a non-finite value is named */
     a->values[1] = NAN;

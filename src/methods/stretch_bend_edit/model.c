@@ -332,10 +332,15 @@ static double trace_rt_c(const double r[9], const double c[9])
  * definite). Quadratic convergence from the previous iteration's rotation
  * takes 1-3 steps. Returns 1 when |d| fell below 1e-10 at a point where H
  * is positive definite (a maximum), else 0. */
-static int polar_iterate(const double c[9], double q[4], double r[9])
+static int polar_iterate(const double c[9], double q_io[4], double r[9])
 {
+    /* q stays a local cf_quat through the iterations: two calls into the
+     * quaternion module per iteration (matrix, product) keep this hot loop
+     * of the ARAP local step within a few percent of inline code */
+    cf_quat q = {q_io[0], q_io[1], q_io[2], q_io[3]};
+    int result = 0;
     for (int it = 0; it < 10; ++it) {
-        cf_quat_to_rotation_matrix(cf_quat_load(q), r);
+        cf_quat_to_rotation_matrix(q, r);
         double w[3] = {0, 0, 0};
         for (int i = 0; i < 3; ++i) {
             double a0 = r[i], a1 = r[3 + i], a2 = r[6 + i], b0 = c[i], b1 = c[3 + i], b2 = c[6 + i];
@@ -366,21 +371,30 @@ static int polar_iterate(const double c[9], double q[4], double r[9])
             d[2] = w[2] * sc;
         }
         double angle = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-        if (!(angle == angle)) return 0;
+        if (!(angle == angle)) goto done;
         /* Converged only at a maximum: a vanishing gradient where H is not
          * positive definite is a saddle of tr(R^T C) (e.g. a rotation by pi
          * of a flat ring's optimum), left to the SVD. */
-        if (angle < 1e-10) return definite;
+        if (angle < 1e-10) {
+            result = definite;
+            goto done;
+        }
         double scale = angle > 1.0 ? 1.0 / angle : 1.0; /* damp far from the optimum */
         angle *= scale;
         double s = sin(0.5 * angle) / (angle / scale), cw = cos(0.5 * angle);
         /* R <- exp([d]x) R is q <- dq q (Hamilton product), renormalised */
-        cf_quat nq = cf_quat_mul(cf_quat_make(cw, s * d[0], s * d[1], s * d[2]), cf_quat_load(q));
-        double n = sqrt(cf_quat_norm2(nq));
-        cf_quat_store(cf_quat_make(nq.w / n, nq.x / n, nq.y / n, nq.z / n), q);
+        cf_quat dq = {cw, s * d[0], s * d[1], s * d[2]};
+        cf_quat nq = cf_quat_mul(dq, q);
+        double n = sqrt(nq.w * nq.w + nq.x * nq.x + nq.y * nq.y + nq.z * nq.z);
+        q = (cf_quat){nq.w / n, nq.x / n, nq.y / n, nq.z / n};
     }
-    cf_quat_to_rotation_matrix(cf_quat_load(q), r);
-    return 0;
+    cf_quat_to_rotation_matrix(q, r);
+done:
+    q_io[0] = q.w;
+    q_io[1] = q.x;
+    q_io[2] = q.y;
+    q_io[3] = q.z;
+    return result;
 }
 
 /* Rank-2 Procrustes for a triangle (Eq. 24): with C_t = P B^T the optimal

@@ -2,7 +2,8 @@
  * `curvflow edit` end to end: generate a bar, edit it with a JSON handle
  * file, check the handle vertices of the written mesh sit on their targets,
  * continue from the result with --start, and the exit status 2 with a
- * message naming the problem for bad handle files (1 for usage errors).
+ * message naming the problem for bad handle files (1 for usage errors);
+ * warnings (exit 0) for an unknown top-level key and a set without a name.
  */
 #define _POSIX_C_SOURCE 200809L
 #include "test.h"
@@ -108,6 +109,15 @@ static void test_edit_command(void)
     write_text(bad, "{\"sets\": [}");
     CHECK(run(args) == 2);
     CHECK(strstr(err_text, "malformed JSON") != NULL);
+    /* issue 15: what the reader ignores is said (a warning, exit 0) */
+    write_text(bad, "{\"version\": 1, \"sets\": [{\"relative_box\": {\"min\": [0,0,0], \"max\": [0,1,1]}, "
+                    "\"fixed\": true}, {\"name\": \"r\", \"relative_box\": {\"min\": [1,0,0], \"max\": [1,1,1]}, "
+                    "\"transform\": {\"translate\": [0, 0, 1]}}]}");
+    snprintf(args, sizeof args, "edit '%s' --handles '%s' -n 2 -q -o '%s'", bar, bad, out);
+    CHECK(run(args) == 0);
+    CHECK(strstr(err_text, "warning: ") != NULL);
+    CHECK(strstr(err_text, "unknown top-level key 'version' ignored") != NULL);
+    CHECK(strstr(err_text, "set #0 has no \"name\"") != NULL);
     snprintf(args, sizeof args, "edit '%s' --handles '%s' --energy twist -o '%s'", bar, hj, out);
     CHECK(run(args) == 1);
     CHECK(strstr(err_text, "unknown energy 'twist'") != NULL);

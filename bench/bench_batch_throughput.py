@@ -37,6 +37,7 @@ def main():
     p.add_argument("--steps", type=int, default=10)
     p.add_argument("--rounds", type=int, default=2)
     p.add_argument("--param", action="append", default=[])
+    p.add_argument("--job-threads", type=int, default=1, help="BLAS threads per job [1, the batch's default]")
     a = p.parse_args()
     shared = os.environ.get("CURVFLOW_SHARED_DIR")
     manifest = pathlib.Path(a.manifest) if a.manifest else (
@@ -51,14 +52,15 @@ def main():
         for workers in (1, 2):
             load = os.getloadavg()[0]
             t = time.perf_counter()
-            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
+            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                   dashboard_address="127.0.0.1:0")
             client = Client(cluster)
             start = time.perf_counter() - t
             try:
                 with tempfile.TemporaryDirectory() as out:
                     t = time.perf_counter()
                     recs = batch.run_batch(manifest, a.method, out, a.steps, None, params, "ply", client=client,
-                                           job_threads=max(1, (os.cpu_count() or 1) // workers))
+                                           job_threads=a.job_threads)
                     secs = time.perf_counter() - t
                     with open(os.path.join(out, "summary.csv")) as fp:
                         failed = [r["mesh"] + ":" + r["status"] for r in csv.DictReader(fp) if r["status"] != "ok"]

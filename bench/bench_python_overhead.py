@@ -18,6 +18,10 @@ threads; less sensitive to other load on the machine), in milliseconds):
                     (array checks, per-step log dicts, the SIGINT guard)
   py_import         `python3 -c "import curvflow, numpy"` process, once per
                     interpreter, not per call
+  tiny_*            py_flow, raw_ctypes_flow and their difference on a 42-vertex
+                    icosphere (20 x the repetitions): the wrapper's cost, which
+                    does not grow with the mesh, measured where the library's
+                    time does not bury it
 and the overheads as percentages of cli_process.
 """
 import ctypes
@@ -129,6 +133,18 @@ def main():
             record("py_import", run_process([sys.executable, "-c", "import curvflow, numpy"],
                                             env=dict(os.environ, PYTHONPATH=str(ROOT / "python"))))
         same = curvflow.load(out_cli)[0].tobytes() == curvflow.load(out_py)[0].tobytes() == raw.tobytes()
+        # The wrapper's own cost does not grow with the mesh (arrays are passed
+        # without copies; the per-step work is one log dict): measured on a
+        # 42-vertex icosphere, where the library's time is small and the
+        # difference is not buried in other load on the machine.
+        tiny = os.path.join(tmp, "tiny.obj")
+        subprocess.run([cli, "generate", "icosphere", "--subdivisions", "1", "-o", tiny], check=True,
+                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        Vt, Ft, _ = curvflow.load(tiny)
+        tiny_py, tiny_raw = [], []
+        for _ in range(20 * reps):
+            tiny_py.append(in_process(lambda: curvflow.flow(Vt, Ft, "spin-willmore", steps=steps))[0][0])
+            tiny_raw.append(in_process(lambda: raw_flow(L, Vt, Ft, steps))[0][0])
     rows = {}
     for k in keys:
         rows[k] = (statistics.median(wall[k]) * 1e3, min(wall[k]) * 1e3, statistics.median(cpu[k]) * 1e3)
@@ -138,7 +154,15 @@ def main():
     print("metric\twall_median_ms\twall_min_ms\tcpu_median_ms")
     for k in keys[:4] + ("py_wrapper", "py_import"):
         print("%s\t%.2f\t%.2f\t%.2f" % ((k,) + rows[k]))
+    tiny = (statistics.median(tiny_py) * 1e3, min(tiny_py) * 1e3, statistics.median(tiny_raw) * 1e3,
+            min(tiny_raw) * 1e3)
+    print("tiny_py_flow\t%.3f\t%.3f\t-" % tiny[:2])
+    print("tiny_raw_ctypes_flow\t%.3f\t%.3f\t-" % tiny[2:])
+    wrapper_ms = tiny[0] - tiny[2]
+    print("tiny_py_wrapper\t%.3f\t%.3f\t-" % (wrapper_ms, tiny[1] - tiny[3]))
     cli_row = rows["cli_process"]
+    print("tiny_py_wrapper_vs_cli_wall_median_percent\t%+.2f" % (100 * wrapper_ms / cli_row[0]))
+    print("tiny_py_wrapper_vs_cli_wall_min_percent\t%+.2f" % (100 * (tiny[1] - tiny[3]) / cli_row[1]))
     for i, what in ((0, "wall_median"), (2, "cpu_median")):
         print("py_load_flow_save_vs_cli_%s_percent\t%+.1f" % (what, 100 * (rows["py_load_flow_save"][i] - cli_row[i])
                                                               / cli_row[i]))

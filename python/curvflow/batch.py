@@ -247,6 +247,29 @@ def _parse_args(argv):
     return p.parse_args(argv)
 
 
+# distributed's Nanny writes these into the parent's os.environ when it
+# starts workers (pre-spawn-environ) and leaves them there: every later
+# subprocess of the caller (e.g. the CLI) would run with one BLAS thread,
+# and a different BLAS thread count changes results in the last bits.
+_NANNY_ENVIRON = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MALLOC_TRIM_THRESHOLD_")
+
+
+def _local_cluster(n_workers):
+    """A LocalCluster of n_workers single-threaded worker processes, leaving
+    the caller's environment as it was."""
+    from distributed import LocalCluster
+    saved = {k: os.environ.get(k) for k in _NANNY_ENVIRON}
+    try:
+        return LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
+                            dashboard_address="127.0.0.1:0")
+    finally:
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+
+
 def run_batch(manifest, method, out, steps=10, time_step=None, params=None, fmt="ply", scheduler=None,
               workers=None, timeout=None, job_threads=None, allow_missing=False, report=False, quiet=True,
               client=None):
@@ -290,15 +313,14 @@ def run_batch(manifest, method, out, steps=10, time_step=None, params=None, fmt=
               len(specs), out), flush=True)
     elapsed = startup = 0.0
     if todo:
-        from distributed import Client, LocalCluster, as_completed
+        from distributed import Client, as_completed
         t_start = time.perf_counter()
         cluster = own_client = None
         if client is None:
             if scheduler:
                 client = own_client = Client(scheduler)
             else:
-                cluster = LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
-                                       dashboard_address="127.0.0.1:0")
+                cluster = _local_cluster(n_workers)
                 client = own_client = Client(cluster)
         t0 = time.perf_counter()
         startup = t0 - t_start

@@ -174,3 +174,48 @@ def test_shared_manifest_tsv_is_read(shared):
     rows = read_manifest(shared / "MANIFEST.tsv")
     assert len(rows) == 20 and not any(r["missing"] for r in rows)
     assert rows[0]["name"] == "spot_3k" and rows[0]["input"] == str((shared / "spot_3k.obj").resolve())
+
+
+def test_batch_on_a_running_scheduler(tmp_path, meshes, monkeypatch):
+    """--scheduler ADDRESS uses an already running Dask scheduler and its
+    workers (here a LocalCluster started by the test, standing for a cluster
+    on other machines) instead of starting one."""
+    from distributed import LocalCluster
+    monkeypatch.setenv("PYTHONPATH", str(ROOT / "python"))  # the workers import curvflow.batch
+    from curvflow.batch import _NANNY_ENVIRON
+    for key in _NANNY_ENVIRON:  # the Nanny writes them into os.environ: restored after the test
+        monkeypatch.setenv(key, "x")
+        monkeypatch.delenv(key)
+    manifest = tmp_path / "m.csv"
+    manifest.write_text("path\n%s\n%s\n" % (meshes["icosphere"], meshes["torus"]))
+    out = tmp_path / "out"
+    with LocalCluster(n_workers=1, threads_per_worker=2, processes=True, dashboard_address="127.0.0.1:0") as cluster:
+        proc = run_batch(manifest, "--method", "conformal-mcf", "--steps", "3", "--out", out, "--scheduler",
+                         cluster.scheduler_address)
+        workers = set(cluster.scheduler_info["workers"])
+    assert proc.returncode == 0, proc.stderr
+    rows = read_summary(out)
+    assert [r["status"] for r in rows.values()] == ["ok", "ok"]
+    assert {r["worker"] for r in rows.values()} <= workers  # ran on the given cluster's worker
+
+
+def test_run_batch_in_process_keeps_environment(tmp_path, meshes):
+    """curvflow.batch.run_batch called from a script: the LocalCluster it
+    starts leaves the caller's environment as it was (distributed's Nanny
+    would leave OPENBLAS_NUM_THREADS=1 etc. behind, and the CLI run by the
+    caller afterwards would compute with another BLAS thread count)."""
+    from curvflow.batch import _NANNY_ENVIRON, run_batch as run_in_process
+    before = {k: os.environ.get(k) for k in _NANNY_ENVIRON}
+    manifest = tmp_path / "m.csv"
+    manifest.write_text("path\n%s\n" % meshes["icosphere"])
+    env_python = os.environ.get("PYTHONPATH")
+    os.environ["PYTHONPATH"] = str(ROOT / "python")
+    try:
+        recs = run_in_process(manifest, "implicit-mcf", tmp_path / "out", steps=2, workers=1)
+    finally:
+        if env_python is None:
+            os.environ.pop("PYTHONPATH")
+        else:
+            os.environ["PYTHONPATH"] = env_python
+    assert [r["status"] for r in recs] == ["ok"]
+    assert {k: os.environ.get(k) for k in _NANNY_ENVIRON} == before

@@ -6,7 +6,7 @@
 #define _GNU_SOURCE
 #include "common.h"
 #include "curvflow/io.h"
-#include "curvflow/ops.h"
+#include "curvflow/metrics.h"
 
 #include <getopt.h>
 #include <jansson.h>
@@ -27,16 +27,6 @@ static void usage(FILE *out)
             "  -h, --help   show this help\n\n"
             "Exit status: 0 valid mesh, 2 unreadable file or invalid mesh (the report is still printed).\n");
 }
-
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-/* Median of a sorted array: the element at n / 2 (the upper median for
- * even n, as ../shared/meshes/CHECKS.tsv computes it). */
-static double median(const double *v, size_t n) { return n == 0 ? NAN : v[n / 2]; }
 
 static json_t *num(double v) { return isfinite(v) ? json_real(v) : json_null(); }
 
@@ -61,7 +51,6 @@ int cli_info(int argc, char **argv)
     int code = CLI_EXIT_OK;
     cf_mesh_data *data = NULL;
     cf_mesh *mesh = NULL;
-    double *angles = NULL, *areas = NULL;
     json_t *root = json_object();
 
     cf_status st = cf_read_mesh_file(ctx, path, &data);
@@ -113,73 +102,37 @@ int cli_info(int argc, char **argv)
             code = cli_fail(ctx, path, st);
             goto done;
         }
-        int32_t nf = cf_mesh_face_count(mesh);
         json_object_set_new(root, "edges", json_integer(cf_mesh_edge_count(mesh)));
         json_object_set_new(root, "components", json_integer(cf_mesh_component_count(mesh)));
         json_object_set_new(root, "boundary_loops", json_integer(cf_mesh_boundary_loop_count(mesh)));
         json_object_set_new(root, "euler_characteristic", json_integer(cf_mesh_euler_characteristic(mesh)));
         json_object_set_new(root, "genus", json_integer(cf_mesh_genus(mesh)));
 
-        angles = malloc(3 * (size_t)nf * sizeof *angles);
-        areas = malloc((size_t)nf * sizeof *areas);
-        if (!angles || !areas) {
-            fprintf(stderr, "curvflow: out of memory\n");
-            code = CLI_EXIT_NUMERICAL;
-            goto done;
-        }
-        const double *x = cf_mesh_positions(mesh);
-        if ((st = cf_corner_angles(ctx, mesh, x, angles)) != CF_OK || (st = cf_face_areas(ctx, mesh, x, areas)) != CF_OK) {
+        /* the library's figures (cf_mesh_quality_compute), the same the Python package reports */
+        cf_mesh_quality q;
+        if ((st = cf_mesh_quality_compute(ctx, mesh, NULL, &q)) != CF_OK) {
             code = cli_fail(ctx, path, st);
             goto done;
         }
-        size_t na = 3 * (size_t)nf, below = 0, faces_below = 0;
         const double deg = 180.0 / acos(-1.0);
-        for (size_t i = 0; i < na; ++i) below += angles[i] * deg < 10.0;
-        /* per-face smallest angle (the usual mesh-quality figure), kept in areas[] temporarily */
-        for (int32_t f = 0; f < nf; ++f) {
-            double m = fmin(angles[3 * f], fmin(angles[3 * f + 1], angles[3 * f + 2]));
-            areas[f] = m;
-            faces_below += m * deg < 10.0;
-        }
-        qsort(areas, (size_t)nf, sizeof *areas, cmp_double);
-        double median_min = median(areas, (size_t)nf) * deg;
-        if ((st = cf_face_areas(ctx, mesh, x, areas)) != CF_OK) {
-            code = cli_fail(ctx, path, st);
-            goto done;
-        }
-        qsort(angles, na, sizeof *angles, cmp_double);
         json_t *ang = json_object();
-        json_object_set_new(ang, "min_degrees", num(angles[0] * deg));
-        json_object_set_new(ang, "median_degrees", num(median(angles, na) * deg));
-        json_object_set_new(ang, "max_degrees", num(angles[na - 1] * deg));
-        json_object_set_new(ang, "fraction_below_10_degrees", num((double)below / (double)na));
-        json_object_set_new(ang, "median_face_min_degrees", num(median_min));
-        json_object_set_new(ang, "fraction_faces_min_below_10_degrees", num((double)faces_below / (double)nf));
+        json_object_set_new(ang, "min_degrees", num(q.min_angle * deg));
+        json_object_set_new(ang, "median_degrees", num(q.median_angle * deg));
+        json_object_set_new(ang, "max_degrees", num(q.max_angle * deg));
+        json_object_set_new(ang, "fraction_below_10_degrees", num(q.fraction_angles_below_10_degrees));
+        json_object_set_new(ang, "median_face_min_degrees", num(q.median_face_min_angle * deg));
+        json_object_set_new(ang, "fraction_faces_min_below_10_degrees", num(q.fraction_faces_min_below_10_degrees));
         json_object_set_new(root, "angles", ang);
-        double total = 0.0;
-        for (int32_t f = 0; f < nf; ++f) total += areas[f];
-        qsort(areas, (size_t)nf, sizeof *areas, cmp_double);
         json_t *ar = json_object();
-        json_object_set_new(ar, "total", num(total));
-        json_object_set_new(ar, "min", num(areas[0]));
-        json_object_set_new(ar, "median", num(median(areas, (size_t)nf)));
-        json_object_set_new(ar, "max", num(areas[nf - 1]));
-        json_object_set_new(ar, "max_over_min", num(areas[nf - 1] / areas[0]));
+        json_object_set_new(ar, "total", num(q.total_area));
+        json_object_set_new(ar, "min", num(q.min_face_area));
+        json_object_set_new(ar, "median", num(q.median_face_area));
+        json_object_set_new(ar, "max", num(q.max_face_area));
+        json_object_set_new(ar, "max_over_min", num(q.max_face_area / q.min_face_area));
         json_object_set_new(root, "face_areas", ar);
-        double volume = 0.0;
-        if (cf_mesh_boundary_loop_count(mesh) == 0) {
-            double w = 0.0;
-            if ((st = cf_willmore_energy(ctx, mesh, x, &w)) != CF_OK ||
-                (st = cf_enclosed_volume(ctx, mesh, x, &volume)) != CF_OK) {
-                code = cli_fail(ctx, path, st);
-                goto done;
-            }
-            json_object_set_new(root, "willmore_over_4pi", num(w / (4.0 * acos(-1.0))));
-            json_object_set_new(root, "volume", num(volume));
-        } else {
-            json_object_set_new(root, "willmore_over_4pi", json_null());
-            json_object_set_new(root, "volume", json_null());
-        }
+        /* NaN (null) with boundary loops */
+        json_object_set_new(root, "willmore_over_4pi", num(q.willmore_over_4pi));
+        json_object_set_new(root, "volume", num(q.volume));
     } else {
         code = CLI_EXIT_INPUT;
     }
@@ -228,8 +181,6 @@ int cli_info(int argc, char **argv)
     if (!mesh) fprintf(stderr, "curvflow: %s: %s\n", path, report.first_message);
 
 done:
-    free(angles);
-    free(areas);
     json_decref(root);
     cf_mesh_destroy(&mesh);
     cf_mesh_data_destroy(&data);

@@ -41,24 +41,6 @@
 #define ZOO_MAX_VERTICES 300000
 #endif
 
-static double smallest_angle_degrees(const cf_mesh *mesh, const double *x)
-{
-    const int32_t *tri = cf_mesh_triangles(mesh);
-    double best = 180.0;
-    for (int32_t f = 0; f < cf_mesh_face_count(mesh); ++f) {
-        for (int k = 0; k < 3; ++k) {
-            const double *a = x + 3 * (int64_t)tri[3 * f + k], *b = x + 3 * (int64_t)tri[3 * f + (k + 1) % 3],
-                         *c = x + 3 * (int64_t)tri[3 * f + (k + 2) % 3];
-            double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-            double cr[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
-            double angle = atan2(sqrt(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]),
-                                 u[0] * v[0] + u[1] * v[1] + u[2] * v[2]) * 180.0 / ZOO_PI;
-            if (angle < best) best = angle;
-        }
-    }
-    return best;
-}
-
 /* 1 when positions x on the mesh's connectivity pass the mesh check */
 static int passes_mesh_check(cf_context *ctx, const cf_mesh *mesh, const double *x)
 {
@@ -114,7 +96,10 @@ static void run_one(cf_context *ctx, const char *name, const cf_mesh *mesh, cf_f
     int loads = finite && passes_mesh_check(ctx, mesh, x);
     cf_stats q = {0};
     cf_status qs = finite ? cf_quasi_conformal_error(ctx, mesh, cf_mesh_positions(mesh), x, NULL, &q) : CF_ERR_NONFINITE;
-    double min_angle = finite ? smallest_angle_degrees(mesh, x) : NAN;
+    cf_mesh_quality quality;
+    double min_angle = finite && cf_mesh_quality_compute(ctx, mesh, x, &quality) == CF_OK
+                           ? quality.min_angle * 180.0 / ZOO_PI
+                           : NAN;
     double e1 = cf_flow_energy(flow) * scale;
     char targets[32] = "";
     if (spin) {

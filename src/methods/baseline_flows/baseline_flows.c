@@ -569,10 +569,20 @@ static cf_status implicit_step(cf_flow *flow, cf_flow_info *info)
     return finish_step(flow, s, info, 0);
 }
 
-#define BASELINE_METHOD(sym, kind, name, desc, defaults, stepfn)                                                \
-    const cfi_flow_method sym = {kind,          name,           desc,          sizeof(cf_baseline_options),    \
-                                 defaults,      baseline_params, BASELINE_PARAM_COUNT, baseline_create,       \
-                                 stepfn,        baseline_reset, baseline_destroy}
+#define BASELINE_METHOD(sym, kind_, name_, desc_, defaults_, stepfn_)                                          \
+    const cfi_flow_method sym = {                                                                              \
+        .kind = (kind_),                                                                                       \
+        .name = (name_),                                                                                       \
+        .description = (desc_),                                                                                \
+        .options_size = sizeof(cf_baseline_options),                                                          \
+        .options_default = (defaults_),                                                                        \
+        .params = baseline_params,                                                                             \
+        .param_count = BASELINE_PARAM_COUNT,                                                                   \
+        .create = baseline_create,                                                                             \
+        .step = (stepfn_),                                                                                     \
+        .reset = baseline_reset,                                                                               \
+        .destroy = baseline_destroy,                                                                           \
+    }
 
 BASELINE_METHOD(cfi_explicit_mcf_method, CF_FLOW_EXPLICIT_MCF, "explicit-mcf",
                 "explicit (forward Euler) mean curvature flow; energy: area", default_explicit_mcf, explicit_step);

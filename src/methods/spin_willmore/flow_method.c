@@ -1226,15 +1226,15 @@ const double *cfi_spin_willmore_last_rhodot(const cf_flow *flow)
 }
 
 const cfi_flow_method cfi_spin_willmore_method = {
-    CF_FLOW_SPIN_WILLMORE,
-    "spin-willmore",
-    "conformal Willmore flow in curvature space (Crane, Pinkall, Schroeder 2013)",
-    sizeof(cf_spin_willmore_options),
-    options_default,
-    spin_params,
-    (int32_t)(sizeof spin_params / sizeof spin_params[0]),
-    spin_create,
-    spin_step,
-    spin_reset,
-    spin_destroy,
+    .kind = CF_FLOW_SPIN_WILLMORE,
+    .name = "spin-willmore",
+    .description = "conformal Willmore flow in curvature space (Crane, Pinkall, Schroeder 2013)",
+    .options_size = sizeof(cf_spin_willmore_options),
+    .options_default = options_default,
+    .params = spin_params,
+    .param_count = (int32_t)(sizeof spin_params / sizeof spin_params[0]),
+    .create = spin_create,
+    .step = spin_step,
+    .reset = spin_reset,
+    .destroy = spin_destroy,
 };

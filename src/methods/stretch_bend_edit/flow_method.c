@@ -633,17 +633,17 @@ static void sbe_destroy(cf_flow *flow)
 }
 
 const cfi_flow_method cfi_stretch_bend_edit_method = {
-    CF_FLOW_STRETCH_BEND_EDIT,
-    "stretch-bend-edit",
-    "stretching + bending mesh editing by local/global iteration (Zhao & Gortler), and ARAP",
-    sizeof(cf_stretch_bend_options),
-    options_default,
-    params,
-    (int32_t)(sizeof params / sizeof params[0]),
-    sbe_create,
-    sbe_step,
-    sbe_reset,
-    sbe_destroy,
+    .kind = CF_FLOW_STRETCH_BEND_EDIT,
+    .name = "stretch-bend-edit",
+    .description = "stretching + bending mesh editing by local/global iteration (Zhao & Gortler), and ARAP",
+    .options_size = sizeof(cf_stretch_bend_options),
+    .options_default = options_default,
+    .params = params,
+    .param_count = (int32_t)(sizeof params / sizeof params[0]),
+    .create = sbe_create,
+    .step = sbe_step,
+    .reset = sbe_reset,
+    .destroy = sbe_destroy,
 };
 
 cf_status cf_stretch_bend_set_handles(cf_flow *flow, const cf_handle_set *handles)

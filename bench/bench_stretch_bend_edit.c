@@ -81,14 +81,14 @@ int main(int argc, char **argv)
     printf("method\tenergy\tV\tF\thandles\titerations\tsetup_ms\tms_per_iteration\tassemble_local_ms\tsolve_ms\t"
            "min_ms_per_iteration\tenergy_first\tenergy_last\tanderson_accepted\tanderson_rejected\n");
     /* One row per energy, plus the hybrid with Anderson acceleration (depth 5). */
-    for (int row = 0; row <= CF_EDIT_ENERGY_COUNT; ++row) {
-        int e = row < CF_EDIT_ENERGY_COUNT ? row : CF_EDIT_HYBRID;
-        const char *label = row < CF_EDIT_ENERGY_COUNT ? cf_edit_energy_name((cf_edit_energy)e) : "hybrid+anderson5";
+    for (int row = 0; row <= CF_STRETCH_BEND_ENERGY_COUNT; ++row) {
+        int e = row < CF_STRETCH_BEND_ENERGY_COUNT ? row : CF_STRETCH_BEND_HYBRID;
+        const char *label = row < CF_STRETCH_BEND_ENERGY_COUNT ? cf_stretch_bend_energy_name((cf_stretch_bend_energy_kind)e) : "hybrid+anderson5";
         cf_flow_options fo;
         cf_flow_options_default(CF_FLOW_STRETCH_BEND_EDIT, &fo);
         cf_stretch_bend_options *o = cf_flow_options_method(&fo);
         o->energy = e;
-        o->anderson = row < CF_EDIT_ENERGY_COUNT ? 0 : 5;
+        o->anderson = row < CF_STRETCH_BEND_ENERGY_COUNT ? 0 : 5;
         o->handles = h;
         o->relative_tolerance = 0.0;
         cf_flow *flow = NULL;

@@ -128,14 +128,14 @@ int cli_edit(int argc, char **argv)
     cf_flow_options options;
     cf_flow_options_default(CF_FLOW_STRETCH_BEND_EDIT, &options);
     cf_stretch_bend_options *o = cf_flow_options_method(&options);
-    cf_edit_energy kind;
-    cf_status st = cf_edit_energy_from_name(ctx, energy, &kind);
+    cf_stretch_bend_energy_kind kind;
+    cf_status st = cf_stretch_bend_energy_from_name(ctx, energy, &kind);
     if (st != CF_OK) {
         int code = cli_usage_error(cmd, "%s", cf_context_message(ctx));
         cf_context_destroy(&ctx);
         return code;
     }
-    if (lambda_given && kind != CF_EDIT_HYBRID) {
+    if (lambda_given && kind != CF_STRETCH_BEND_HYBRID) {
         cf_context_destroy(&ctx);
         /* stretch and bend are lambda = 1 and 0; the ARAP energies have none */
         return cli_usage_error(cmd, "--lambda weighs --energy hybrid; it has no effect with --energy %s", energy);
@@ -144,7 +144,7 @@ int cli_edit(int argc, char **argv)
     o->lambda = lambda;
     o->max_iterations = (int32_t)iterations;
     o->relative_tolerance = tol;
-    o->mass = strcmp(mass, "barycentric") == 0 ? CF_EDIT_MASS_BARYCENTRIC : CF_EDIT_MASS_VORONOI;
+    o->mass = strcmp(mass, "barycentric") == 0 ? CF_STRETCH_BEND_MASS_BARYCENTRIC : CF_STRETCH_BEND_MASS_VORONOI;
     o->scale_free = scale_free;
     o->anderson = (int32_t)anderson;
 
@@ -204,7 +204,7 @@ int cli_edit(int argc, char **argv)
     }
     if (completed && !quiet) {
         const cf_flow_info *last = cf_flow_last_info(flow);
-        if (kind == CF_EDIT_ARAP || kind == CF_EDIT_ARAP_RIMS)
+        if (kind == CF_STRETCH_BEND_ARAP || kind == CF_STRETCH_BEND_ARAP_RIMS)
             fprintf(stderr, "curvflow: edit %s: %lld iterations%s, energy %.9g; wrote %s\n", energy,
                     (long long)last->iteration, cf_flow_converged(flow) ? " (converged)" : "", last->energy, output);
         else

@@ -36,6 +36,11 @@
  * reproduces App. B's table but, unlike CGAL's per-face variant, is not
  * positive semi-definite when W < 0 (non-Delaunay edges); ARAP spokes has the
  * same property (the paper's Fig. 8). Details and measurements: docs/edit.md.
+ *
+ * Names: folder src/methods/stretch_bend_edit, flow kind "stretch-bend-edit"
+ * (CF_FLOW_STRETCH_BEND_EDIT), public prefix cf_stretch_bend_ / CF_STRETCH_BEND_,
+ * internal cfi_stretch_bend_. The command `curvflow edit` is a front end on
+ * `curvflow flow --method stretch-bend-edit` (docs/edit.md).
  */
 #ifndef CURVFLOW_STRETCH_BEND_EDIT_H
 #define CURVFLOW_STRETCH_BEND_EDIT_H
@@ -49,25 +54,25 @@
 extern "C" {
 #endif
 
-typedef enum cf_edit_energy {
-    CF_EDIT_HYBRID = 0,    /* lambda E_s + (1 - lambda) E_db (Eq. 17) */
-    CF_EDIT_STRETCH = 1,   /* E_s only (Eq. 5), lambda = 1 */
-    CF_EDIT_BEND = 2,      /* E_db only (Eq. 15), lambda = 0 */
-    CF_EDIT_ARAP = 3,      /* ARAP spokes, per-vertex rotations (Eq. 6) */
-    CF_EDIT_ARAP_RIMS = 4, /* ARAP spokes and rims (Eq. 7) */
-    CF_EDIT_ENERGY_COUNT = 5
-} cf_edit_energy;
+typedef enum cf_stretch_bend_energy_kind {
+    CF_STRETCH_BEND_HYBRID = 0,    /* lambda E_s + (1 - lambda) E_db (Eq. 17) */
+    CF_STRETCH_BEND_STRETCH = 1,   /* E_s only (Eq. 5), lambda = 1 */
+    CF_STRETCH_BEND_BEND = 2,      /* E_db only (Eq. 15), lambda = 0 */
+    CF_STRETCH_BEND_ARAP = 3,      /* ARAP spokes, per-vertex rotations (Eq. 6) */
+    CF_STRETCH_BEND_ARAP_RIMS = 4, /* ARAP spokes and rims (Eq. 7) */
+    CF_STRETCH_BEND_ENERGY_COUNT = 5
+} cf_stretch_bend_energy_kind;
 
 /* "hybrid", "stretch", "bend", "arap", "arap-rims"; NULL if out of range. */
-CF_API const char *cf_edit_energy_name(cf_edit_energy energy);
+CF_API const char *cf_stretch_bend_energy_name(cf_stretch_bend_energy_kind energy);
 /* CF_ERR_INVALID_ARG with a message listing the names for an unknown name. */
-CF_API cf_status cf_edit_energy_from_name(cf_context *ctx, const char *name, cf_edit_energy *energy);
+CF_API cf_status cf_stretch_bend_energy_from_name(cf_context *ctx, const char *name, cf_stretch_bend_energy_kind *energy);
 
 /* Dual area M_v of the bending energy (the paper suggests Voronoi). */
-typedef enum cf_edit_mass {
-    CF_EDIT_MASS_VORONOI = 0,      /* Meyer et al. mixed Voronoi cells */
-    CF_EDIT_MASS_BARYCENTRIC = 1
-} cf_edit_mass;
+typedef enum cf_stretch_bend_mass {
+    CF_STRETCH_BEND_MASS_VORONOI = 0,      /* Meyer et al. mixed Voronoi cells */
+    CF_STRETCH_BEND_MASS_BARYCENTRIC = 1
+} cf_stretch_bend_mass;
 
 /* ---- Handles ------------------------------------------------------------ */
 
@@ -80,11 +85,11 @@ typedef enum cf_edit_mass {
 /* ---- Options and flow ---------------------------------------------------- */
 
 typedef struct cf_stretch_bend_options {
-    int32_t energy;              /* cf_edit_energy, default CF_EDIT_HYBRID */
+    int32_t energy;              /* cf_stretch_bend_energy_kind, default CF_STRETCH_BEND_HYBRID */
     double lambda;               /* hybrid weight in [0, 1], default 0.5 */
     int32_t max_iterations;      /* for cf_stretch_bend_edit and the CLI, default 100 */
     double relative_tolerance;   /* converged when (E_prev - E) / E_prev < tol, default 1e-6 */
-    int32_t mass;                /* cf_edit_mass, default CF_EDIT_MASS_VORONOI */
+    int32_t mass;                /* cf_stretch_bend_mass, default CF_STRETCH_BEND_MASS_VORONOI */
     int32_t scale_free;          /* 1: stretch term divided by total rest area (default) */
     int32_t anderson;            /* Anderson acceleration of the local/global fixed-point map with this
                                     many past iterates (0 = off, at most 10; default -1 = 5 for hybrid,

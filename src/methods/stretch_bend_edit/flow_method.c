@@ -15,15 +15,15 @@
  * model.c.
  */
 #include "methods/flow_internal.h"
-#include "methods/stretch_bend_edit/sbe_internal.h"
+#include "methods/stretch_bend_edit/stretch_bend_internal.h"
 
 #include "curvflow/stretch_bend_edit.h"
 
 #include <math.h>
 #include <string.h>
 
-typedef struct sbe_state {
-    cfi_sbe_model model;
+typedef struct stretch_bend_state {
+    cfi_stretch_bend_model model;
     cf_stretch_bend_options options;
     double *rest;             /* 3 nv, copy of the rest pose */
     int32_t handle_count;
@@ -42,29 +42,29 @@ typedef struct sbe_state {
     int64_t first_from_start; /* first steps won by the rotations of the unsnapped start (statistics) */
     double factorize_seconds; /* of the last (re)factorisation, reported once */
     /* Anderson acceleration of G = global(local(x)) (depth from
-     * options.anderson, see sbe_create; linalg's cf_anderson): */
+     * options.anderson, see stretch_bend_create; linalg's cf_anderson): */
     int32_t aa_depth;
     cf_anderson *aa;
     double *aa_g, *aa_x;      /* 3 nv each: G(x) and the mixed candidate */
     int64_t aa_accepted, aa_rejected;
-} sbe_state;
+} stretch_bend_state;
 
 static const char *const energy_names[] = {"hybrid", "stretch", "bend", "arap", "arap-rims", NULL};
 static const char *const mass_names[] = {"voronoi", "barycentric", NULL};
 
-const char *cf_edit_energy_name(cf_edit_energy energy)
+const char *cf_stretch_bend_energy_name(cf_stretch_bend_energy_kind energy)
 {
-    if ((int)energy < 0 || (int)energy >= CF_EDIT_ENERGY_COUNT) return NULL;
+    if ((int)energy < 0 || (int)energy >= CF_STRETCH_BEND_ENERGY_COUNT) return NULL;
     return energy_names[energy];
 }
 
-cf_status cf_edit_energy_from_name(cf_context *ctx, const char *name, cf_edit_energy *energy)
+cf_status cf_stretch_bend_energy_from_name(cf_context *ctx, const char *name, cf_stretch_bend_energy_kind *energy)
 {
     if (!ctx) return CF_ERR_INVALID_ARG;
     if (!name || !energy) return cfi_error(ctx, CF_ERR_INVALID_ARG, "energy name or output is NULL");
-    for (int k = 0; k < CF_EDIT_ENERGY_COUNT; ++k) {
+    for (int k = 0; k < CF_STRETCH_BEND_ENERGY_COUNT; ++k) {
         if (strcmp(name, energy_names[k]) == 0) {
-            *energy = (cf_edit_energy)k;
+            *energy = (cf_stretch_bend_energy_kind)k;
             return CF_OK;
         }
     }
@@ -76,11 +76,11 @@ void cf_stretch_bend_options_default(cf_stretch_bend_options *o)
 {
     if (!o) return;
     memset(o, 0, sizeof *o);
-    o->energy = CF_EDIT_HYBRID;
+    o->energy = CF_STRETCH_BEND_HYBRID;
     o->lambda = 0.5;
     o->max_iterations = 100;
     o->relative_tolerance = 1e-6;
-    o->mass = CF_EDIT_MASS_VORONOI;
+    o->mass = CF_STRETCH_BEND_MASS_VORONOI;
     o->scale_free = 1;
     o->anderson = -1;
 }
@@ -105,7 +105,7 @@ static const cf_param_desc params[] = {
      "energy-safeguarded"},
 };
 
-static void free_system(sbe_state *s, cf_context *ctx)
+static void free_system(stretch_bend_state *s, cf_context *ctx)
 {
     cf_min_quad_destroy(&s->mq);
     CFI_FREE(ctx, s->handle_vertices, (size_t)s->handle_count);
@@ -114,7 +114,7 @@ static void free_system(sbe_state *s, cf_context *ctx)
     s->handle_count = 0;
 }
 
-static void state_free(sbe_state *s, cf_context *ctx)
+static void state_free(stretch_bend_state *s, cf_context *ctx)
 {
     if (!s) return;
     int32_t nv = s->model.nv;
@@ -130,15 +130,15 @@ static void state_free(sbe_state *s, cf_context *ctx)
     cf_anderson_destroy(&s->aa);
     CFI_FREE(ctx, s->aa_g, n3);
     CFI_FREE(ctx, s->aa_x, n3);
-    cfi_sbe_model_free(&s->model);
+    cfi_stretch_bend_model_free(&s->model);
     cfi_free(ctx, s, sizeof *s);
 }
 
 /* A = alpha K_t + beta K M^-1 K on all vertices (Eq. 23 times 1/2 of the
  * gradient), K_t = sum over terms w (d_i - d_j)(d_i - d_j)^T. */
-static cf_status build_full_matrix(sbe_state *s, cf_context *ctx)
+static cf_status build_full_matrix(stretch_bend_state *s, cf_context *ctx)
 {
-    cfi_sbe_model *m = &s->model;
+    cfi_stretch_bend_model *m = &s->model;
     int32_t nv = m->nv;
     cf_sparse *kt = NULL, *dk = NULL, *kmk = NULL;
     cf_status st = CF_OK;
@@ -199,7 +199,7 @@ static cf_status build_full_matrix(sbe_state *s, cf_context *ctx)
 
 /* Validates the handles against the mesh, reduces A to the free vertices,
  * factorises it and precomputes A_fc x_c (Sec. 4.1). */
-static cf_status build_system(sbe_state *s, cf_context *ctx, const cf_mesh *mesh, const cf_handle_set *h);
+static cf_status build_system(stretch_bend_state *s, cf_context *ctx, const cf_mesh *mesh, const cf_handle_set *h);
 
 /* Index of vertex v in the sorted handle list, or -1. */
 static int32_t handle_index(const cf_handle_set *h, int32_t v)
@@ -252,7 +252,7 @@ static cf_status check_handle_geometry(cf_context *ctx, const cf_mesh *mesh, con
     return CF_OK;
 }
 
-static cf_status setup_system(sbe_state *s, cf_context *ctx, const cf_mesh *mesh, const cf_handle_set *h)
+static cf_status setup_system(stretch_bend_state *s, cf_context *ctx, const cf_mesh *mesh, const cf_handle_set *h)
 {
     int32_t nv = mesh->nv;
     if (!h)
@@ -286,7 +286,7 @@ static cf_status setup_system(sbe_state *s, cf_context *ctx, const cf_mesh *mesh
     return st;
 }
 
-static cf_status build_system(sbe_state *s, cf_context *ctx, const cf_mesh *mesh, const cf_handle_set *h)
+static cf_status build_system(stretch_bend_state *s, cf_context *ctx, const cf_mesh *mesh, const cf_handle_set *h)
 {
     int32_t nv = mesh->nv;
     free_system(s, ctx);
@@ -329,22 +329,22 @@ static cf_status build_system(sbe_state *s, cf_context *ctx, const cf_mesh *mesh
         return cfi_error(ctx, CF_ERR_NOT_POSDEF,
                          "stretch-bend-edit: the %s system is not positive definite on this mesh (negative cotan "
                          "weights; the ARAP spokes energy can be indefinite, try arap-rims or hybrid)",
-                         cf_edit_energy_name(s->model.energy));
+                         cf_stretch_bend_energy_name(s->model.energy));
     return st;
 }
 
-static void snap_handles(const sbe_state *s, double *x)
+static void snap_handles(const stretch_bend_state *s, double *x)
 {
     for (int32_t k = 0; k < s->handle_count; ++k)
         memcpy(x + 3 * (size_t)s->handle_vertices[k], s->handle_targets + 3 * (size_t)k, 3 * sizeof(double));
 }
 
-static void fill_terms(const sbe_state *s, cf_flow_info *info)
+static void fill_terms(const stretch_bend_state *s, cf_flow_info *info)
 {
-    int arap = s->model.energy == CF_EDIT_ARAP || s->model.energy == CF_EDIT_ARAP_RIMS;
+    int arap = s->model.energy == CF_STRETCH_BEND_ARAP || s->model.energy == CF_STRETCH_BEND_ARAP_RIMS;
     info->energy = s->energy;
     if (arap) {
-        info->term_names[0] = cf_edit_energy_name(s->model.energy);
+        info->term_names[0] = cf_stretch_bend_energy_name(s->model.energy);
         info->energy_terms[0] = s->model.term_energy;
     } else {
         info->term_names[0] = "stretch";
@@ -371,17 +371,17 @@ static void fill_terms(const sbe_state *s, cf_flow_info *info)
  * (b) alone guarantees E(x1) <= E(x0), so the energy still never
  * increases. This function leaves the rotations of (a) in the model and x0
  * in x_start. */
-static cf_status start_state(sbe_state *s, double *x)
+static cf_status start_state(stretch_bend_state *s, double *x)
 {
     size_t n3 = 3 * (size_t)s->model.nv;
     memcpy(s->x_start, x, n3 * sizeof(double));
     snap_handles(s, x);
-    cf_status st = cfi_sbe_local_step(&s->model, x, 1, &s->energy);
+    cf_status st = cfi_stretch_bend_local_step(&s->model, x, 1, &s->energy);
     if (st != CF_OK) return st;
     s->first_pending = 0;
     if (memcmp(s->x_start, x, n3 * sizeof(double)) != 0) {
         double term = s->model.term_energy, bend = s->model.bend_energy, unused = 0.0;
-        st = cfi_sbe_local_step(&s->model, s->x_start, 1, &unused);
+        st = cfi_stretch_bend_local_step(&s->model, s->x_start, 1, &unused);
         /* The reported terms stay those of the snapped state. */
         s->model.term_energy = term;
         s->model.bend_energy = bend;
@@ -392,13 +392,13 @@ static cf_status start_state(sbe_state *s, double *x)
     return CF_OK;
 }
 
-static cf_status sbe_create(cf_flow *flow, const void *options)
+static cf_status stretch_bend_create(cf_flow *flow, const void *options)
 {
     cf_context *ctx = flow->ctx;
     const cf_mesh *mesh = flow->mesh;
     int32_t nv = mesh->nv;
     const cf_stretch_bend_options *o = options;
-    sbe_state *s = cfi_malloc(ctx, sizeof *s);
+    stretch_bend_state *s = cfi_malloc(ctx, sizeof *s);
     if (!s) return CF_ERR_NOMEM;
     memset(s, 0, sizeof *s);
     s->model.nv = nv;
@@ -422,7 +422,7 @@ static cf_status sbe_create(cf_flow *flow, const void *options)
      * at the default tolerance where the plain iteration goes on to the
      * buckled minimum E = 0.041 (docs/edit.md). */
     int32_t depth_opt = o->anderson;
-    if (depth_opt < 0) depth_opt = (o->energy == CF_EDIT_ARAP || o->energy == CF_EDIT_ARAP_RIMS) ? 0 : 5;
+    if (depth_opt < 0) depth_opt = (o->energy == CF_STRETCH_BEND_ARAP || o->energy == CF_STRETCH_BEND_ARAP_RIMS) ? 0 : 5;
     if (depth_opt > 0) {
         size_t n3 = 3 * (size_t)nv;
         s->aa_depth = depth_opt;
@@ -438,7 +438,7 @@ static cf_status sbe_create(cf_flow *flow, const void *options)
             return cfi_error(ctx, CF_ERR_NONFINITE, "vertex %d: rest position is not finite", i / 3);
         s->rest[i] = rest[i];
     }
-    cf_status st = cfi_sbe_model_init(&s->model, ctx, mesh, s->rest, o);
+    cf_status st = cfi_stretch_bend_model_init(&s->model, ctx, mesh, s->rest, o);
     if (st == CF_OK) {
         s->model.rhs = s->rhs;
         s->model.hu = s->hu;
@@ -457,15 +457,15 @@ static cf_status sbe_create(cf_flow *flow, const void *options)
 }
 
 /* Right-hand side of Eq. 23 on all vertices (interleaved) into s->rhs. */
-static void assemble_rhs(sbe_state *s)
+static void assemble_rhs(stretch_bend_state *s)
 {
     s->model.hu = s->hu;
-    cfi_sbe_assemble_rhs(&s->model, s->rhs);
+    cfi_stretch_bend_assemble_rhs(&s->model, s->rhs);
 }
 
 /* Global phase: x (3 nv interleaved) receives the minimiser over the free
  * vertices for the current rotations and u', handles at their targets. */
-static cf_status global_solve(sbe_state *s, double *x, double *assemble_seconds, double *solve_seconds)
+static cf_status global_solve(stretch_bend_state *s, double *x, double *assemble_seconds, double *solve_seconds)
 {
     int32_t nv = s->model.nv;
     double t0 = cfi_now_seconds();
@@ -487,17 +487,17 @@ static cf_status global_solve(sbe_state *s, double *x, double *assemble_seconds,
     return CF_OK;
 }
 
-cf_status cfi_sbe_flow_global_solve(cf_flow *flow, double *x)
+cf_status cfi_stretch_bend_flow_global_solve(cf_flow *flow, double *x)
 {
     if (!flow || flow->method != &cfi_stretch_bend_edit_method || !flow->impl || !x) return CF_ERR_INVALID_ARG;
     return global_solve(flow->impl, x, NULL, NULL);
 }
 
-cf_status cfi_sbe_flow_gradient(cf_flow *flow, const double *x, double *grad)
+cf_status cfi_stretch_bend_flow_gradient(cf_flow *flow, const double *x, double *grad)
 {
     if (!flow || flow->method != &cfi_stretch_bend_edit_method || !flow->impl || !x || !grad)
         return CF_ERR_INVALID_ARG;
-    sbe_state *s = flow->impl;
+    stretch_bend_state *s = flow->impl;
     int32_t nv = s->model.nv;
     assemble_rhs(s);
     double *xcol = s->model.xcol, *ax = s->model.kx;
@@ -511,10 +511,10 @@ cf_status cfi_sbe_flow_gradient(cf_flow *flow, const double *x, double *grad)
     return CF_OK;
 }
 
-cfi_sbe_model *cfi_sbe_flow_model(cf_flow *flow)
+cfi_stretch_bend_model *cfi_stretch_bend_flow_model(cf_flow *flow)
 {
     if (!flow || flow->method != &cfi_stretch_bend_edit_method || !flow->impl) return NULL;
-    return &((sbe_state *)flow->impl)->model;
+    return &((stretch_bend_state *)flow->impl)->model;
 }
 
 /* One local/global iteration: global solve with the rotations and u' of the
@@ -522,10 +522,10 @@ cfi_sbe_model *cfi_sbe_flow_model(cf_flow *flow)
  * energy E(x') reported for it). With Anderson acceleration the candidate
  * mixed from the history replaces the plain result when its energy is not
  * higher than the current one. */
-static cf_status sbe_step(cf_flow *flow, cf_flow_info *info)
+static cf_status stretch_bend_step(cf_flow *flow, cf_flow_info *info)
 {
-    sbe_state *s = flow->impl;
-    cfi_sbe_model *m = &s->model;
+    stretch_bend_state *s = flow->impl;
+    cfi_stretch_bend_model *m = &s->model;
     double *x = flow->positions;
     if (!s->mq)
         return cfi_error(flow->ctx, CF_ERR_INVALID_ARG,
@@ -542,17 +542,17 @@ static cf_status sbe_step(cf_flow *flow, cf_flow_info *info)
         st = global_solve(s, x, &assemble, &solve);
         if (st != CF_OK) return st;
         t2 = cfi_now_seconds();
-        st = cfi_sbe_local_step(m, x, 0, &ea);
-        if (st == CF_OK) st = cfi_sbe_local_step(m, s->x_start, 1, &e0);
+        st = cfi_stretch_bend_local_step(m, x, 0, &ea);
+        if (st == CF_OK) st = cfi_stretch_bend_local_step(m, s->x_start, 1, &e0);
         if (st == CF_OK) st = global_solve(s, s->x_start, NULL, NULL);
-        if (st == CF_OK) st = cfi_sbe_local_step(m, s->x_start, 0, &eb);
+        if (st == CF_OK) st = cfi_stretch_bend_local_step(m, s->x_start, 0, &eb);
         if (st != CF_OK) return st;
         if (eb <= ea) {
             memcpy(x, s->x_start, n3 * sizeof(double));
             s->energy = eb;
         } else {
             ++s->first_from_start;
-            st = cfi_sbe_local_step(m, x, 0, &s->energy);
+            st = cfi_stretch_bend_local_step(m, x, 0, &s->energy);
             if (st != CF_OK) return st;
         }
         t3 = cfi_now_seconds();
@@ -560,7 +560,7 @@ static cf_status sbe_step(cf_flow *flow, cf_flow_info *info)
         st = global_solve(s, x, &assemble, &solve);
         if (st != CF_OK) return st;
         t2 = cfi_now_seconds();
-        st = cfi_sbe_local_step(m, x, 0, &s->energy);
+        st = cfi_stretch_bend_local_step(m, x, 0, &s->energy);
         if (st != CF_OK) return st;
         t3 = cfi_now_seconds();
     } else {
@@ -573,7 +573,7 @@ static cf_status sbe_step(cf_flow *flow, cf_flow_info *info)
         int accepted = 0;
         if (have) {
             double e_aa = 0.0;
-            st = cfi_sbe_local_step(m, s->aa_x, 0, &e_aa);
+            st = cfi_stretch_bend_local_step(m, s->aa_x, 0, &e_aa);
             if (st == CF_OK && isfinite(e_aa) && e_aa <= previous) {
                 memcpy(x, s->aa_x, n3 * sizeof(double));
                 s->energy = e_aa;
@@ -587,7 +587,7 @@ static cf_status sbe_step(cf_flow *flow, cf_flow_info *info)
         }
         if (!accepted) {
             memcpy(x, s->aa_g, n3 * sizeof(double));
-            st = cfi_sbe_local_step(m, x, 0, &s->energy);
+            st = cfi_stretch_bend_local_step(m, x, 0, &s->energy);
             if (st != CF_OK) return st;
         }
         t3 = cfi_now_seconds();
@@ -616,9 +616,9 @@ static cf_status sbe_step(cf_flow *flow, cf_flow_info *info)
 
 /* After cf_flow_set_positions or a failed step: handles back on their
  * targets and the local step redone at the new state. */
-static cf_status sbe_reset(cf_flow *flow)
+static cf_status stretch_bend_reset(cf_flow *flow)
 {
-    sbe_state *s = flow->impl;
+    stretch_bend_state *s = flow->impl;
     if (!s) return CF_OK;
     cf_anderson_reset(s->aa);
     cf_status st = start_state(s, flow->positions);
@@ -626,7 +626,7 @@ static cf_status sbe_reset(cf_flow *flow)
     return st;
 }
 
-static void sbe_destroy(cf_flow *flow)
+static void stretch_bend_destroy(cf_flow *flow)
 {
     state_free(flow->impl, flow->ctx);
     flow->impl = NULL;
@@ -640,10 +640,10 @@ const cfi_flow_method cfi_stretch_bend_edit_method = {
     .options_default = options_default,
     .params = params,
     .param_count = (int32_t)(sizeof params / sizeof params[0]),
-    .create = sbe_create,
-    .step = sbe_step,
-    .reset = sbe_reset,
-    .destroy = sbe_destroy,
+    .create = stretch_bend_create,
+    .step = stretch_bend_step,
+    .reset = stretch_bend_reset,
+    .destroy = stretch_bend_destroy,
 };
 
 cf_status cf_stretch_bend_set_handles(cf_flow *flow, const cf_handle_set *handles)
@@ -651,12 +651,12 @@ cf_status cf_stretch_bend_set_handles(cf_flow *flow, const cf_handle_set *handle
     if (!flow) return CF_ERR_INVALID_ARG;
     if (flow->method != &cfi_stretch_bend_edit_method || !flow->impl)
         return cfi_error(flow->ctx, CF_ERR_INVALID_ARG, "cf_stretch_bend_set_handles: not a stretch-bend-edit flow");
-    sbe_state *s = flow->impl;
+    stretch_bend_state *s = flow->impl;
     cf_status st = setup_system(s, flow->ctx, flow->mesh, handles);
     if (st != CF_OK) return st; /* invalid handles: the old system stays; failed build: steps report it */
     s->options.handles = handles;
     flow->converged = 0;
-    return sbe_reset(flow);
+    return stretch_bend_reset(flow);
 }
 
 cf_status cf_stretch_bend_edit(cf_context *ctx, const cf_mesh *mesh, const double *start,
@@ -690,24 +690,24 @@ cf_status cf_stretch_bend_energy(cf_context *ctx, const cf_mesh *mesh, const dou
     if (!mesh || !deformed || !options)
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "cf_stretch_bend_energy: mesh, deformed or options is NULL");
     const double *x0 = rest ? rest : mesh->positions;
-    int is_arap = options->energy == CF_EDIT_ARAP || options->energy == CF_EDIT_ARAP_RIMS;
-    cfi_sbe_model m;
-    cf_status st = cfi_sbe_model_init(&m, ctx, mesh, x0, options);
+    int is_arap = options->energy == CF_STRETCH_BEND_ARAP || options->energy == CF_STRETCH_BEND_ARAP_RIMS;
+    cfi_stretch_bend_model m;
+    cf_status st = cfi_stretch_bend_model_init(&m, ctx, mesh, x0, options);
     if (st != CF_OK) return st;
     double alpha = m.alpha, beta = m.beta;
     if (!is_arap && (alpha == 0.0 || beta == 0.0)) {
         /* A one-term model lacks the other term's data: evaluate both with
          * a two-term model and weight them with the requested alpha, beta. */
-        cfi_sbe_model_free(&m);
+        cfi_stretch_bend_model_free(&m);
         cf_stretch_bend_options h = *options;
-        h.energy = CF_EDIT_HYBRID;
+        h.energy = CF_STRETCH_BEND_HYBRID;
         h.lambda = 0.5;
-        st = cfi_sbe_model_init(&m, ctx, mesh, x0, &h);
+        st = cfi_stretch_bend_model_init(&m, ctx, mesh, x0, &h);
         if (st != CF_OK) return st;
     }
-    st = cfi_sbe_local_step(&m, deformed, 1, NULL);
+    st = cfi_stretch_bend_local_step(&m, deformed, 1, NULL);
     double term = m.term_energy, bd = m.bend_energy;
-    cfi_sbe_model_free(&m);
+    cfi_stretch_bend_model_free(&m);
     if (st != CF_OK) return st;
     if (stretch) *stretch = is_arap ? 0.0 : term;
     if (bend) *bend = is_arap ? 0.0 : bd;

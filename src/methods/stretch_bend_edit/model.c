@@ -7,7 +7,7 @@
  * Procrustes rotations from the cross-covariance with determinant
  * correction (Eq. 24) and u' = normalised K x'.
  */
-#include "methods/stretch_bend_edit/sbe_internal.h"
+#include "methods/stretch_bend_edit/stretch_bend_internal.h"
 
 #include "curvflow/ops.h"
 #include "curvflow/quaternion.h"
@@ -16,7 +16,7 @@
 #include <math.h>
 #include <string.h>
 
-void cfi_sbe_model_free(cfi_sbe_model *m)
+void cfi_stretch_bend_model_free(cfi_stretch_bend_model *m)
 {
     if (!m || !m->ctx) return;
     cf_context *ctx = m->ctx;
@@ -40,7 +40,7 @@ void cfi_sbe_model_free(cfi_sbe_model *m)
     m->ctx = NULL;
 }
 
-static void set_term(cfi_sbe_model *m, int32_t t, int32_t i, int32_t j, double w, const double *rest)
+static void set_term(cfi_stretch_bend_model *m, int32_t t, int32_t i, int32_t j, double w, const double *rest)
 {
     m->term_ij[2 * t] = i;
     m->term_ij[2 * t + 1] = j;
@@ -50,7 +50,7 @@ static void set_term(cfi_sbe_model *m, int32_t t, int32_t i, int32_t j, double w
 
 /* Eq. 5: one term per halfedge v->w of face t with weight cot of the corner
  * opposite it, rotation R_t. */
-static void build_stretch_terms(cfi_sbe_model *m, const double *rest, const double *cot)
+static void build_stretch_terms(cfi_stretch_bend_model *m, const double *rest, const double *cot)
 {
     const cf_mesh *mesh = m->mesh;
     for (int32_t f = 0; f < mesh->nf; ++f) {
@@ -88,7 +88,7 @@ static void build_stretch_terms(cfi_sbe_model *m, const double *rest, const doub
  * the edges of its cell, each with the full edge weight W = cot a + cot b
  * (= 2 w_e of the project's L). The rims of v are the edges opposite v in
  * its faces; with the spokes they form the set E(v), each edge once. */
-static void build_arap_terms(cfi_sbe_model *m, const double *rest, const double *w_edge, int rims)
+static void build_arap_terms(cfi_stretch_bend_model *m, const double *rest, const double *w_edge, int rims)
 {
     const cf_mesh *mesh = m->mesh;
     int32_t t = 0;
@@ -114,7 +114,7 @@ static void build_arap_terms(cfi_sbe_model *m, const double *rest, const double 
 
 /* K = 2 L from the edge weights (K f)_v = sum_w W_vw (f_v - f_w) (Eq. 14
  * times M_v), assembled once. */
-static cf_status build_k(cfi_sbe_model *m, const double *w_edge)
+static cf_status build_k(cfi_stretch_bend_model *m, const double *w_edge)
 {
     cf_context *ctx = m->ctx;
     const cf_mesh *mesh = m->mesh;
@@ -178,7 +178,7 @@ static void k_apply3_add(const cf_sparse *k, double alpha, const double *x, doub
     }
 }
 
-cf_status cfi_sbe_model_init(cfi_sbe_model *m, cf_context *ctx, const cf_mesh *mesh, const double *rest,
+cf_status cfi_stretch_bend_model_init(cfi_stretch_bend_model *m, cf_context *ctx, const cf_mesh *mesh, const double *rest,
                              const cf_stretch_bend_options *o)
 {
     memset(m, 0, sizeof *m);
@@ -186,13 +186,13 @@ cf_status cfi_sbe_model_init(cfi_sbe_model *m, cf_context *ctx, const cf_mesh *m
     m->mesh = mesh;
     m->nv = mesh->nv;
     int32_t nv = mesh->nv, nf = mesh->nf, ne = mesh->ne;
-    if (o->energy < 0 || o->energy >= CF_EDIT_ENERGY_COUNT)
+    if (o->energy < 0 || o->energy >= CF_STRETCH_BEND_ENERGY_COUNT)
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "stretch-bend-edit: energy %d out of range", (int)o->energy);
     if (!(o->lambda >= 0.0 && o->lambda <= 1.0))
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "stretch-bend-edit: lambda %g is not in [0, 1]", o->lambda);
-    m->energy = (cf_edit_energy)o->energy;
-    double lambda = o->energy == CF_EDIT_STRETCH ? 1.0 : o->energy == CF_EDIT_BEND ? 0.0 : o->lambda;
-    int arap = m->energy == CF_EDIT_ARAP || m->energy == CF_EDIT_ARAP_RIMS;
+    m->energy = (cf_stretch_bend_energy_kind)o->energy;
+    double lambda = o->energy == CF_STRETCH_BEND_STRETCH ? 1.0 : o->energy == CF_STRETCH_BEND_BEND ? 0.0 : o->lambda;
+    int arap = m->energy == CF_STRETCH_BEND_ARAP || m->energy == CF_STRETCH_BEND_ARAP_RIMS;
 
     double *cot = CFI_ALLOC(ctx, double, 3 * (size_t)nf);
     double *w_edge = CFI_ALLOC(ctx, double, (size_t)ne);
@@ -214,10 +214,10 @@ cf_status cfi_sbe_model_init(cfi_sbe_model *m, cf_context *ctx, const cf_mesh *m
         m->beta = 1.0 - lambda;
     }
 
-    if (m->energy == CF_EDIT_ARAP) {
+    if (m->energy == CF_STRETCH_BEND_ARAP) {
         m->rot_count = nv;
         m->term_count = 2 * ne;
-    } else if (m->energy == CF_EDIT_ARAP_RIMS) {
+    } else if (m->energy == CF_STRETCH_BEND_ARAP_RIMS) {
         m->rot_count = nv;
         m->term_count = 2 * ne + 3 * nf;
     } else if (m->alpha > 0.0) {
@@ -254,8 +254,8 @@ cf_status cfi_sbe_model_init(cfi_sbe_model *m, cf_context *ctx, const cf_mesh *m
         st = CF_ERR_NOMEM;
         goto done;
     }
-    if (m->energy == CF_EDIT_ARAP || m->energy == CF_EDIT_ARAP_RIMS)
-        build_arap_terms(m, rest, w_edge, m->energy == CF_EDIT_ARAP_RIMS);
+    if (m->energy == CF_STRETCH_BEND_ARAP || m->energy == CF_STRETCH_BEND_ARAP_RIMS)
+        build_arap_terms(m, rest, w_edge, m->energy == CF_STRETCH_BEND_ARAP_RIMS);
     else if (m->term_count > 0)
         build_stretch_terms(m, rest, cot);
     else
@@ -285,7 +285,7 @@ cf_status cfi_sbe_model_init(cfi_sbe_model *m, cf_context *ctx, const cf_mesh *m
             goto done;
         }
         st = cf_vertex_areas(ctx, mesh, rest,
-                             o->mass == CF_EDIT_MASS_BARYCENTRIC ? CF_DUAL_AREA_BARYCENTRIC
+                             o->mass == CF_STRETCH_BEND_MASS_BARYCENTRIC ? CF_DUAL_AREA_BARYCENTRIC
                                                                  : CF_DUAL_AREA_MIXED_VORONOI,
                              m->mass);
         if (st == CF_OK) st = build_k(m, w_edge);
@@ -313,7 +313,7 @@ cf_status cfi_sbe_model_init(cfi_sbe_model *m, cf_context *ctx, const cf_mesh *m
 done:
     CFI_FREE(ctx, cot, 3 * (size_t)nf);
     CFI_FREE(ctx, w_edge, (size_t)ne);
-    if (st != CF_OK) cfi_sbe_model_free(m);
+    if (st != CF_OK) cfi_stretch_bend_model_free(m);
     return st;
 }
 
@@ -432,7 +432,7 @@ static int triangle_rotation(const double p[6], const double b[9], double r[9], 
 /* Eq. 22 for the terms of rotation r: b_i += alpha w R e, b_j -= alpha w R e
  * (interleaved, 3 nv), fused into the local step while the terms are in
  * cache. */
-static void accumulate_rhs(const cfi_sbe_model *m, int32_t r, double *rhs)
+static void accumulate_rhs(const cfi_stretch_bend_model *m, int32_t r, double *rhs)
 {
     const double *rot = m->rotations + 9 * r;
     for (int32_t t = m->rot_offsets[r]; t < m->rot_offsets[r + 1]; ++t) {
@@ -448,7 +448,7 @@ static void accumulate_rhs(const cfi_sbe_model *m, int32_t r, double *rhs)
 }
 
 /* beta K (|H| u') of Eq. 23, added to rhs (interleaved). */
-static void add_bend_rhs(const cfi_sbe_model *m, double *rhs)
+static void add_bend_rhs(const cfi_stretch_bend_model *m, double *rhs)
 {
     for (int32_t v = 0; v < m->nv; ++v) {
         double h = m->hm[v] / m->mass[v];
@@ -457,14 +457,14 @@ static void add_bend_rhs(const cfi_sbe_model *m, double *rhs)
     k_apply3_add(m->k, m->beta, m->hu, rhs);
 }
 
-void cfi_sbe_assemble_rhs(cfi_sbe_model *m, double *rhs)
+void cfi_stretch_bend_assemble_rhs(cfi_stretch_bend_model *m, double *rhs)
 {
     memset(rhs, 0, 3 * (size_t)m->nv * sizeof(double));
     for (int32_t r = 0; r < m->rot_count; ++r) accumulate_rhs(m, r, rhs);
     if (m->beta > 0.0) add_bend_rhs(m, rhs);
 }
 
-cf_status cfi_sbe_local_step(cfi_sbe_model *m, const double *x, int exact, double *total)
+cf_status cfi_stretch_bend_local_step(cfi_stretch_bend_model *m, const double *x, int exact, double *total)
 {
     cf_context *ctx = m->ctx;
     int32_t nv = m->nv;
@@ -567,7 +567,7 @@ cf_status cfi_sbe_local_step(cfi_sbe_model *m, const double *x, int exact, doubl
     return CF_OK;
 }
 
-double cfi_sbe_fixed_energy(const cfi_sbe_model *m, const double *x)
+double cfi_stretch_bend_fixed_energy(const cfi_stretch_bend_model *m, const double *x)
 {
     int32_t nv = m->nv;
     double e_terms = 0.0;

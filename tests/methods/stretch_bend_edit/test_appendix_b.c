@@ -44,11 +44,11 @@ static void evaluate(cf_context *ctx, const cf_mesh *mesh, const double *x, ener
 {
     cf_stretch_bend_options o;
     cf_stretch_bend_options_default(&o);
-    o.energy = CF_EDIT_ARAP;
+    o.energy = CF_STRETCH_BEND_ARAP;
     CHECK_OK(ctx, cf_stretch_bend_energy(ctx, mesh, NULL, x, &o, NULL, NULL, &out->spoke, NULL));
-    o.energy = CF_EDIT_ARAP_RIMS;
+    o.energy = CF_STRETCH_BEND_ARAP_RIMS;
     CHECK_OK(ctx, cf_stretch_bend_energy(ctx, mesh, NULL, x, &o, NULL, NULL, &out->rims, NULL));
-    o.energy = CF_EDIT_HYBRID;
+    o.energy = CF_STRETCH_BEND_HYBRID;
     CHECK_OK(ctx, cf_stretch_bend_energy(ctx, mesh, NULL, x, &o, &out->stretch, &out->bend, NULL, NULL));
 }
 

@@ -267,7 +267,7 @@ static void test_allocation_failures(void)
     const char *json = "{\"sets\": [{\"name\": \"l\", \"relative_box\": {\"min\": [0,0,0], \"max\": [0,1,1]}, "
                        "\"fixed\": true}, {\"name\": \"r\", \"vertices\": [5, 35], \"transform\": "
                        "{\"translate\": [0,0,0.3]}}]}";
-    for (int e = 0; e < CF_EDIT_ENERGY_COUNT; ++e) {
+    for (int e = 0; e < CF_STRETCH_BEND_ENERGY_COUNT; ++e) {
         int succeeded = 0, failures = 0;
         for (int64_t n = 1; n < 2000 && !succeeded; ++n) {
             cf_context_fail_allocation(ctx, n, 1);
@@ -334,7 +334,7 @@ static void test_explicit_rest_pose(void)
     if (!mesh || !h) return;
     cf_stretch_bend_options o;
     cf_stretch_bend_options_default(&o);
-    o.energy = CF_EDIT_ARAP;
+    o.energy = CF_STRETCH_BEND_ARAP;
     o.handles = h;
     o.rest_positions = rest;
     o.max_iterations = 500;

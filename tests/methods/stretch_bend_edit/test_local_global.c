@@ -6,13 +6,13 @@
  * rigid motion of all handles, Anderson acceleration, and the two-candidate
  * first step.
  */
-#include "sbe_test_util.h"
+#include "stretch_bend_test_util.h"
 #include "test.h"
 
 #include "curvflow/flow.h"
 #include "curvflow/generate.h"
 #include "curvflow/stretch_bend_edit.h"
-#include "methods/stretch_bend_edit/sbe_internal.h"
+#include "methods/stretch_bend_edit/stretch_bend_internal.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -43,11 +43,11 @@ static int bar_rule(int32_t v, const double *p, double *t, const void *user)
 static cf_handle_set *bar_handles(cf_context *ctx, const cf_mesh *mesh, double shift, double twist)
 {
     bar_edit b = {shift, twist};
-    return sbe_handles_where(ctx, mesh, bar_rule, &b);
+    return stretch_bend_handles_where(ctx, mesh, bar_rule, &b);
 }
 
 static cf_flow *make_flow_aa(cf_context *ctx, const cf_mesh *mesh, const double *start, const cf_handle_set *h,
-                             cf_edit_energy energy, int32_t anderson)
+                             cf_stretch_bend_energy_kind energy, int32_t anderson)
 {
     cf_flow_options fo;
     CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_STRETCH_BEND_EDIT, &fo));
@@ -63,7 +63,7 @@ static cf_flow *make_flow_aa(cf_context *ctx, const cf_mesh *mesh, const double 
 
 /* The plain local/global iteration (the paper's; the default adds Anderson
  * acceleration for hybrid/stretch/bend, tested in test_anderson). */
-static cf_flow *make_flow(cf_context *ctx, const cf_mesh *mesh, const cf_handle_set *h, cf_edit_energy energy)
+static cf_flow *make_flow(cf_context *ctx, const cf_mesh *mesh, const cf_handle_set *h, cf_stretch_bend_energy_kind energy)
 {
     return make_flow_aa(ctx, mesh, NULL, h, energy, 0);
 }
@@ -77,8 +77,8 @@ static void test_monotone_decrease(void)
     cf_mesh *mesh = NULL;
     CHECK_OK(ctx, cf_generate_bar(ctx, 3, 3, 9, 1.0, 1.0, 3.0, 0, &mesh));
     cf_handle_set *h = bar_handles(ctx, mesh, 0.8, 0.6);
-    for (int e = 0; e < CF_EDIT_ENERGY_COUNT; ++e) {
-        cf_flow *flow = make_flow(ctx, mesh, h, (cf_edit_energy)e);
+    for (int e = 0; e < CF_STRETCH_BEND_ENERGY_COUNT; ++e) {
+        cf_flow *flow = make_flow(ctx, mesh, h, (cf_stretch_bend_energy_kind)e);
         if (!flow) continue;
         double first = cf_flow_energy(flow), prev = first;
         int monotone = 1;
@@ -87,7 +87,7 @@ static void test_monotone_decrease(void)
             CHECK_OK(ctx, cf_flow_step(flow, &info));
             if (info.energy > prev + 1e-10 * fabs(prev)) {
                 monotone = 0;
-                fprintf(stderr, "%s: iteration %d: %.17g > %.17g\n", cf_edit_energy_name((cf_edit_energy)e), k + 1,
+                fprintf(stderr, "%s: iteration %d: %.17g > %.17g\n", cf_stretch_bend_energy_name((cf_stretch_bend_energy_kind)e), k + 1,
                         info.energy, prev);
             }
             prev = info.energy;
@@ -95,7 +95,7 @@ static void test_monotone_decrease(void)
         CHECK(monotone);
         /* The iteration must actually make progress from the snapped start. */
         CHECK_LE(prev, 0.5 * first);
-        fprintf(stderr, "  %-9s E0 %.6g  E30 %.6g\n", cf_edit_energy_name((cf_edit_energy)e), first, prev);
+        fprintf(stderr, "  %-9s E0 %.6g  E30 %.6g\n", cf_stretch_bend_energy_name((cf_stretch_bend_energy_kind)e), first, prev);
         cf_flow_destroy(&flow);
     }
     cf_handle_set_destroy(&h);
@@ -118,14 +118,14 @@ static void test_gradient_finite_difference(void)
     int32_t nv = cf_mesh_vertex_count(mesh);
     double *x = malloc(sizeof(double) * 3 * (size_t)nv);
     double *g = malloc(sizeof(double) * 3 * (size_t)nv);
-    for (int e = 0; e < CF_EDIT_ENERGY_COUNT; ++e) {
-        cf_flow *flow = make_flow(ctx, mesh, h, (cf_edit_energy)e);
+    for (int e = 0; e < CF_STRETCH_BEND_ENERGY_COUNT; ++e) {
+        cf_flow *flow = make_flow(ctx, mesh, h, (cf_stretch_bend_energy_kind)e);
         if (!flow) continue;
         for (int k = 0; k < 3; ++k) CHECK_OK(ctx, cf_flow_step(flow, NULL));
-        cfi_sbe_model *m = cfi_sbe_flow_model(flow);
+        cfi_stretch_bend_model *m = cfi_stretch_bend_flow_model(flow);
         CHECK(m != NULL);
-        CHECK_OK(ctx, cfi_sbe_flow_global_solve(flow, x));
-        CHECK_OK(ctx, cfi_sbe_flow_gradient(flow, x, g));
+        CHECK_OK(ctx, cfi_stretch_bend_flow_global_solve(flow, x));
+        CHECK_OK(ctx, cfi_stretch_bend_flow_gradient(flow, x, g));
         /* Free vertices: zero gradient at the global solution. */
         double gscale = 0.0, gfree = 0.0;
         int32_t hk = 0;
@@ -142,21 +142,21 @@ static void test_gradient_finite_difference(void)
         /* Perturb and compare every coordinate's central difference. */
         srand(7);
         for (int32_t i = 0; i < 3 * nv; ++i) x[i] += 0.05 * ((double)rand() / RAND_MAX - 0.5);
-        CHECK_OK(ctx, cfi_sbe_flow_gradient(flow, x, g));
+        CHECK_OK(ctx, cfi_stretch_bend_flow_gradient(flow, x, g));
         double worst = 0.0, scale = 0.0, step = 1e-4;
         for (int32_t i = 0; i < 3 * nv; ++i) {
             double keep = x[i];
             x[i] = keep + step;
-            double ep = cfi_sbe_fixed_energy(m, x);
+            double ep = cfi_stretch_bend_fixed_energy(m, x);
             x[i] = keep - step;
-            double em = cfi_sbe_fixed_energy(m, x);
+            double em = cfi_stretch_bend_fixed_energy(m, x);
             x[i] = keep;
             double fd = (ep - em) / (2.0 * step);
             worst = fmax(worst, fabs(fd - g[i]));
             scale = fmax(scale, fabs(g[i]));
         }
         fprintf(stderr, "  %-9s |g_free| %.3g / %.3g, fd error %.3g / %.3g\n",
-                cf_edit_energy_name((cf_edit_energy)e), gfree, gscale, worst, scale);
+                cf_stretch_bend_energy_name((cf_stretch_bend_energy_kind)e), gfree, gscale, worst, scale);
         CHECK_LE(worst, 1e-6 * scale);
         cf_flow_destroy(&flow);
     }
@@ -199,8 +199,8 @@ static void test_rigid_motion(void)
     for (int32_t v = 0; v < nv; ++v)
         for (int d = 0; d < 3; ++d)
             moved[3 * v + d] = r[3 * d] * x0[3 * v] + r[3 * d + 1] * x0[3 * v + 1] + r[3 * d + 2] * x0[3 * v + 2] + t[d];
-    cf_handle_set *h = sbe_handles_where(ctx, mesh, moved_ends_rule, moved);
-    for (int e = 0; e < CF_EDIT_ENERGY_COUNT; ++e) {
+    cf_handle_set *h = stretch_bend_handles_where(ctx, mesh, moved_ends_rule, moved);
+    for (int e = 0; e < CF_STRETCH_BEND_ENERGY_COUNT; ++e) {
         /* (a) Started at the rigid motion: zero energy and a fixed point. */
         cf_flow_options fo;
         CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_STRETCH_BEND_EDIT, &fo));
@@ -225,7 +225,7 @@ static void test_rigid_motion(void)
          * per-triangle stretch and the bending term propagate the rotation
          * slowly (local/global is first order), so for them the test asks
          * for a 10^3-fold energy decrease in 300 iterations. */
-        flow = make_flow(ctx, mesh, h, (cf_edit_energy)e);
+        flow = make_flow(ctx, mesh, h, (cf_stretch_bend_energy_kind)e);
         if (!flow) continue;
         double e0 = cf_flow_energy(flow);
         CHECK_OK(ctx, cf_flow_run(flow, 300, NULL));
@@ -233,10 +233,10 @@ static void test_rigid_motion(void)
         err = 0.0;
         for (int32_t i = 0; i < 3 * nv; ++i) err = fmax(err, fabs(y[i] - moved[i]));
         fprintf(stderr, "  %-9s E0 %.3g  E %.3g  max error %.3g after %lld iterations\n",
-                cf_edit_energy_name((cf_edit_energy)e), e0, cf_flow_energy(flow), err,
+                cf_stretch_bend_energy_name((cf_stretch_bend_energy_kind)e), e0, cf_flow_energy(flow), err,
                 (long long)cf_flow_last_info(flow)->iteration);
         CHECK(e0 > 0.0);
-        if (e == CF_EDIT_ARAP || e == CF_EDIT_ARAP_RIMS) {
+        if (e == CF_STRETCH_BEND_ARAP || e == CF_STRETCH_BEND_ARAP_RIMS) {
             CHECK_LE(fabs(cf_flow_energy(flow)), 1e-10 * e0);
             CHECK_LE(err, 1e-6);
         } else {
@@ -277,11 +277,11 @@ static void test_fast_local_step_is_optimal(void)
     cf_mesh *mesh = NULL;
     CHECK_OK(ctx, cf_generate_sheet(ctx, 8, 1.0, 0, &mesh));
     if (!mesh) return;
-    cf_handle_set *h = sbe_handles_where(ctx, mesh, sheet_turn_rule, NULL);
-    for (int e = 0; e < CF_EDIT_ENERGY_COUNT; ++e) {
-        cf_flow *flow = make_flow(ctx, mesh, h, (cf_edit_energy)e);
+    cf_handle_set *h = stretch_bend_handles_where(ctx, mesh, sheet_turn_rule, NULL);
+    for (int e = 0; e < CF_STRETCH_BEND_ENERGY_COUNT; ++e) {
+        cf_flow *flow = make_flow(ctx, mesh, h, (cf_stretch_bend_energy_kind)e);
         if (!flow) continue;
-        cfi_sbe_model *m = cfi_sbe_flow_model(flow);
+        cfi_stretch_bend_model *m = cfi_stretch_bend_flow_model(flow);
         size_t rbytes = 9 * sizeof(double) * (size_t)m->rot_count, qbytes = 4 * sizeof(double) * (size_t)m->rot_count;
         double *keep_r = malloc(rbytes + 1), *keep_q = malloc(qbytes + 1);
         double worst = 0.0;
@@ -291,14 +291,14 @@ static void test_fast_local_step_is_optimal(void)
             memcpy(keep_r, m->rotations, rbytes);
             if (m->quats) memcpy(keep_q, m->quats, qbytes);
             double exact = 0.0;
-            CHECK_OK(ctx, cfi_sbe_local_step(m, cf_flow_positions(flow), 1, &exact));
+            CHECK_OK(ctx, cfi_stretch_bend_local_step(m, cf_flow_positions(flow), 1, &exact));
             memcpy(m->rotations, keep_r, rbytes);
             if (m->quats) memcpy(m->quats, keep_q, qbytes);
-            CHECK_OK(ctx, cfi_sbe_local_step(m, cf_flow_positions(flow), 0, NULL)); /* restore the step's rhs */
+            CHECK_OK(ctx, cfi_stretch_bend_local_step(m, cf_flow_positions(flow), 0, NULL)); /* restore the step's rhs */
             worst = fmax(worst, (info.energy - exact) / fabs(exact));
         }
         fprintf(stderr, "  %-9s worst relative excess of the fast local step: %.3g\n",
-                cf_edit_energy_name((cf_edit_energy)e), worst);
+                cf_stretch_bend_energy_name((cf_stretch_bend_energy_kind)e), worst);
         CHECK_LE(worst, 1e-10);
         free(keep_r);
         free(keep_q);
@@ -322,9 +322,9 @@ static void test_anderson(void)
     cf_mesh *mesh = NULL;
     CHECK_OK(ctx, cf_generate_bar(ctx, 3, 3, 9, 1.0, 1.0, 3.0, 0, &mesh));
     cf_handle_set *h = bar_handles(ctx, mesh, 0.3, 1.5);
-    for (int e = 0; e < CF_EDIT_ENERGY_COUNT; ++e) {
-        cf_flow *plain = make_flow_aa(ctx, mesh, NULL, h, (cf_edit_energy)e, 0);
-        cf_flow *fast = make_flow_aa(ctx, mesh, NULL, h, (cf_edit_energy)e, 5);
+    for (int e = 0; e < CF_STRETCH_BEND_ENERGY_COUNT; ++e) {
+        cf_flow *plain = make_flow_aa(ctx, mesh, NULL, h, (cf_stretch_bend_energy_kind)e, 0);
+        cf_flow *fast = make_flow_aa(ctx, mesh, NULL, h, (cf_stretch_bend_energy_kind)e, 5);
         if (!plain || !fast) continue;
         double prev = cf_flow_energy(fast);
         int monotone = 1;
@@ -341,9 +341,9 @@ static void test_anderson(void)
         CHECK_OK(ctx, cf_flow_run(plain, 300, NULL));
         const cf_flow_info *fi = cf_flow_last_info(fast);
         fprintf(stderr, "  %-9s anderson(5) 100 iterations: E %.6g (%g accepted, %g rejected); plain 300: E %.6g\n",
-                cf_edit_energy_name((cf_edit_energy)e), fi->energy, fi->residuals[1], fi->residuals[2],
+                cf_stretch_bend_energy_name((cf_stretch_bend_energy_kind)e), fi->energy, fi->residuals[1], fi->residuals[2],
                 cf_flow_energy(plain));
-        if (e == CF_EDIT_HYBRID) CHECK_LE(cf_flow_energy(fast), cf_flow_energy(plain));
+        if (e == CF_STRETCH_BEND_HYBRID) CHECK_LE(cf_flow_energy(fast), cf_flow_energy(plain));
         cf_flow_destroy(&plain);
         cf_flow_destroy(&fast);
     }
@@ -361,8 +361,8 @@ static void test_no_allocation_in_loop(void)
     cf_mesh *mesh = NULL;
     CHECK_OK(ctx, cf_generate_bar(ctx, 2, 2, 6, 1.0, 1.0, 3.0, 0, &mesh));
     cf_handle_set *h = bar_handles(ctx, mesh, 0.5, 0.3);
-    for (int e = 0; e < CF_EDIT_ENERGY_COUNT; ++e) {
-        cf_flow *flow = make_flow(ctx, mesh, h, (cf_edit_energy)e);
+    for (int e = 0; e < CF_STRETCH_BEND_ENERGY_COUNT; ++e) {
+        cf_flow *flow = make_flow(ctx, mesh, h, (cf_stretch_bend_energy_kind)e);
         if (!flow) continue;
         CHECK_OK(ctx, cf_flow_run(flow, 2, NULL));
         int64_t before = cf_context_allocation_count(ctx);
@@ -378,7 +378,7 @@ static void test_no_allocation_in_loop(void)
 
 /* Energy after one plain step of a flow on `mesh` with handles h, started
  * from `start` (NULL = rest pose). */
-static double first_step_energy(cf_context *ctx, const cf_mesh *mesh, const cf_handle_set *h, cf_edit_energy e,
+static double first_step_energy(cf_context *ctx, const cf_mesh *mesh, const cf_handle_set *h, cf_stretch_bend_energy_kind e,
                                 const double *start)
 {
     cf_flow *flow = make_flow_aa(ctx, mesh, start, h, e, 0);
@@ -429,22 +429,22 @@ static void test_first_step_candidates(void)
     /* Pull: top face moved by 0.8 along x. Turn: top face rotated by 90
      * degrees about the y-parallel line through its centre. */
     cf_handle_set *pull = bar_handles(ctx, mesh, 0.8, 0.0);
-    cf_handle_set *turn = sbe_handles_where(ctx, mesh, top_turn_rule, NULL);
+    cf_handle_set *turn = stretch_bend_handles_where(ctx, mesh, top_turn_rule, NULL);
     double *snapped = malloc(sizeof(double) * 3 * (size_t)nv);
     for (int k = 0; k < 2 && turn; ++k) {
         const cf_handle_set *h = k ? turn : pull;
         memcpy(snapped, x, sizeof(double) * 3 * (size_t)nv);
         for (int32_t i = 0; i < h->count; ++i)
             memcpy(snapped + 3 * h->vertices[i], h->targets + 3 * i, 3 * sizeof(double));
-        for (int e = 0; e < CF_EDIT_ENERGY_COUNT; ++e) {
-            double best = first_step_energy(ctx, mesh, h, (cf_edit_energy)e, NULL);
-            double plain = first_step_energy(ctx, mesh, h, (cf_edit_energy)e, snapped);
+        for (int e = 0; e < CF_STRETCH_BEND_ENERGY_COUNT; ++e) {
+            double best = first_step_energy(ctx, mesh, h, (cf_stretch_bend_energy_kind)e, NULL);
+            double plain = first_step_energy(ctx, mesh, h, (cf_stretch_bend_energy_kind)e, snapped);
             fprintf(stderr, "  %s %-9s first step: E %.6g, plain step from the snapped state %.6g\n",
-                    k ? "turn" : "pull", cf_edit_energy_name((cf_edit_energy)e), best, plain);
+                    k ? "turn" : "pull", cf_stretch_bend_energy_name((cf_stretch_bend_energy_kind)e), best, plain);
             CHECK_LE(best, plain * (1.0 + 1e-12));
-            int bilaplacian = e == CF_EDIT_HYBRID || e == CF_EDIT_BEND;
+            int bilaplacian = e == CF_STRETCH_BEND_HYBRID || e == CF_STRETCH_BEND_BEND;
             if (k == 0) CHECK_LE(best, (bilaplacian ? 0.25 : 0.6) * plain);
-            else if (e != CF_EDIT_ARAP_RIMS) CHECK_NEAR(best, plain, 1e-10, 0.0);
+            else if (e != CF_STRETCH_BEND_ARAP_RIMS) CHECK_NEAR(best, plain, 1e-10, 0.0);
         }
     }
     free(snapped);

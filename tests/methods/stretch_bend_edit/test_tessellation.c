@@ -12,7 +12,7 @@
  * Distances are measured at shared vertices relative to the bounding-box
  * diagonal of the rest shape.
  */
-#include "sbe_test_util.h"
+#include "stretch_bend_test_util.h"
 #include "test.h"
 
 #include "curvflow/generate.h"
@@ -22,7 +22,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-static double *solve(cf_context *ctx, const cf_mesh *mesh, const cf_handle_set *h, cf_edit_energy e, int iterations)
+static double *solve(cf_context *ctx, const cf_mesh *mesh, const cf_handle_set *h, cf_stretch_bend_energy_kind e, int iterations)
 {
     cf_stretch_bend_options o;
     cf_stretch_bend_options_default(&o);
@@ -34,7 +34,7 @@ static double *solve(cf_context *ctx, const cf_mesh *mesh, const cf_handle_set *
     double *out = malloc(sizeof(double) * 3 * (size_t)nv);
     cf_flow_info info;
     CHECK_OK(ctx, cf_stretch_bend_edit(ctx, mesh, NULL, &o, out, &info));
-    fprintf(stderr, "    [%s nv %d: %lld iterations, E %.6g, relative decrease %.3g]\n", cf_edit_energy_name(e), nv,
+    fprintf(stderr, "    [%s nv %d: %lld iterations, E %.6g, relative decrease %.3g]\n", cf_stretch_bend_energy_name(e), nv,
             (long long)info.iteration, info.energy, info.residuals[0]);
     return out;
 }
@@ -64,7 +64,7 @@ static int twist_rule(int32_t v, const double *p, double *t, const void *user)
 static cf_handle_set *twist_handles(cf_context *ctx, const cf_mesh *mesh, double angle, double pull)
 {
     sheet_edit se = {angle, pull};
-    return sbe_handles_where(ctx, mesh, twist_rule, &se);
+    return stretch_bend_handles_where(ctx, mesh, twist_rule, &se);
 }
 
 static void test_sheet_twist_resolution(void)
@@ -82,11 +82,11 @@ static void test_sheet_twist_resolution(void)
     double ang = 0.5 * 3.14159265358979323846, pull = 0.2;
     int iters = 4000;
     cf_handle_set *hc = twist_handles(ctx, coarse, ang, pull), *hf = twist_handles(ctx, fine, ang, pull);
-    double dist[CF_EDIT_ENERGY_COUNT] = {0};
-    for (int e = 0; e < CF_EDIT_ENERGY_COUNT; ++e) {
-        if (e == CF_EDIT_STRETCH || e == CF_EDIT_BEND) continue;
-        double *yc = solve(ctx, coarse, hc, (cf_edit_energy)e, iters);
-        double *yf = solve(ctx, fine, hf, (cf_edit_energy)e, iters);
+    double dist[CF_STRETCH_BEND_ENERGY_COUNT] = {0};
+    for (int e = 0; e < CF_STRETCH_BEND_ENERGY_COUNT; ++e) {
+        if (e == CF_STRETCH_BEND_STRETCH || e == CF_STRETCH_BEND_BEND) continue;
+        double *yc = solve(ctx, coarse, hc, (cf_stretch_bend_energy_kind)e, iters);
+        double *yf = solve(ctx, fine, hf, (cf_stretch_bend_energy_kind)e, iters);
         /* Coarse vertex (i, j) is fine vertex (4 i, 4 j). */
         double worst = 0.0;
         for (int j = 0; j <= 8; ++j)
@@ -97,7 +97,7 @@ static void test_sheet_twist_resolution(void)
             }
         dist[e] = worst / sqrt(2.0);
         fprintf(stderr, "  twist %-9s max distance n=8 vs n=16: %.4f of the diagonal\n",
-                cf_edit_energy_name((cf_edit_energy)e), dist[e]);
+                cf_stretch_bend_energy_name((cf_stretch_bend_energy_kind)e), dist[e]);
         free(yc);
         free(yf);
     }
@@ -107,9 +107,9 @@ static void test_sheet_twist_resolution(void)
      * hybrid's). ARAP runs without Anderson acceleration (the default):
      * with it, at n = 16 the run stops at E = 0.070 on a saddle plateau
      * before the sheet buckles to the minimum E = 0.041 (docs/edit.md). */
-    CHECK_LE(dist[CF_EDIT_HYBRID], 0.03);
-    CHECK(dist[CF_EDIT_ARAP] > 3.0 * dist[CF_EDIT_HYBRID]);
-    CHECK(dist[CF_EDIT_ARAP_RIMS] > 3.0 * dist[CF_EDIT_HYBRID]);
+    CHECK_LE(dist[CF_STRETCH_BEND_HYBRID], 0.03);
+    CHECK(dist[CF_STRETCH_BEND_ARAP] > 3.0 * dist[CF_STRETCH_BEND_HYBRID]);
+    CHECK(dist[CF_STRETCH_BEND_ARAP_RIMS] > 3.0 * dist[CF_STRETCH_BEND_HYBRID]);
     cf_handle_set_destroy(&hc);
     cf_handle_set_destroy(&hf);
     cf_mesh_destroy(&coarse);
@@ -140,7 +140,7 @@ static int bar_rule(int32_t v, const double *p, double *t, const void *user)
 static cf_handle_set *bar_handles(cf_context *ctx, const cf_mesh *mesh, double pull, double bend)
 {
     bar_edit b = {pull, bend};
-    return sbe_handles_where(ctx, mesh, bar_rule, &b);
+    return stretch_bend_handles_where(ctx, mesh, bar_rule, &b);
 }
 
 /* Fig. 4's bar, 1 x 1 x 4, at 3 x 3 x 12 and 6 x 6 x 24 cells. The fine
@@ -149,7 +149,7 @@ static cf_handle_set *bar_handles(cf_context *ctx, const cf_mesh *mesh, double p
  * by position. Returns the max distance at the shared vertices relative to
  * the diagonal sqrt(18), for the pull (bend = 0) or the bend. */
 static double bar_resolution_distance(cf_context *ctx, const cf_mesh *mc, const cf_mesh *mf, const int32_t *map,
-                                      cf_edit_energy e, double pull, double bend)
+                                      cf_stretch_bend_energy_kind e, double pull, double bend)
 {
     cf_handle_set *hc = bar_handles(ctx, mc, pull, bend), *hf = bar_handles(ctx, mf, pull, bend);
     double *yc = solve(ctx, mc, hc, e, 3000);
@@ -162,7 +162,7 @@ static double bar_resolution_distance(cf_context *ctx, const cf_mesh *mc, const 
     }
     double d = worst / sqrt(18.0);
     fprintf(stderr, "  bar %s %-9s 3x3x12 vs 6x6x24: max distance %.5f of the diagonal\n", bend != 0.0 ? "bend" : "pull",
-            cf_edit_energy_name(e), d);
+            cf_stretch_bend_energy_name(e), d);
     free(yc);
     free(yf);
     cf_handle_set_destroy(&hc);
@@ -218,15 +218,15 @@ static void test_bar_resolution(void)
     CHECK(matched == nc);
     if (matched == nc) {
         double pi = 3.14159265358979323846;
-        double ph = bar_resolution_distance(ctx, mc, mf, map, CF_EDIT_HYBRID, 1.5, 0.0);
-        double pa = bar_resolution_distance(ctx, mc, mf, map, CF_EDIT_ARAP, 1.5, 0.0);
-        double pr = bar_resolution_distance(ctx, mc, mf, map, CF_EDIT_ARAP_RIMS, 1.5, 0.0);
+        double ph = bar_resolution_distance(ctx, mc, mf, map, CF_STRETCH_BEND_HYBRID, 1.5, 0.0);
+        double pa = bar_resolution_distance(ctx, mc, mf, map, CF_STRETCH_BEND_ARAP, 1.5, 0.0);
+        double pr = bar_resolution_distance(ctx, mc, mf, map, CF_STRETCH_BEND_ARAP_RIMS, 1.5, 0.0);
         CHECK_LE(ph, 0.03);
         CHECK_LE(pa, 0.006);
         CHECK_LE(pr, 0.006);
-        double bh = bar_resolution_distance(ctx, mc, mf, map, CF_EDIT_HYBRID, 0.0, 0.5 * pi);
-        double ba = bar_resolution_distance(ctx, mc, mf, map, CF_EDIT_ARAP, 0.0, 0.5 * pi);
-        double br = bar_resolution_distance(ctx, mc, mf, map, CF_EDIT_ARAP_RIMS, 0.0, 0.5 * pi);
+        double bh = bar_resolution_distance(ctx, mc, mf, map, CF_STRETCH_BEND_HYBRID, 0.0, 0.5 * pi);
+        double ba = bar_resolution_distance(ctx, mc, mf, map, CF_STRETCH_BEND_ARAP, 0.0, 0.5 * pi);
+        double br = bar_resolution_distance(ctx, mc, mf, map, CF_STRETCH_BEND_ARAP_RIMS, 0.0, 0.5 * pi);
         CHECK_LE(bh, 0.035);
         CHECK(ba > 0.10 && ba > 4.0 * bh);
         CHECK(br > 0.10 && br > 4.0 * bh);
@@ -251,7 +251,7 @@ static int pull_rule(int32_t v, const double *p, double *t, const void *user)
 
 static cf_handle_set *pull_handles(cf_context *ctx, const cf_mesh *mesh, double pull)
 {
-    return sbe_handles_where(ctx, mesh, pull_rule, &pull);
+    return stretch_bend_handles_where(ctx, mesh, pull_rule, &pull);
 }
 
 /* The same bar re-triangulated: every square cell of cf_generate_bar
@@ -309,7 +309,7 @@ static cf_mesh *split_cells(cf_context *ctx, const cf_mesh *mesh)
 
 /* Max distance between two results at the first nv vertices, relative to
  * the bar's diagonal. */
-static double bar_distance(cf_context *ctx, const cf_mesh *m0, const cf_mesh *m1, cf_edit_energy e, const char *what)
+static double bar_distance(cf_context *ctx, const cf_mesh *m0, const cf_mesh *m1, cf_stretch_bend_energy_kind e, const char *what)
 {
     cf_handle_set *h0 = pull_handles(ctx, m0, 1.5), *h1 = pull_handles(ctx, m1, 1.5);
     int32_t nv = cf_mesh_vertex_count(m0);
@@ -322,7 +322,7 @@ static double bar_distance(cf_context *ctx, const cf_mesh *m0, const cf_mesh *m1
                                  (a[2] - b[2]) * (a[2] - b[2])));
     }
     double d = worst / sqrt(1.0 + 1.0 + 16.0);
-    fprintf(stderr, "  bar %-9s %s: max distance %.5f of the diagonal\n", cf_edit_energy_name(e), what, d);
+    fprintf(stderr, "  bar %-9s %s: max distance %.5f of the diagonal\n", cf_stretch_bend_energy_name(e), what, d);
     free(y0);
     free(y1);
     cf_handle_set_destroy(&h0);
@@ -401,17 +401,17 @@ static void test_bar_retriangulation(void)
     double same = 0.0;
     for (int32_t i = 0; i < 3 * nv; ++i) same = fmax(same, fabs(x0[i] - x1[i]));
     CHECK(same == 0.0);
-    CHECK_LE(bar_distance(ctx, m0, m1, CF_EDIT_ARAP, "diagonal flip"), 1e-9);
-    CHECK_LE(bar_distance(ctx, m0, m1, CF_EDIT_HYBRID, "diagonal flip"), 4e-3);
-    CHECK_LE(bar_distance(ctx, m0, m1, CF_EDIT_ARAP_RIMS, "diagonal flip"), 1e-2);
-    CHECK_LE(bar_distance(ctx, m0, m2, CF_EDIT_HYBRID, "cells split in 4"), 0.03);
-    CHECK_LE(bar_distance(ctx, m0, m2, CF_EDIT_ARAP, "cells split in 4"), 0.01);
-    CHECK_LE(bar_distance(ctx, m0, m2, CF_EDIT_ARAP_RIMS, "cells split in 4"), 0.01);
+    CHECK_LE(bar_distance(ctx, m0, m1, CF_STRETCH_BEND_ARAP, "diagonal flip"), 1e-9);
+    CHECK_LE(bar_distance(ctx, m0, m1, CF_STRETCH_BEND_HYBRID, "diagonal flip"), 4e-3);
+    CHECK_LE(bar_distance(ctx, m0, m1, CF_STRETCH_BEND_ARAP_RIMS, "diagonal flip"), 1e-2);
+    CHECK_LE(bar_distance(ctx, m0, m2, CF_STRETCH_BEND_HYBRID, "cells split in 4"), 0.03);
+    CHECK_LE(bar_distance(ctx, m0, m2, CF_STRETCH_BEND_ARAP, "cells split in 4"), 0.01);
+    CHECK_LE(bar_distance(ctx, m0, m2, CF_STRETCH_BEND_ARAP_RIMS, "cells split in 4"), 0.01);
     cf_mesh *j0 = jittered_bar(ctx, 0, 0.35), *j1 = jittered_bar(ctx, 1, 0.35);
     if (j0 && j1) {
-        double dh = bar_distance(ctx, j0, j1, CF_EDIT_HYBRID, "irregular, diagonal flip");
-        double da = bar_distance(ctx, j0, j1, CF_EDIT_ARAP, "irregular, diagonal flip");
-        double dr = bar_distance(ctx, j0, j1, CF_EDIT_ARAP_RIMS, "irregular, diagonal flip");
+        double dh = bar_distance(ctx, j0, j1, CF_STRETCH_BEND_HYBRID, "irregular, diagonal flip");
+        double da = bar_distance(ctx, j0, j1, CF_STRETCH_BEND_ARAP, "irregular, diagonal flip");
+        double dr = bar_distance(ctx, j0, j1, CF_STRETCH_BEND_ARAP_RIMS, "irregular, diagonal flip");
         CHECK_LE(dh, 0.015);
         CHECK(da > 0.03);
         CHECK(da > 3.0 * dh);

@@ -2,8 +2,8 @@
  * Shared fixtures of the stretch/bend editing tests: building a handle set
  * from a per-vertex rule (which vertices are handles, and where they go).
  */
-#ifndef CF_TESTS_SBE_TEST_UTIL_H
-#define CF_TESTS_SBE_TEST_UTIL_H
+#ifndef CF_TESTS_STRETCH_BEND_TEST_UTIL_H
+#define CF_TESTS_STRETCH_BEND_TEST_UTIL_H
 
 #include "curvflow/stretch_bend_edit.h"
 #include "test.h"
@@ -13,10 +13,10 @@
 
 /* Returns nonzero if vertex v (rest position p) is a handle, and then
  * writes its target position to t. */
-typedef int (*sbe_handle_rule)(int32_t v, const double *p, double *t, const void *user);
+typedef int (*stretch_bend_handle_rule)(int32_t v, const double *p, double *t, const void *user);
 
 /* The handle set of the vertices `rule` selects, in vertex order. */
-static inline cf_handle_set *sbe_handles_where(cf_context *ctx, const cf_mesh *mesh, sbe_handle_rule rule,
+static inline cf_handle_set *stretch_bend_handles_where(cf_context *ctx, const cf_mesh *mesh, stretch_bend_handle_rule rule,
                                                const void *user)
 {
     int32_t nv = cf_mesh_vertex_count(mesh);
@@ -33,4 +33,4 @@ static inline cf_handle_set *sbe_handles_where(cf_context *ctx, const cf_mesh *m
     return h;
 }
 
-#endif /* CF_TESTS_SBE_TEST_UTIL_H */
+#endif /* CF_TESTS_STRETCH_BEND_TEST_UTIL_H */

@@ -3,8 +3,8 @@
  * (terms, rotations, bending data) shared by the flow and the energy
  * evaluation, so tests can reach the pieces.
  */
-#ifndef CF_METHODS_STRETCH_BEND_EDIT_SBE_INTERNAL_H
-#define CF_METHODS_STRETCH_BEND_EDIT_SBE_INTERNAL_H
+#ifndef CF_METHODS_STRETCH_BEND_EDIT_STRETCH_BEND_INTERNAL_H
+#define CF_METHODS_STRETCH_BEND_EDIT_STRETCH_BEND_INTERNAL_H
 
 #include "core/core.h"
 #include "curvflow/linalg.h"
@@ -15,11 +15,11 @@
  *     w |(x'_i - x'_j) - R_r (x_i - x_j)|^2
  * grouped by rotation r (one per face for E_s, one per vertex for ARAP).
  * The bending part is sum_v (|(K x')_v| - hm_v)^2 / M_v at the optimal u'. */
-typedef struct cfi_sbe_model {
+typedef struct cfi_stretch_bend_model {
     cf_context *ctx;
     const cf_mesh *mesh;
     int32_t nv;
-    cf_edit_energy energy;
+    cf_stretch_bend_energy_kind energy;
     double alpha;            /* weight of the term energy in the total */
     double beta;             /* weight of the bending energy in the total */
     int32_t term_count;
@@ -47,12 +47,12 @@ typedef struct cfi_sbe_model {
     double *kx;              /* 3 nv interleaved scratch (K x') */
     double term_energy;      /* last local step: E_s or E_arap (unweighted) */
     double bend_energy;      /* last local step: E_db (unweighted) */
-} cfi_sbe_model;
+} cfi_stretch_bend_model;
 
 /* Builds the model on `rest` (3 nv, interleaved). */
-cf_status cfi_sbe_model_init(cfi_sbe_model *m, cf_context *ctx, const cf_mesh *mesh, const double *rest,
+cf_status cfi_stretch_bend_model_init(cfi_stretch_bend_model *m, cf_context *ctx, const cf_mesh *mesh, const double *rest,
                              const cf_stretch_bend_options *options);
-void cfi_sbe_model_free(cfi_sbe_model *m);
+void cfi_stretch_bend_model_free(cfi_stretch_bend_model *m);
 
 /* Local step at `x` (3 nv interleaved): optimal rotations and u', and the
  * energies E(x) with them (term_energy, bend_energy); returns the total.
@@ -61,22 +61,22 @@ void cfi_sbe_model_free(cfi_sbe_model *m);
  * (exact as well) and per-vertex rotations a polar iteration warm-started
  * at the previous rotation, never accepted if it lowers tr(R^T C) below the
  * previous rotation's, with the SVD as fallback when it does not converge. */
-cf_status cfi_sbe_local_step(cfi_sbe_model *m, const double *x, int exact, double *total);
+cf_status cfi_stretch_bend_local_step(cfi_stretch_bend_model *m, const double *x, int exact, double *total);
 
 /* Right-hand side of Eq. 23 (interleaved, 3 nv) for the model's current
  * rotations and u' (needs m->hu when beta > 0). */
-void cfi_sbe_assemble_rhs(cfi_sbe_model *m, double *rhs);
+void cfi_stretch_bend_assemble_rhs(cfi_stretch_bend_model *m, double *rhs);
 
 /* For tests, on a CF_FLOW_STRETCH_BEND_EDIT flow: the global phase alone
  * into x (3 nv) with the flow's current rotations and u'; the gradient
  * (3 nv interleaved) of the energy with rotations and u' held fixed, from
  * the assembled system (2 (A x - rhs)); the energy model. */
 typedef struct cf_flow cf_flow;
-cf_status cfi_sbe_flow_global_solve(cf_flow *flow, double *x);
-cf_status cfi_sbe_flow_gradient(cf_flow *flow, const double *x, double *grad);
-cfi_sbe_model *cfi_sbe_flow_model(cf_flow *flow);
+cf_status cfi_stretch_bend_flow_global_solve(cf_flow *flow, double *x);
+cf_status cfi_stretch_bend_flow_gradient(cf_flow *flow, const double *x, double *grad);
+cfi_stretch_bend_model *cfi_stretch_bend_flow_model(cf_flow *flow);
 /* Energy at x with the model's current rotations and u' held fixed
  * (Eqs. 5-7 and 15 before minimising over R, u'). */
-double cfi_sbe_fixed_energy(const cfi_sbe_model *m, const double *x);
+double cfi_stretch_bend_fixed_energy(const cfi_stretch_bend_model *m, const double *x);
 
-#endif /* CF_METHODS_STRETCH_BEND_EDIT_SBE_INTERNAL_H */
+#endif /* CF_METHODS_STRETCH_BEND_EDIT_STRETCH_BEND_INTERNAL_H */

@@ -1,0 +1,246 @@
+/*
+ * Exactness constraint of the spin-willmore flow (Crane, Pinkall, Schroeder
+ * 2013, App. C) on closed surfaces of genus > 0 and free-boundary surfaces
+ * that are not disks: the harmonic 1-forms of the input, their re-projection
+ * onto the current metric, and the constraint columns - App. C.1's Z_i
+ * (exactness_linearized = 0) or, by default, the discrete linearisation of
+ * "the transformed edges have no periods" (docs/spin.md, "Exactness").
+ */
+#include "methods/spin_willmore/spin_flow.h"
+#include "curvflow/ops.h"
+
+#include <string.h>
+
+/* The discrete flow keeps the conformal structure only up to the mesh's
+ * resolution, so 1-forms harmonic on the input drift away from harmonic on
+ * the current surface, and Z_i built from them stop spanning the periods
+ * (a bumped torus at tau 0.1 blew up after 62 steps, its integrability
+ * error growing from 4e-4 to 4e-2). Each form is re-projected onto the
+ * harmonic forms of the current cotan metric within its cohomology class:
+ * omega <- omega - d u with L u = -div omega, (div omega)_i = sum_j w_ij
+ * omega_ij, so that the result is co-closed and still closed with the same
+ * periods. The current L is refilled every step for H; its factorisation is
+ * shared with the position solve only when that uses the current metric
+ * (input_metric = 0). */
+static cf_status update_harmonic_forms(cf_flow *flow, cfi_spin_state *s, double *factor_seconds, double *solve_seconds)
+{
+    const cf_mesh *mesh = flow->mesh;
+    int32_t nv = s->nv, ne = s->ne, dim = s->harmonic_dim;
+    const cf_sparse *l = s->poisson->l;
+    const int64_t *slot = s->poisson->edge_slot;
+    double *div = s->zrhs, *u = s->zsol; /* scratch: at least nv x dim each */
+    memset(div, 0, (size_t)nv * dim * sizeof(double));
+    for (int32_t g = 0; g < dim; ++g) {
+        const double *w = s->harmonic + (int64_t)g * ne;
+        double *d = div + (int64_t)g * nv;
+        for (int32_t e = 0; e < ne; ++e) {
+            int32_t i = mesh->edge_vertices[2 * e], j = mesh->edge_vertices[2 * e + 1];
+            double flux = -l->values[slot[e]] * w[e]; /* w_ij omega_ij, the edge runs i -> j */
+            d[i] -= flux;                              /* right-hand side -div */
+            d[j] += flux;
+        }
+        /* L's range is orthogonal to the constants; the rounding left in the
+         * sum would come back multiplied by 1 / shift as a constant in u,
+         * whose cancellation in d u then costs digits */
+        double mean = 0.0;
+        for (int32_t i = 0; i < nv; ++i) mean += d[i];
+        mean /= nv;
+        for (int32_t i = 0; i < nv; ++i) d[i] -= mean;
+    }
+    cf_status st = cfi_poisson_solve_scalar(s->poisson, dim, div, u, factor_seconds, solve_seconds);
+    if (st != CF_OK) return st;
+    for (int32_t g = 0; g < dim; ++g) {
+        double *w = s->harmonic + (int64_t)g * ne;
+        const double *ug = u + (int64_t)g * nv;
+        for (int32_t e = 0; e < ne; ++e) w[e] -= ug[mesh->edge_vertices[2 * e + 1]] - ug[mesh->edge_vertices[2 * e]];
+    }
+    return CF_OK;
+}
+
+/* Z_i of App. C.1 on the current surface x: face vectors v from the 2 x 2
+ * systems, right-hand side D^* A v (vertex i gets sum_k e_i v_k / 2), and
+ * solves with X(0). Fills columns of s->basis from `col` with the imaginary
+ * parts of each Z_i; returns the new column count. */
+static cf_status exactness_columns(cf_flow *flow, cfi_spin_state *s, const double *x, int32_t *col,
+                                   double *factor_seconds, double *solve_seconds)
+{
+    const cf_mesh *mesh = flow->mesh;
+    int32_t nv = s->nv, dim = s->harmonic_dim;
+    if (s->opt.harmonic_update) {
+        cf_status sth = update_harmonic_forms(flow, s, factor_seconds, solve_seconds);
+        if (sth != CF_OK) return sth;
+    }
+    double t0 = cfi_now_seconds();
+    cf_status st = cfi_dirac_fill(s->dirac, mesh, x, NULL, s->eps);
+    if (st != CF_OK) return st;
+    st = cf_cholesky_factorize(s->chol0, s->dirac->x);
+    double t1 = cfi_now_seconds();
+    *factor_seconds += t1 - t0;
+    if (st != CF_OK) return st;
+    memset(s->zrhs, 0, 4 * (size_t)nv * dim * sizeof(double));
+    for (int32_t f = 0; f < s->nf; ++f) {
+        const int32_t *t = mesh->triangles + 3 * f;
+        const int32_t *he = mesh->halfedge_edge + 3 * f;
+        double e[3][3];
+        for (int m = 0; m < 3; ++m)
+            for (int c = 0; c < 3; ++c) e[m][c] = x[3 * t[(m + 2) % 3] + c] - x[3 * t[(m + 1) % 3] + c];
+        /* halfedge 3f+k runs t[k] -> t[k+1] = edge opposite corner k+2, i.e. e[(k+2)%3] */
+        double a11 = 0, a12 = 0, a22 = 0;
+        const double *e1 = e[2], *e2 = e[0];   /* halfedges 0 (t0->t1) and 1 (t1->t2) */
+        for (int c = 0; c < 3; ++c) {
+            a11 += e1[c] * e1[c];
+            a12 += e1[c] * e2[c];
+            a22 += e2[c] * e2[c];
+        }
+        double det = a11 * a22 - a12 * a12;
+        if (!(det > 0.0)) return cfi_error(flow->ctx, CF_ERR_DEGENERATE_FACE, "face %d: degenerate in exactness", f);
+        for (int32_t g = 0; g < dim; ++g) {
+            const double *w = s->harmonic + (int64_t)g * s->ne;
+            /* 1-form values along the halfedges: the edge runs i < j */
+            double om[2];
+            for (int h = 0; h < 2; ++h) {
+                int32_t ed = he[h];
+                double sgn = mesh->edge_vertices[2 * ed] == t[h] ? 1.0 : -1.0;
+                om[h] = sgn * w[ed];
+            }
+            double a1 = (a22 * om[0] - a12 * om[1]) / det, a2 = (a11 * om[1] - a12 * om[0]) / det;
+            double v[3];
+            for (int c = 0; c < 3; ++c) v[c] = a1 * e1[c] + a2 * e2[c];
+            double *r = s->zrhs + (int64_t)g * 4 * nv;
+            for (int m = 0; m < 3; ++m) {
+                /* e_m v = -<e_m, v> + e_m x v */
+                const double *em = e[m];
+                double *ri = r + 4 * t[m];
+                ri[0] += -0.5 * (em[0] * v[0] + em[1] * v[1] + em[2] * v[2]);
+                ri[1] += 0.5 * (em[1] * v[2] - em[2] * v[1]);
+                ri[2] += 0.5 * (em[2] * v[0] - em[0] * v[2]);
+                ri[3] += 0.5 * (em[0] * v[1] - em[1] * v[0]);
+            }
+        }
+    }
+    st = cf_cholesky_solve(s->chol0, dim, s->zrhs, s->zsol);
+    *solve_seconds += cfi_now_seconds() - t1;
+    if (st != CF_OK) return st;
+    for (int32_t g = 0; g < dim; ++g) {
+        const double *z = s->zsol + (int64_t)g * 4 * nv;
+        for (int c = 1; c < 4; ++c) {
+            double *b = s->basis + (int64_t)(*col) * nv;
+            for (int32_t i = 0; i < nv; ++i) b[i] = z[4 * i + c];
+            ++*col;
+        }
+    }
+    return CF_OK;
+}
+
+/* Exactness by linearising "no periods" through the discrete step; the
+ * default, and the only way on a surface with free boundary: App. C's step "<D Z a,
+ * lambda> = <Z a, D lambda>" needs D to be self-adjoint, which fails with
+ * the natural boundary condition (Green's formula leaves a boundary
+ * integral); measured on annuli, the Z_i constraint does not reduce the
+ * period of the transformed edges at all (docs/spin.md). Instead the
+ * condition <e~, h_g>_*1 = 0 (no harmonic part = no period around any
+ * hole, as h_g spans the Neumann harmonic fields, ops.md) is linearised
+ * through the discrete pipeline of one step:
+ *  - lambda = X(tau rhodot)^-1 M 1 with X(0) 1 = eps M 1 (D 1 = 0), so to
+ *    first order lambda ~ 1 + tau mu, mu = -X(0)^-1 K rhodot, where
+ *    K rhodot = X_1(rhodot) 1 = -(1/6) sum_faces e_m (rho_0 + rho_1 + rho_2)
+ *    at corner m (App. G: the rho-linear term (rho_m e_n - rho_n e_m) / 6,
+ *    sum_n e_n = 0);
+ *  - the edge transform (dirac.c) changes by d e~ = (a_i + a_j) e +
+ *    e x (u_i + u_j) for mu = (a, u);
+ *  - so <d e~, h_g>^c = G_gc . mu, and the constraint is rhodot orthogonal
+ *    (in M) to M^-1 K^T X(0)^-1 G_gc, three columns per harmonic form.
+ * Exact to first order in tau for one inverse power iteration (the
+ * default); an approximation for more. */
+static cf_status exactness_columns_linearized(cf_flow *flow, cfi_spin_state *s, const double *x, int32_t *col,
+                                              double *factor_seconds, double *solve_seconds)
+{
+    const cf_mesh *mesh = flow->mesh;
+    int32_t nv = s->nv, dim = s->harmonic_dim, ncol = 3 * dim;
+    double t0 = cfi_now_seconds();
+    cf_status st = cfi_dirac_fill(s->dirac, mesh, x, NULL, s->eps);
+    if (st != CF_OK) return st;
+    st = cf_cholesky_factorize(s->chol0, s->dirac->x);
+    double t1 = cfi_now_seconds();
+    *factor_seconds += t1 - t0;
+    if (st != CF_OK) return st;
+    memset(s->zrhs, 0, 4 * (size_t)nv * ncol * sizeof(double));
+    for (int32_t e = 0; e < s->ne; ++e) {
+        int32_t i = mesh->edge_vertices[2 * e], j = mesh->edge_vertices[2 * e + 1];
+        double v[3] = {x[3 * j] - x[3 * i], x[3 * j + 1] - x[3 * i + 1], x[3 * j + 2] - x[3 * i + 2]};
+        /* coefficient of u_l in (v x u)_c: (v x unit_l)_c */
+        const double vx[3][3] = {{0.0, v[2], -v[1]}, {-v[2], 0.0, v[0]}, {v[1], -v[0], 0.0}};
+        for (int32_t g = 0; g < dim; ++g) {
+            double wh = s->hweights[e] * s->harmonic[(int64_t)g * s->ne + e];
+            for (int c = 0; c < 3; ++c) {
+                double *r = s->zrhs + (int64_t)(3 * g + c) * 4 * nv;
+                double q[4] = {wh * v[c], wh * vx[0][c], wh * vx[1][c], wh * vx[2][c]};
+                for (int k = 0; k < 4; ++k) {
+                    r[4 * i + k] += q[k];
+                    r[4 * j + k] += q[k];
+                }
+            }
+        }
+    }
+    st = cf_cholesky_solve(s->chol0, ncol, s->zrhs, s->zsol);
+    *solve_seconds += cfi_now_seconds() - t1;
+    if (st != CF_OK) return st;
+    for (int32_t k = 0; k < ncol; ++k) {
+        const double *y = s->zsol + (int64_t)k * 4 * nv;
+        double *b = s->basis + (int64_t)(*col) * nv;
+        memset(b, 0, (size_t)nv * sizeof(double));
+        /* K^T y: face f adds -(1/6) sum_m <Im y_tri[m], e_m> to each corner */
+        for (int32_t f = 0; f < s->nf; ++f) {
+            const int32_t *t = mesh->triangles + 3 * f;
+            double sum = 0.0;
+            for (int m = 0; m < 3; ++m) {
+                const double *a = x + 3 * t[(m + 1) % 3], *bb = x + 3 * t[(m + 2) % 3], *ym = y + 4 * t[m];
+                for (int c = 0; c < 3; ++c) sum += ym[1 + c] * (bb[c] - a[c]);
+            }
+            for (int m = 0; m < 3; ++m) b[t[m]] -= sum / 6.0;
+        }
+        for (int32_t i = 0; i < nv; ++i) b[i] /= s->area[i];
+        ++*col;
+    }
+    return CF_OK;
+}
+
+
+cf_status cfi_spin_exactness_dimension(cf_flow *flow, const cf_spin_willmore_options *o, int32_t *dim)
+{
+    const cf_mesh *mesh = flow->mesh;
+    int32_t has_boundary = mesh->boundary_loop_count > 0;
+    /* exactness: harmonic 1-forms of the input (App. C.1, steps I-III), on
+     * closed surfaces of genus > 0 and on free-boundary surfaces that are
+     * not disks (dim 2g + b - 1 > 0). Harmonic forms depend only on the
+     * conformal structure, which the flow preserves, so the basis is
+     * computed once. Not with fixed boundaries (the transformed boundary
+     * edges are the input's, so the periods around the boundary loops vanish
+     * identically) nor with prescribed / cmc ones (lambda is not near 1 on
+     * the boundary and App. C's Z_i were measured to increase the periods
+     * there), see docs/spin.md. */
+    *dim = 0;
+    if (o->exactness && (has_boundary ? o->boundary_mode == CF_SPIN_BOUNDARY_FREE : mesh->genus > 0))
+        return cf_harmonic_basis(flow->ctx, mesh, flow->positions, dim, NULL);
+    return CF_OK;
+}
+
+cf_status cfi_spin_exactness_init(cf_flow *flow, cfi_spin_state *s)
+{
+    cf_context *ctx = flow->ctx;
+    const cf_mesh *mesh = flow->mesh;
+    int32_t dim2 = 0;
+    cf_status st = cf_harmonic_basis(ctx, mesh, flow->positions, &dim2, s->harmonic);
+    if (st != CF_OK) return st;
+    if (CF_NEVER(dim2 != s->harmonic_dim))
+        return cfi_error(ctx, CF_ERR_NUMERICAL, "spin-willmore: harmonic basis dimension changed");
+    if (s->linearized) return cf_cotan_weights(ctx, mesh, flow->positions, s->hweights);
+    return CF_OK;
+}
+
+cf_status cfi_spin_exactness_columns(cf_flow *flow, cfi_spin_state *s, const double *x, int32_t *col,
+                                     double *factor_seconds, double *solve_seconds)
+{
+    return s->linearized ? exactness_columns_linearized(flow, s, x, col, factor_seconds, solve_seconds)
+                         : exactness_columns(flow, s, x, col, factor_seconds, solve_seconds);
+}

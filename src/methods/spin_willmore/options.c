@@ -1,0 +1,158 @@
+/*
+ * Options of the spin-willmore flow: defaults, the parameter table of the
+ * common flow interface (names, ranges, help), and the validation that
+ * create runs before anything is allocated, and the method's entry in the
+ * flow registry (its vtable; the functions are in flow_method.c). Conventions of each parameter:
+ * docs/spin.md.
+ */
+#include "methods/spin_willmore/spin_flow.h"
+
+#include <math.h>
+#include <stddef.h>
+#include <string.h>
+
+void cf_spin_willmore_options_default(cf_spin_willmore_options *o)
+{
+    if (!o) return;
+    memset(o, 0, sizeof *o);
+    o->time_step = 0.5;
+    o->total_curvature = 1;
+    o->inversion = 1;
+    o->exactness = 1;
+    o->mobius = 0;
+    o->mobius_weight = 1.0;
+    o->sigma = 0.0;
+    o->filter_k = 2;
+    o->boundary_mode = CF_SPIN_BOUNDARY_FREE;
+    o->boundary_angle = 0.0;
+    o->boundary_axis[0] = 1.0;
+    o->power_iterations = 1;
+    o->normalize = 1;
+    o->tolerance = 1e-6;
+    o->blowup_factor = 10.0;
+    o->divergence_factor = 1.0;
+    o->complex_factorization = 1;
+    o->harmonic_update = 1;
+    o->exactness_linearized = 1;
+    o->adaptive = 1;
+    o->max_scale_change = 1.2;
+    o->input_metric = 1;
+    o->regularization = CFI_SPIN_SHIFT;
+}
+
+static void options_default(void *options) { cf_spin_willmore_options_default(options); }
+
+const char *const cfi_spin_boundary_choices[] = {"free", "fixed", "prescribed", "cmc", NULL};
+
+#define OPT(f) offsetof(cf_spin_willmore_options, f)
+static const cf_param_desc spin_params[] = {
+    {"time_step", CF_PARAM_DOUBLE, OPT(time_step), 1e-9, 10.0, NULL,
+     "tau: rho = -2 tau H per step (stable for tau < 1; 0.5 removes curvature to first order)"},
+    {"total_curvature", CF_PARAM_BOOL, OPT(total_curvature), 0, 1, NULL, "constraint <rhodot, 1> = 0 (App. B)"},
+    {"inversion", CF_PARAM_BOOL, OPT(inversion), 0, 1, NULL, "constraints <rhodot, N> = 0 (App. D)"},
+    {"exactness", CF_PARAM_BOOL, OPT(exactness), 0, 1, NULL,
+     "constraints <rhodot, Z_i> = 0: genus > 0, or holes with boundary=free (App. C)"},
+    {"mobius", CF_PARAM_BOOL, OPT(mobius), 0, 1, NULL, "Moebius balancing toward the input area distribution (App. E)"},
+    {"mobius_weight", CF_PARAM_DOUBLE, OPT(mobius_weight), 0.0, 100.0, NULL, "scale of the balancing term"},
+    {"sigma", CF_PARAM_DOUBLE, OPT(sigma), 0.0, 1e12, NULL,
+     "spectral filter strength in units of R^2k, R = sqrt(area/4pi); 0 = off (Sec. 4)"},
+    {"filter_k", CF_PARAM_INT, OPT(filter_k), 0, 3, NULL, "spectral filter power k (Fig. 8)"},
+    {"boundary", CF_PARAM_CHOICE, OPT(boundary_mode), 0, 3, cfi_spin_boundary_choices,
+     "free (natural), fixed positions (Sec. 6.3.2), prescribed binormals or cmc (Sec. 6.3.1)"},
+    {"boundary_angle", CF_PARAM_DOUBLE, OPT(boundary_angle), -6.3, 6.3, NULL,
+     "prescribed: rotation (radians) of the target binormals of boundary loops 1, 2, ..."},
+    {"boundary_vector_angle", CF_PARAM_DOUBLE, OPT(boundary_vector_angle), -1.5, 1.5, NULL,
+     "prescribed/cmc: V = cos(phi) B + sin(phi) N in the N-B plane (0: binormal; not +-N)"},
+    {"boundary_tangent_angle", CF_PARAM_DOUBLE, OPT(boundary_tangent_angle), -1.5707963267948966, 1.5707963267948966, NULL,
+     "prescribed/cmc: tilt psi of V toward the boundary tangent T (pi/2: V = T, Fig. 15 centre)"},
+    {"boundary_axis_x", CF_PARAM_DOUBLE, OPT(boundary_axis[0]), -1e9, 1e9, NULL, "prescribed: rotation axis x"},
+    {"boundary_axis_y", CF_PARAM_DOUBLE, OPT(boundary_axis[1]), -1e9, 1e9, NULL, "prescribed: rotation axis y"},
+    {"boundary_axis_z", CF_PARAM_DOUBLE, OPT(boundary_axis[2]), -1e9, 1e9, NULL, "prescribed: rotation axis z"},
+    {"power_iterations", CF_PARAM_INT, OPT(power_iterations), 1, 100, NULL, "inverse power iterations per step"},
+    {"normalize", CF_PARAM_BOOL, OPT(normalize), 0, 1, NULL, "keep total area and centroid"},
+    {"tolerance", CF_PARAM_DOUBLE, OPT(tolerance), 0.0, 1.0, NULL, "converged below this relative energy decrease"},
+    {"blowup_factor", CF_PARAM_DOUBLE, OPT(blowup_factor), 0.0, 1e12, NULL,
+     "fail a step whose energy grows more than this factor (0: never)"},
+    {"divergence_factor", CF_PARAM_DOUBLE, OPT(divergence_factor), 0.0, 1e12, NULL,
+     "fail a step that leaves W above this factor times the starting W (0: never; not for prescribed/cmc)"},
+    {"complex_factorization", CF_PARAM_BOOL, OPT(complex_factorization), 0, 1, NULL,
+     "factorise X as its complex Hermitian form of half the size (0: real 4n x 4n form)"},
+    {"input_metric", CF_PARAM_BOOL, OPT(input_metric), 0, 1, NULL,
+     "recover positions in the cotan metric of the starting surface (0: the current surface's, per step)"},
+    {"adaptive", CF_PARAM_BOOL, OPT(adaptive), 0, 1, NULL,
+     "retry a step with a smaller tau while it would raise W or exceed max_scale_change (up to 10 times; then "
+     "stop as converged), grow tau back after; 0: the paper's fixed step"},
+    {"max_scale_change", CF_PARAM_DOUBLE, OPT(max_scale_change), 0.0, 100.0, NULL,
+     "adaptive: largest change of the log conformal scale across an edge in one step (0: no bound)"},
+    {"exactness_linearized", CF_PARAM_BOOL, OPT(exactness_linearized), 0, 1, NULL,
+     "exactness as the discrete linearisation of 'no periods' (0: App. C's Z_i on closed surfaces)"},
+    {"regularization", CF_PARAM_DOUBLE, OPT(regularization), 1e-9, 1e6, NULL,
+     "weight of |lambda - 1|^2 in units of 4pi/area: damps near-kernel modes of thin shapes"},
+    {"harmonic_update", CF_PARAM_BOOL, OPT(harmonic_update), 0, 1, NULL,
+     "with App. C's Z_i: re-project the harmonic 1-forms onto the current metric each step"},
+};
+#undef OPT
+
+cf_status cfi_spin_validate_options(cf_context *ctx, const cf_mesh *mesh, const cf_spin_willmore_options *o)
+{
+    if (!(o->time_step > 0.0) || !isfinite(o->time_step))
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: time_step must be > 0, got %g", o->time_step);
+    if (o->filter_k < 0 || o->filter_k > 3)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: filter_k must be 0..3, got %d", o->filter_k);
+    if (!(o->sigma >= 0.0) || !isfinite(o->sigma))
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: sigma must be >= 0, got %g", o->sigma);
+    if (!(o->blowup_factor == 0.0 || o->blowup_factor > 1.0) || !isfinite(o->blowup_factor))
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: blowup_factor must be 0 (off) or > 1, got %g",
+                         o->blowup_factor);
+    if (!(o->divergence_factor == 0.0 || o->divergence_factor >= 1.0) || !isfinite(o->divergence_factor))
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: divergence_factor must be 0 (off) or >= 1, got %g",
+                         o->divergence_factor);
+    if (!(o->regularization > 0.0) || !isfinite(o->regularization))
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: regularization must be > 0, got %g", o->regularization);
+    if (o->power_iterations < 1)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: power_iterations must be >= 1, got %d",
+                         o->power_iterations);
+    if (o->boundary_mode < CF_SPIN_BOUNDARY_FREE || o->boundary_mode > CF_SPIN_BOUNDARY_CMC)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: unknown boundary mode %d", o->boundary_mode);
+    double axis_len = sqrt(o->boundary_axis[0] * o->boundary_axis[0] + o->boundary_axis[1] * o->boundary_axis[1] +
+                           o->boundary_axis[2] * o->boundary_axis[2]);
+    if (!(fabs(o->boundary_tangent_angle) <= 0.5 * CFI_PI + 1e-12))
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: boundary_tangent_angle must be in [-pi/2, pi/2]");
+    if (!(fabs(o->boundary_vector_angle) <= 1.5))
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: boundary_vector_angle must be in [-1.5, 1.5] (V = +-N is excluded)");
+    if (o->boundary_mode == CF_SPIN_BOUNDARY_PRESCRIBED && (!(axis_len > 0.0) || !isfinite(axis_len) || !isfinite(o->boundary_angle)))
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: boundary_axis must be a nonzero finite vector");
+    if (!(o->mobius_weight >= 0.0) || !isfinite(o->mobius_weight))
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: mobius_weight must be >= 0");
+    if (o->boundary_targets && o->boundary_mode != CF_SPIN_BOUNDARY_PRESCRIBED)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: boundary targets are given but boundary=%s "
+                         "(they need boundary=prescribed)", cfi_spin_boundary_choices[o->boundary_mode]);
+    if (o->boundary_targets)
+        for (int32_t i = 0; i < mesh->nv; ++i) {
+            if (!mesh->vertex_on_boundary[i]) continue;
+            const double *t = o->boundary_targets + 3 * (int64_t)i;
+            double len = sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
+            if (!isfinite(len) || !(len > 0.0))
+                return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: vertex %d: boundary target (%g, %g, %g) is %s",
+                                 i, t[0], t[1], t[2], isfinite(len) ? "zero" : "not finite");
+        }
+    int32_t has_boundary = mesh->boundary_loop_count > 0;
+    if (o->boundary_mode != CF_SPIN_BOUNDARY_FREE && !has_boundary)
+        return cfi_error(ctx, CF_ERR_BAD_MESH, "spin-willmore: boundary=%s needs a mesh with boundary",
+                         cfi_spin_boundary_choices[o->boundary_mode]);
+    return CF_OK;
+}
+
+const cfi_flow_method cfi_spin_willmore_method = {
+    .kind = CF_FLOW_SPIN_WILLMORE,
+    .name = "spin-willmore",
+    .description = "conformal Willmore flow in curvature space (Crane, Pinkall, Schroeder 2013)",
+    .options_size = sizeof(cf_spin_willmore_options),
+    .options_default = options_default,
+    .params = spin_params,
+    .param_count = (int32_t)(sizeof spin_params / sizeof spin_params[0]),
+    .create = cfi_spin_create,
+    .step = cfi_spin_step,
+    .reset = cfi_spin_reset,
+    .destroy = cfi_spin_destroy,
+};

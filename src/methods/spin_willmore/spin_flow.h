@@ -1,0 +1,155 @@
+/*
+ * Private to src/methods/spin_willmore/: the state of a spin-willmore flow
+ * and the functions its files share. flow_method.c runs the step
+ * (Crane, Pinkall, Schroeder 2013, Table 1); the concerns it calls into
+ * live in one file each:
+ *   options.c          defaults, parameter table, validation of the options
+ *   boundary_frames.c  boundary vectors and frames, prescribed targets (Sec. 6.3.1)
+ *   spectral_filter.c  the filter v <- v - (id + sigma Delta^k)^-1 v (Sec. 4)
+ *   exactness.c        harmonic 1-forms and the exactness columns (App. C; genus > 0, holes)
+ *   mobius.c           Moebius balancing (App. E.1)
+ *   constraints.c      assembling and projecting the constraints (Sec. 6.2)
+ *   step_policy.c      adaptive retries, blow-up and divergence checks, convergence
+ *   workspace.c        the flow's arrays, recorded and freed in one call
+ */
+#ifndef CF_METHODS_SPIN_WILLMORE_SPIN_FLOW_H
+#define CF_METHODS_SPIN_WILLMORE_SPIN_FLOW_H
+
+#include "methods/flow_internal.h"
+#include "methods/spin_willmore/spin_internal.h"
+
+#define CFI_PI 3.14159265358979323846
+
+/* The arrays of one flow (workspace.c): each allocated through the context
+ * and recorded; cfi_spin_ws_free_all frees every recorded array at once. */
+#define CFI_SPIN_WORKSPACE_SLOTS 32
+typedef struct cfi_spin_workspace {
+    cf_context *ctx;
+    int32_t count;
+    void *ptr[CFI_SPIN_WORKSPACE_SLOTS];
+    size_t bytes[CFI_SPIN_WORKSPACE_SLOTS];
+} cfi_spin_workspace;
+
+/* count elements of `size` bytes, zero-filled; NULL (CF_ERR_NOMEM recorded) on failure. */
+void *cfi_spin_ws_alloc(cfi_spin_workspace *ws, size_t count, size_t size);
+#define CFI_SPIN_WS_ALLOC(ws, type, count) ((type *)cfi_spin_ws_alloc((ws), (size_t)(count), sizeof(type)))
+/* Frees every recorded array (newest first); the workspace is empty after. */
+void cfi_spin_ws_free_all(cfi_spin_workspace *ws);
+
+typedef struct cfi_spin_state {
+    cf_spin_willmore_options opt;
+    cfi_spin_workspace ws;   /* every array below */
+    int32_t nv, ne, nf;
+    cfi_dirac *dirac;
+    cf_cholesky *chol;       /* X(rho) + eps M */
+    cf_cholesky *chol0;      /* X(0) + eps M, exactness only */
+    cfi_poisson *poisson;    /* cotan Laplacian of the current surface (H; fixed-boundary positions) */
+    cfi_poisson *poisson_input; /* input_metric: that of the starting surface, factorised once */
+    cf_sparse *filter;       /* M + sigma' L (M^-1 L)^(k-1), built from the input */
+    cf_cholesky *filter_chol;
+    double filter_scale;     /* k = 0: sigma / (1 + sigma) */
+    double *filter_mass;     /* nv: M of the filter (input areas) */
+    int32_t harmonic_dim;    /* dim H^1 (2g + b - 1 with boundary) if the exactness constraint is active */
+    int32_t linearized;      /* exactness by the discrete linearisation instead of App. C's Z_i */
+    double *hweights;        /* ne: cotan weights of the input (the *1 of the harmonic basis), linearized only */
+    int32_t fixed_boundary;
+    int32_t restricted_boundary;   /* PRESCRIBED or CMC */
+    int32_t has_boundary;
+    double *frames;          /* 16 nv: Q_i of cfi_dirac_restrict_boundary (boundary vertices) */
+    double *target;          /* 3 nv: prescribed V~ (PRESCRIBED) */
+    double *binormal;        /* 3 nv: current boundary binormals */
+    double eps;
+    double *harmonic;        /* ne x 2g */
+    double *area;            /* nv barycentric areas of the current surface */
+    double *normal;          /* 3 nv */
+    double *lx;              /* 3 nv: L f */
+    double *h;               /* nv */
+    double *rest_area;       /* nv: areas of the input, for Moebius balancing */
+    double *rhodot, *rho;    /* nv */
+    double *lambda, *qrhs, *qwork;   /* 4 nv */
+    double *zrhs, *zsol;     /* 4 nv x dim (x 3 dim if linearized) */
+    double *basis;           /* nv x max_cols */
+    int32_t max_cols;
+    double *edges;           /* 3 ne */
+    double *newpos;          /* 3 nv */
+    double *xsave;           /* 3 nv: positions before the step (adaptive only) */
+    double tau;              /* time step of the next step (adaptive: may be below opt.time_step) */
+    double *vtmp, *vtmp2;    /* nv */
+    double energy;
+    double initial_energy;   /* W of the starting surface (divergence check) */
+    cfi_spin_diagnostics diag;
+} cfi_spin_state;
+
+/* ---- options.c ---- */
+extern const char *const cfi_spin_boundary_choices[];
+/* Checks the options against the mesh (ranges, boundary mode vs boundary,
+ * per-vertex targets); CF_ERR_INVALID_ARG / CF_ERR_BAD_MESH with a message. */
+cf_status cfi_spin_validate_options(cf_context *ctx, const cf_mesh *mesh, const cf_spin_willmore_options *o);
+
+/* ---- flow_method.c: the vtable's functions (cfi_spin_willmore_method, options.c) ---- */
+cf_status cfi_spin_create(cf_flow *flow, const void *options);
+cf_status cfi_spin_step(cf_flow *flow, cf_flow_info *info);
+cf_status cfi_spin_reset(cf_flow *flow);
+void cfi_spin_destroy(cf_flow *flow);
+/* ---- geometry (flow_method.c) ---- */
+/* Refills L, areas, normals, L f, H and the energy W of x (s->energy). */
+cf_status cfi_spin_update_geometry(cf_flow *flow, cfi_spin_state *s, const double *x);
+
+/* ---- boundary_frames.c ---- */
+cf_status cfi_spin_boundary_binormals(const cf_flow *flow, const cfi_spin_state *s, const double *x, double *out);
+void cfi_spin_boundary_frames(const cf_flow *flow, cfi_spin_state *s);
+/* s->target of boundary=prescribed: the caller's per-vertex targets
+ * (normalised) or the input's binormals rotated on loops 1, 2, ... */
+cf_status cfi_spin_boundary_targets(cf_flow *flow, cfi_spin_state *s, const cf_spin_willmore_options *o);
+
+/* ---- spectral_filter.c ---- */
+/* Builds and factorises the filter of the input surface (sigma > 0). */
+cf_status cfi_spin_filter_build(cf_flow *flow, cfi_spin_state *s);
+/* rhodot <- rhodot - (id + sigma Delta^k)^-1 rhodot (sigma > 0 only); adds the solve time. */
+cf_status cfi_spin_filter_apply(cfi_spin_state *s, double *solve_seconds);
+
+/* ---- exactness.c ---- */
+/* Harmonic dimension the exactness constraint needs for these options (0: off). */
+cf_status cfi_spin_exactness_dimension(cf_flow *flow, const cf_spin_willmore_options *o, int32_t *dim);
+/* Fills s->harmonic (and s->hweights when linearised) from the input. */
+cf_status cfi_spin_exactness_init(cf_flow *flow, cfi_spin_state *s);
+/* Appends the exactness columns to s->basis from *col (App. C's Z_i or the linearised ones). */
+cf_status cfi_spin_exactness_columns(cf_flow *flow, cfi_spin_state *s, const double *x, int32_t *col,
+                                     double *factor_seconds, double *solve_seconds);
+
+/* ---- mobius.c ---- */
+double cfi_spin_mobius_term(const cf_flow *flow, cfi_spin_state *s, const double *x);
+
+/* ---- constraints.c ---- */
+/* Step III: projects the constraints out of s->rhodot and records the diagnostics. */
+cf_status cfi_spin_apply_constraints(cf_flow *flow, cfi_spin_state *s, const double *x, double *factor_seconds,
+                                     double *solve_seconds);
+
+/* ---- the step (flow_method.c) ---- */
+typedef struct cfi_spin_timers {
+    double assemble, factorize, solve;   /* seconds, accumulated */
+} cfi_spin_timers;
+/* Steps IV-VI for the time step tau from the current state (rhodot and its
+ * constraints computed): rho, lambda, edges, positions (flow->positions in
+ * place) and the geometry of the new surface (s->energy). *too_large: the
+ * attempt was stopped before the positions because lambda's scale jumps
+ * more than max_scale_change (adaptive only). */
+cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, int *too_large, cfi_spin_timers *t);
+
+/* ---- step_policy.c ---- */
+/* Largest change of the log conformal scale across an edge, |log(|l_i|^2 / |l_j|^2)|. */
+double cfi_spin_max_scale_change(const cf_mesh *mesh, const double *lambda);
+typedef struct cfi_spin_attempt {
+    double tau;          /* time step of the accepted attempt */
+    int32_t halvings;    /* retries before it */
+    int stalled;         /* no attempt lowered W: state kept, flow converged */
+} cfi_spin_attempt;
+/* Steps IV-VI under the adaptive policy (retries with a smaller tau). */
+cf_status cfi_spin_advance(cf_flow *flow, cfi_spin_state *s, double energy_before, cfi_spin_attempt *out,
+                           cfi_spin_timers *t);
+/* Blow-up and divergence checks of an accepted step (CF_ERR_NUMERICAL with a message). */
+cf_status cfi_spin_check_energy(cf_flow *flow, const cfi_spin_state *s, double energy_before, double tau);
+/* Relative energy decrease below tolerance, or stalled. */
+int32_t cfi_spin_converged(const cfi_spin_state *s, double energy_before, int stalled);
+
+#endif /* CF_METHODS_SPIN_WILLMORE_SPIN_FLOW_H */

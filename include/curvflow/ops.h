@@ -91,6 +91,58 @@ CF_API cf_status cf_cotan_laplacian_refill(cf_sparse *l, const cf_mesh *mesh, co
  * also the DEC Hodge star *1. */
 CF_API cf_status cf_cotan_weights(cf_context *ctx, const cf_mesh *mesh, const double *positions, double *weights);
 
+/* ---- Positions from edge vectors (src/ops/edge_poisson.c) ---------------
+ * Least-squares fit of positions f (3 nv) to prescribed edge vectors e~
+ * (3 ne, interleaved, e~_e for edge e running i -> j, i < j as in
+ * cf_mesh_edge_vertices) in the cotan metric of some surface (Crane et al.
+ * 2011; Crane, Pinkall, Schroeder 2013, Eq. (6)):
+ *     minimise 1/2 sum_e w_e |f_j - f_i - e~_e|^2,  i.e.  L f = b,
+ *     b_i = -sum_{e = (i, j)} w_e e~_e + sum_{e = (j, i)} w_e e~_e,
+ * L the positive semi-definite cotan Laplacian and w_e its weights, so that
+ * integrable edges (e~_e = g_j - g_i) give b = L g and f = g. The metric is
+ * that of the positions given at create (the source surface), or of any
+ * later cf_edge_poisson_set_metric (e.g. the target surface); the pattern
+ * and the symbolic factorisation are made once. With known vertices their
+ * values are fixed (cf_min_quad on the free block, linalg.h); without, L is
+ * shifted by 1e-10 times its mean diagonal and the caller fixes the
+ * translation (the constant mode is arbitrary up to that shift). No
+ * allocation after create. */
+typedef struct cf_edge_poisson cf_edge_poisson;
+
+/* positions: 3 nv, the metric's surface (NULL: the mesh's rest positions);
+ * known: known_count distinct vertices (0 <= known_count < nv; NULL if 0),
+ * copied. Statuses: CF_ERR_INVALID_ARG, CF_ERR_DEGENERATE_FACE,
+ * CF_ERR_NOT_POSDEF (a free component with no known vertex), CF_ERR_NOMEM,
+ * solver errors. The object keeps `mesh` (it must outlive it). */
+CF_API cf_status cf_edge_poisson_create(cf_context *ctx, const cf_mesh *mesh, const double *positions,
+                                        int32_t known_count, const int32_t *known, cf_edge_poisson **out);
+/* Refills L for the metric of `positions` (3 nv, values only); the next
+ * solve refactorises. CF_ERR_DEGENERATE_FACE on a zero-area face. */
+CF_API cf_status cf_edge_poisson_set_metric(cf_edge_poisson *p, const double *positions);
+/* f from edges (3 ne); fixed: 3 nv interleaved, read at the known vertices
+ * only (NULL without known vertices); out: 3 nv interleaved (the known
+ * vertices get their fixed values exactly). timings (may be NULL)
+ * accumulates factorise / solve seconds. Solver statuses. */
+CF_API cf_status cf_edge_poisson_solve(cf_edge_poisson *p, const double *edges, const double *fixed, double *out,
+                                       cf_solver_timings *timings);
+/* (L + shift I) u = b for ncols scalar columns (nv each, column-major) with
+ * the current metric, factorising only if the metric changed since the last
+ * factorisation (a position solve of the same metric shares it). Only
+ * without known vertices (else CF_ERR_INVALID_ARG). */
+CF_API cf_status cf_edge_poisson_solve_scalar(cf_edge_poisson *p, int32_t ncols, const double *b, double *u,
+                                              cf_solver_timings *timings);
+/* The current L (positive semi-definite, both triangles) and the weight
+ * w_e = -L_ij of edge e (no check of e). */
+CF_API const cf_sparse *cf_edge_poisson_laplacian(const cf_edge_poisson *p);
+CF_API double cf_edge_poisson_weight(const cf_edge_poisson *p, int32_t e);
+CF_API void cf_edge_poisson_destroy(cf_edge_poisson **p);
+
+/* Integrability (closure) measure of edge vectors against positions:
+ * sqrt(sum_e |f_j - f_i - e~_e|^2 / sum_e |e~_e|^2) (0 when every e~ is
+ * zero; NaN for NULL arguments). After cf_edge_poisson_solve it is the
+ * relative part of e~ that no surface realises (Crane 2013, Sec. 6.4). */
+CF_API double cf_edge_closure_error(const cf_mesh *mesh, const double *positions, const double *edges);
+
 typedef enum cf_mass_kind {
     CF_MASS_LUMPED_BARYCENTRIC = 0,
     CF_MASS_LUMPED_VORONOI = 1,

@@ -52,15 +52,6 @@ cf_status cfi_spin_boundary_binormals(const cf_flow *flow, const cfi_spin_state 
     return CF_OK;
 }
 
-/* Hamilton product on (w, x, y, z) arrays. */
-static void qmul4(const double *a, const double *b, double *o)
-{
-    o[0] = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3];
-    o[1] = a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2];
-    o[2] = a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1];
-    o[3] = a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0];
-}
-
 /* Q_i for every boundary vertex: columns r, r V~, r u1, r u2 with r the
  * rotation taking V = current binormal to V~ under v -> conj(r) v r
  * (r = cos(theta/2) - sin(theta/2) w, w = V x V~ / |V x V~|, Sec. 6.3.1), and
@@ -97,10 +88,11 @@ void cfi_spin_boundary_frames(const cf_flow *flow, cfi_spin_state *s)
         double u2[3] = {vt[1] * u1[2] - vt[2] * u1[1], vt[2] * u1[0] - vt[0] * u1[2], vt[0] * u1[1] - vt[1] * u1[0]};
         double cols[4][4];
         double e1[4] = {0.0, vt[0], vt[1], vt[2]}, e2[4] = {0.0, u1[0], u1[1], u1[2]}, e3[4] = {0.0, u2[0], u2[1], u2[2]};
+        cf_quat rq = cf_quat_load(r);
         memcpy(cols[0], r, sizeof r);
-        qmul4(r, e1, cols[1]);
-        qmul4(r, e2, cols[2]);
-        qmul4(r, e3, cols[3]);
+        cf_quat_store(cf_quat_mul(rq, cf_quat_load(e1)), cols[1]);
+        cf_quat_store(cf_quat_mul(rq, cf_quat_load(e2)), cols[2]);
+        cf_quat_store(cf_quat_mul(rq, cf_quat_load(e3)), cols[3]);
         double *q = s->frames + 16 * (int64_t)i;
         for (int row = 0; row < 4; ++row)
             for (int c = 0; c < 4; ++c) q[4 * row + c] = cols[c][row];

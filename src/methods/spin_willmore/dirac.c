@@ -7,6 +7,7 @@
  * fill then writes values in place without allocating.
  */
 #include "methods/spin_willmore/spin_internal.h"
+#include "curvflow/quaternion.h"
 
 #include <math.h>
 #include <string.h>
@@ -153,24 +154,11 @@ void cfi_dirac_fix_boundary(cfi_dirac *d, const cf_mesh *mesh, double *rhs)
     }
 }
 
-/* Hamilton product of (w, x, y, z) arrays. */
-static inline void qmul(const double *a, const double *b, double *o)
-{
-    o[0] = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3];
-    o[1] = a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2];
-    o[2] = a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1];
-    o[3] = a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0];
-}
-
-/* imaginary part of conj(a) v b for imaginary v */
+/* imaginary part of conj(a) v b for imaginary v (a, b: (w, x, y, z) arrays) */
 static inline void sandwich(const double *a, const double *v, const double *b, double *o)
 {
-    double ac[4] = {a[0], -a[1], -a[2], -a[3]}, vq[4] = {0.0, v[0], v[1], v[2]}, t[4], u[4];
-    qmul(ac, vq, t);
-    qmul(t, b, u);
-    o[0] = u[1];
-    o[1] = u[2];
-    o[2] = u[3];
+    cf_quat u = cf_quat_mul(cf_quat_mul(cf_quat_conj(cf_quat_load(a)), cf_quat_from_vector(v)), cf_quat_load(b));
+    cf_quat_to_vector(u, o);
 }
 
 void cfi_spin_transform_edges(const cf_mesh *mesh, const double *positions, const double *lambda, double *out)
@@ -188,21 +176,6 @@ void cfi_spin_transform_edges(const cf_mesh *mesh, const double *positions, cons
         /* Crane et al. 2011 (NOTES.md): average of the similarity transforms at both ends */
         for (int c = 0; c < 3; ++c) out[3 * e + c] = (aa[c] + bb[c]) / 3.0 + (ab[c] + ba[c]) / 6.0;
     }
-}
-
-double cfi_spin_integrability_error(const cf_mesh *mesh, const double *positions, const double *edges)
-{
-    double num = 0.0, den = 0.0;
-    for (int32_t e = 0; e < mesh->ne; ++e) {
-        int32_t i = mesh->edge_vertices[2 * e], j = mesh->edge_vertices[2 * e + 1];
-        for (int c = 0; c < 3; ++c) {
-            double g = positions[3 * j + c] - positions[3 * i + c];
-            double t = edges[3 * e + c];
-            num += (g - t) * (g - t);
-            den += t * t;
-        }
-    }
-    return den > 0.0 ? sqrt(num / den) : 0.0;
 }
 
 void cfi_dirac_restrict_boundary(cfi_dirac *d, const cf_mesh *mesh, const double *frames)

@@ -26,8 +26,6 @@ static cf_status update_harmonic_forms(cf_flow *flow, cfi_spin_state *s, double 
 {
     const cf_mesh *mesh = flow->mesh;
     int32_t nv = s->nv, ne = s->ne, dim = s->harmonic_dim;
-    const cf_sparse *l = s->poisson->l;
-    const int64_t *slot = s->poisson->edge_slot;
     double *div = s->zrhs, *u = s->zsol; /* scratch: at least nv x dim each */
     memset(div, 0, (size_t)nv * dim * sizeof(double));
     for (int32_t g = 0; g < dim; ++g) {
@@ -35,7 +33,7 @@ static cf_status update_harmonic_forms(cf_flow *flow, cfi_spin_state *s, double 
         double *d = div + (int64_t)g * nv;
         for (int32_t e = 0; e < ne; ++e) {
             int32_t i = mesh->edge_vertices[2 * e], j = mesh->edge_vertices[2 * e + 1];
-            double flux = -l->values[slot[e]] * w[e]; /* w_ij omega_ij, the edge runs i -> j */
+            double flux = cf_edge_poisson_weight(s->poisson, e) * w[e]; /* w_ij omega_ij, the edge runs i -> j */
             d[i] -= flux;                              /* right-hand side -div */
             d[j] += flux;
         }
@@ -47,7 +45,10 @@ static cf_status update_harmonic_forms(cf_flow *flow, cfi_spin_state *s, double 
         mean /= nv;
         for (int32_t i = 0; i < nv; ++i) d[i] -= mean;
     }
-    cf_status st = cfi_poisson_solve_scalar(s->poisson, dim, div, u, factor_seconds, solve_seconds);
+    cf_solver_timings tm = {0.0, 0.0, 0.0};
+    cf_status st = cf_edge_poisson_solve_scalar(s->poisson, dim, div, u, &tm);
+    *factor_seconds += tm.factorize_seconds;
+    *solve_seconds += tm.solve_seconds;
     if (st != CF_OK) return st;
     for (int32_t g = 0; g < dim; ++g) {
         double *w = s->harmonic + (int64_t)g * ne;

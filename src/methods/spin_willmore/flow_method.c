@@ -42,11 +42,11 @@ cf_status cfi_spin_update_geometry(cf_flow *flow, cfi_spin_state *s, const doubl
 {
     cf_context *ctx = flow->ctx;
     const cf_mesh *mesh = flow->mesh;
-    cf_status st = cfi_poisson_refill(s->poisson, mesh, x);
+    cf_status st = cf_edge_poisson_set_metric(s->poisson, x);
     if (st == CF_OK) st = cf_vertex_areas(ctx, mesh, x, CF_DUAL_AREA_BARYCENTRIC, s->area);
     if (st == CF_OK) st = cf_vertex_normals(ctx, mesh, x, s->normal);
     if (st != CF_OK) return st;
-    const cf_sparse *l = s->poisson->l;
+    const cf_sparse *l = cf_edge_poisson_laplacian(s->poisson);
     memset(s->lx, 0, 3 * (size_t)s->nv * sizeof(double));
     for (int32_t j = 0; j < s->nv; ++j)
         for (int32_t p = l->colptr[j]; p < l->colptr[j + 1]; ++p) {
@@ -78,8 +78,8 @@ void cfi_spin_destroy(cf_flow *flow)
     cfi_dirac_destroy(ctx, &s->dirac);
     cf_cholesky_destroy(&s->chol);
     cf_cholesky_destroy(&s->chol0);
-    cfi_poisson_destroy(ctx, &s->poisson);
-    cfi_poisson_destroy(ctx, &s->poisson_input);
+    cf_edge_poisson_destroy(&s->poisson);
+    cf_edge_poisson_destroy(&s->poisson_input);
     cf_sparse_destroy(&s->filter);
     cf_cholesky_destroy(&s->filter_chol);
     cfi_spin_ws_free_all(&s->ws);
@@ -126,6 +126,26 @@ static cf_status allocate_arrays(cfi_spin_state *s, int32_t dim)
     }
 #undef WS_ARRAY
     return ok ? CF_OK : CF_ERR_NOMEM;
+}
+
+/* The Poisson solver in the current metric (H every step; the positions
+ * when they keep the current metric). A fixed boundary makes its vertices
+ * known values (Sec. 6.3.2). */
+static cf_status create_current_poisson(cf_flow *flow, cfi_spin_state *s)
+{
+    cf_context *ctx = flow->ctx;
+    const cf_mesh *mesh = flow->mesh;
+    if (!s->fixed_boundary) return cf_edge_poisson_create(ctx, mesh, flow->positions, 0, NULL, &s->poisson);
+    int32_t count = 0;
+    for (int32_t i = 0; i < mesh->nv; ++i) count += mesh->vertex_on_boundary[i] != 0;
+    int32_t *known = CFI_ALLOC(ctx, int32_t, count);
+    if (!known) return CF_ERR_NOMEM;
+    count = 0;
+    for (int32_t i = 0; i < mesh->nv; ++i)
+        if (mesh->vertex_on_boundary[i]) known[count++] = i;
+    cf_status st = cf_edge_poisson_create(ctx, mesh, flow->positions, count, known, &s->poisson);
+    CFI_FREE(ctx, known, count);
+    return st;
 }
 
 /* Symbolic factorisations of X (X(rho) and, for exactness, X(0)) on the
@@ -184,7 +204,7 @@ cf_status cfi_spin_create(cf_flow *flow, const void *options)
     s->linearized = dim > 0 && (s->has_boundary || o->exactness_linearized);
     st = allocate_arrays(s, dim);
     if (st == CF_OK && dim) st = cfi_spin_exactness_init(flow, s);
-    if (st == CF_OK) st = cfi_poisson_create(ctx, mesh, flow->positions, &s->poisson);
+    if (st == CF_OK) st = create_current_poisson(flow, s);
     /* Position recovery in the metric of the starting surface: the Dirichlet
      * energy is conformally invariant, so for a conformal flow the Poisson
      * problem of Eq. (6) is the same in the input's metric (as cMCF keeps the
@@ -193,7 +213,7 @@ cf_status cfi_spin_create(cf_flow *flow, const void *options)
      * -> 2.9; bunny max Q 7.1 -> 3.7; spot W/4pi 1.0488 -> 1.0472. A fixed
      * boundary rewrites the matrix every step and keeps the current metric. */
     if (st == CF_OK && o->input_metric && !s->fixed_boundary)
-        st = cfi_poisson_create(ctx, mesh, flow->positions, &s->poisson_input); /* filled with these positions */
+        st = cf_edge_poisson_create(ctx, mesh, flow->positions, 0, NULL, &s->poisson_input); /* filled with these positions */
     if (st == CF_OK) st = cfi_spin_update_geometry(flow, s, flow->positions);
     /* desired vertex areas of Moebius balancing: the mesh's rest shape */
     if (st == CF_OK) st = cf_vertex_areas(ctx, mesh, mesh->positions, CF_DUAL_AREA_BARYCENTRIC, s->rest_area);
@@ -298,10 +318,13 @@ cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, in
     ta = cfi_now_seconds();
     cfi_spin_transform_edges(mesh, x, s->lambda, s->edges);
     t->assemble += cfi_now_seconds() - ta;
-    st = cfi_poisson_solve(s->poisson_input ? s->poisson_input : s->poisson, mesh, s->edges, s->fixed_boundary, x,
-                           s->newpos, &t->factorize, &t->solve);
+    cf_solver_timings tm = {0.0, 0.0, 0.0};
+    st = cf_edge_poisson_solve(s->poisson_input ? s->poisson_input : s->poisson, s->edges,
+                               s->fixed_boundary ? x : NULL, s->newpos, &tm);
+    t->factorize += tm.factorize_seconds;
+    t->solve += tm.solve_seconds;
     if (st != CF_OK) return st;
-    s->diag.integrability_error = cfi_spin_integrability_error(mesh, s->newpos, s->edges);
+    s->diag.integrability_error = cf_edge_closure_error(mesh, s->newpos, s->edges);
     if (!s->fixed_boundary) {
         /* fix translation (and the scale, if asked): Willmore energy is invariant under both */
         double c_old[3] = {0, 0, 0}, c_new[3] = {0, 0, 0}, atot = 0.0;

@@ -43,8 +43,8 @@ typedef struct cfi_spin_state {
     cfi_dirac *dirac;
     cf_cholesky *chol;       /* X(rho) + eps M */
     cf_cholesky *chol0;      /* X(0) + eps M, exactness only */
-    cfi_poisson *poisson;    /* cotan Laplacian of the current surface (H; fixed-boundary positions) */
-    cfi_poisson *poisson_input; /* input_metric: that of the starting surface, factorised once */
+    cf_edge_poisson *poisson;       /* cotan Laplacian of the current surface (H; fixed-boundary positions) */
+    cf_edge_poisson *poisson_input; /* input_metric: that of the starting surface, factorised once */
     cf_sparse *filter;       /* M + sigma' L (M^-1 L)^(k-1), built from the input */
     cf_cholesky *filter_chol;
     double filter_scale;     /* k = 0: sigma / (1 + sigma) */

@@ -12,6 +12,7 @@
 #include "core/core.h"
 #include "curvflow/flow.h"
 #include "curvflow/linalg.h"
+#include "curvflow/ops.h"
 #include "curvflow/spin_willmore.h"
 #include "mesh/mesh_internal.h"
 
@@ -51,9 +52,6 @@ void cfi_dirac_restrict_boundary(cfi_dirac *d, const cf_mesh *mesh, const double
  * (l' = conj(l)), e = f_j - f_i for every edge i < j. out: 3 ne. */
 void cfi_spin_transform_edges(const cf_mesh *mesh, const double *positions, const double *lambda, double *out);
 
-/* Relative integrability error sqrt(sum_e |f_j - f_i - e~_e|^2 / sum_e |e~_e|^2). */
-double cfi_spin_integrability_error(const cf_mesh *mesh, const double *positions, const double *edges);
-
 
 /* Relative shift of the Dirac eigenproblem: X + eps M with
  * eps = CFI_SPIN_SHIFT * 4 pi / area (a fraction of 1/R^2 of the sphere of
@@ -77,38 +75,8 @@ cf_status cfi_spin_power_iteration(cf_cholesky *chol, const double *mass, int32_
 double cfi_spin_rayleigh(const cf_sparse *x, const double *mass, int32_t nv, double eps, const double *lambda,
                          double *work);
 
-/* Cotan Poisson problem L f~ = div e~ for recovering positions from edge
- * vectors (Crane 2013, Eq. (6)): L's pattern is built once and refilled. */
-typedef struct cfi_poisson {
-    cf_sparse *l;
-    int64_t *slot_map;     /* cfi_cotan_laplacian_triplet_count entries */
-    int64_t slot_count;
-    int64_t *edge_slot;    /* ne: slot of entry (i, j), L_ij = -w_ij */
-    int64_t *diag_slot;    /* nv */
-    cf_cholesky *chol;
-    double *rhs;           /* 3 nv, column-major */
-    double *sol;           /* 3 nv */
-    int32_t nv, ne;
-    int32_t factored;      /* chol holds the shifted factorisation of l's current values */
-} cfi_poisson;
-
-cf_status cfi_poisson_create(cf_context *ctx, const cf_mesh *mesh, const double *positions, cfi_poisson **out);
-void cfi_poisson_destroy(cf_context *ctx, cfi_poisson **p);
-/* Refills L for positions (values only). */
-cf_status cfi_poisson_refill(cfi_poisson *p, const cf_mesh *mesh, const double *positions);
-/* Solves for positions from edge vectors (3 ne) with the current L.
- * fixed_boundary: boundary vertices keep their values from `fixed`
- * (3 nv interleaved); otherwise L + shift I with shift relative to the mean
- * diagonal (the caller fixes the translation).
- * Overwrites L's values when fixed_boundary (refill before the next use).
- * out: 3 nv interleaved. */
-cf_status cfi_poisson_solve(cfi_poisson *p, const cf_mesh *mesh, const double *edges, int fixed_boundary,
-                            const double *fixed, double *out, double *factor_seconds, double *solve_seconds);
-/* Solves (L + shift I) u = b for ncols columns (nv each, column-major) with
- * the current L, factorising it unless that was already done since the last
- * refill (the free-boundary position solve of the same step reuses it). */
-cf_status cfi_poisson_solve_scalar(cfi_poisson *p, int32_t ncols, const double *b, double *u, double *factor_seconds,
-                                   double *solve_seconds);
+/* Positions from the transformed edges: cf_edge_poisson (curvflow/ops.h);
+ * the integrability error: cf_edge_closure_error. */
 
 /* Diagnostics of the last step of a spin-willmore flow (test hook). */
 typedef struct cfi_spin_diagnostics {
@@ -116,7 +84,7 @@ typedef struct cfi_spin_diagnostics {
     int32_t constraint_rank;
     double constraint_residual;     /* max_i |<rhodot, c_i>_M| / (|rhodot|_M |c_i|_M) over enforced constraints */
     double total_curvature_change;  /* |<rhodot, 1>_M| / (|rhodot|_M |1|_M) */
-    double integrability_error;     /* cfi_spin_integrability_error of the step */
+    double integrability_error;     /* cf_edge_closure_error of the step */
     double eigenvalue;              /* Rayleigh quotient of lambda (shift removed) */
     int32_t harmonic_dimension;     /* dim H^1 used by the exactness constraint: 2g, or 2g + b - 1 with a free boundary (0 if off) */
     double mobius_norm;             /* |balancing term|_M added to rhodot */

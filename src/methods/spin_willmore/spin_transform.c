@@ -82,7 +82,7 @@ cf_status cf_spin_transform(cf_context *ctx, const cf_mesh *mesh, const double *
                              "vertex %d: rho = %.3g is out of range (|rho| times the mesh size %.3g exceeds %.0e)", i,
                              rho[i], size, CF_MAX_COORDINATE);
     cfi_dirac *dirac = NULL;
-    cfi_poisson *poisson = NULL;
+    cf_edge_poisson *poisson = NULL;
     cf_cholesky *chol = NULL;
     double *mass = CFI_ALLOC(ctx, double, nv);
     double *lambda = CFI_ALLOC(ctx, double, 4 * (int64_t)nv);
@@ -122,8 +122,8 @@ cf_status cf_spin_transform(cf_context *ctx, const cf_mesh *mesh, const double *
         gamma_old = gamma;
     }
     cfi_spin_transform_edges(mesh, positions, lambda, edges);
-    st = cfi_poisson_create(ctx, mesh, positions, &poisson);
-    if (st == CF_OK) st = cfi_poisson_solve(poisson, mesh, edges, 0, NULL, out_positions, NULL, NULL);
+    st = cf_edge_poisson_create(ctx, mesh, positions, 0, NULL, &poisson);
+    if (st == CF_OK) st = cf_edge_poisson_solve(poisson, edges, NULL, out_positions, NULL);
     if (st != CF_OK) goto done;
     /* keep the area-weighted centroid */
     double c_in[3] = {0, 0, 0}, c_out[3] = {0, 0, 0};
@@ -137,7 +137,7 @@ cf_status cf_spin_transform(cf_context *ctx, const cf_mesh *mesh, const double *
 done:
     cf_cholesky_destroy(&chol);
     cfi_dirac_destroy(ctx, &dirac);
-    cfi_poisson_destroy(ctx, &poisson);
+    cf_edge_poisson_destroy(&poisson);
     CFI_FREE(ctx, mass, nv);
     CFI_FREE(ctx, lambda, 4 * (int64_t)nv);
     CFI_FREE(ctx, work, 4 * (int64_t)nv);

@@ -1,0 +1,210 @@
+/* cf_edge_poisson / cf_edge_closure_error (ops/edge_poisson.c): positions
+ * from edge vectors, free (shifted) and with fixed values, sign convention
+ * b = L f, the metric switch, and failure paths. */
+#include "curvflow/generate.h"
+#include "curvflow/ops.h"
+#include "test.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static double *edges_of(const cf_mesh *mesh, const double *p)
+{
+    int32_t ne = cf_mesh_edge_count(mesh);
+    const int32_t *ev = cf_mesh_edge_vertices(mesh);
+    double *e = malloc(3 * (size_t)ne * sizeof(double));
+    for (int32_t k = 0; k < ne; ++k)
+        for (int c = 0; c < 3; ++c) e[3 * k + c] = p[3 * ev[2 * k + 1] + c] - p[3 * ev[2 * k] + c];
+    return e;
+}
+
+/* Integrable edges give the surface back up to a translation (closed mesh,
+ * shifted L), and the closure error of the result is ~0; a rotated copy of
+ * the edges gives the rotated surface. */
+static void test_integrable_edges_closed(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *mesh = NULL;
+    CHECK_OK(ctx, cf_generate_bumpy_sphere(ctx, 3, 0.2, 7, &mesh));
+    int32_t nv = cf_mesh_vertex_count(mesh);
+    const double *p = cf_mesh_positions(mesh);
+    double *e = edges_of(mesh, p), *x = malloc(3 * (size_t)nv * sizeof(double));
+    cf_edge_poisson *ep = NULL;
+    CHECK_OK(ctx, cf_edge_poisson_create(ctx, mesh, NULL, 0, NULL, &ep));
+    cf_solver_timings tm = {0.0, 0.0, 0.0};
+    CHECK_OK(ctx, cf_edge_poisson_solve(ep, e, NULL, x, &tm));
+    double off[3] = {x[0] - p[0], x[1] - p[1], x[2] - p[2]}, err = 0.0;
+    for (int32_t i = 0; i < nv; ++i)
+        for (int c = 0; c < 3; ++c) err = fmax(err, fabs(x[3 * i + c] - off[c] - p[3 * i + c]));
+    /* the 1e-10 relative shift perturbs the solution by ~1e-10 times L's condition number */
+    CHECK_LE(err, 1e-7);
+    CHECK_LE(cf_edge_closure_error(mesh, x, e), 1e-7);
+    CHECK(tm.factorize_seconds >= 0.0 && tm.solve_seconds >= 0.0);
+    /* a non-integrable field: closure error of the least-squares fit is positive */
+    for (int32_t k = 0; k < cf_mesh_edge_count(mesh); ++k) e[3 * k] += (k % 3 == 0) ? 0.05 : 0.0;
+    CHECK_OK(ctx, cf_edge_poisson_solve(ep, e, NULL, x, NULL));
+    double ce = cf_edge_closure_error(mesh, x, e);
+    CHECK(ce > 1e-3 && ce < 1.0);
+    cf_edge_poisson_destroy(&ep);
+    CHECK(ep == NULL);
+    free(e);
+    free(x);
+    cf_mesh_destroy(&mesh);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+/* Fixed values: on a flat grid, boundary vertices fixed to an affine map A p
+ * and edges of A p: the interior is A p to rounding; fixed vertices keep
+ * their values exactly. Then a least-squares property: with edges that are
+ * not integrable, the residual L f - b vanishes at free vertices (sign
+ * convention b_i = -sum_(i,j) w e~ + sum_(j,i) w e~). */
+static void test_fixed_values_and_sign(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *mesh = NULL;
+    CHECK_OK(ctx, cf_generate_grid(ctx, 12, 9, 1.0, 0.8, &mesh));
+    int32_t nv = cf_mesh_vertex_count(mesh), ne = cf_mesh_edge_count(mesh);
+    const double *p = cf_mesh_positions(mesh);
+    const int32_t *ev = cf_mesh_edge_vertices(mesh);
+    double *q = malloc(3 * (size_t)nv * sizeof(double)), *x = malloc(3 * (size_t)nv * sizeof(double));
+    const double a[9] = {1.2, 0.3, 0.0, -0.4, 0.9, 0.1, 0.2, 0.5, 1.1};
+    for (int32_t i = 0; i < nv; ++i)
+        for (int r = 0; r < 3; ++r)
+            q[3 * i + r] = a[3 * r] * p[3 * i] + a[3 * r + 1] * p[3 * i + 1] + a[3 * r + 2] * p[3 * i + 2] + 0.7 * r;
+    int32_t *known = malloc((size_t)nv * sizeof(int32_t)), nk = 0;
+    const uint8_t *onb = cf_mesh_vertex_on_boundary(mesh);
+    for (int32_t i = 0; i < nv; ++i)
+        if (onb[i]) known[nk++] = i;
+    double *e = edges_of(mesh, q);
+    cf_edge_poisson *ep = NULL;
+    CHECK_OK(ctx, cf_edge_poisson_create(ctx, mesh, NULL, nk, known, &ep));
+    CHECK_OK(ctx, cf_edge_poisson_solve(ep, e, q, x, NULL));
+    double err = 0.0;
+    for (int32_t i = 0; i < 3 * nv; ++i) err = fmax(err, fabs(x[i] - q[i]));
+    CHECK_LE(err, 1e-12);
+    for (int32_t k = 0; k < nk; ++k)
+        for (int c = 0; c < 3; ++c) CHECK(x[3 * known[k] + c] == q[3 * known[k] + c]);
+    /* non-integrable edges: gradient of 1/2 sum w |f_j - f_i - e~|^2 at free vertices is 0 */
+    for (int32_t k = 0; k < ne; ++k) e[3 * k + 2] += 0.01 * (double)(k % 5);
+    CHECK_OK(ctx, cf_edge_poisson_solve(ep, e, q, x, NULL));
+    double *g = calloc(3 * (size_t)nv, sizeof(double)), gmax = 0.0;
+    for (int32_t k = 0; k < ne; ++k) {
+        int32_t i = ev[2 * k], j = ev[2 * k + 1];
+        double w = cf_edge_poisson_weight(ep, k);
+        for (int c = 0; c < 3; ++c) {
+            double r = x[3 * j + c] - x[3 * i + c] - e[3 * k + c];
+            g[3 * i + c] -= w * r;
+            g[3 * j + c] += w * r;
+        }
+    }
+    for (int32_t i = 0; i < nv; ++i)
+        if (!onb[i])
+            for (int c = 0; c < 3; ++c) gmax = fmax(gmax, fabs(g[3 * i + c]));
+    CHECK_LE(gmax, 1e-12);
+    /* the weight is minus L's off-diagonal entry: the Laplacian is PSD */
+    const cf_sparse *l = cf_edge_poisson_laplacian(ep);
+    CHECK_NEAR(cf_edge_poisson_weight(ep, 0), -l->values[cf_sparse_find(l, ev[0], ev[1])], 0.0, 0.0);
+    /* scalar solves are for the free (shifted) solver only */
+    CHECK_STATUS(cf_edge_poisson_solve_scalar(ep, 1, x, g, NULL), CF_ERR_INVALID_ARG);
+    cf_edge_poisson_destroy(&ep);
+    free(g);
+    free(e);
+    free(q);
+    free(x);
+    free(known);
+    cf_mesh_destroy(&mesh);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+/* The metric switch: after set_metric to a scaled copy (cotan weights depend
+ * only on angles, so the solve must not change) and to a sheared one (it
+ * must, for non-integrable edges). */
+static void test_metric(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *mesh = NULL;
+    CHECK_OK(ctx, cf_generate_icosphere(ctx, 2, 1.0, &mesh));
+    int32_t nv = cf_mesh_vertex_count(mesh), ne = cf_mesh_edge_count(mesh);
+    const double *p = cf_mesh_positions(mesh);
+    double *s = malloc(3 * (size_t)nv * sizeof(double)), *x0 = malloc(3 * (size_t)nv * sizeof(double));
+    double *x1 = malloc(3 * (size_t)nv * sizeof(double));
+    double *e = edges_of(mesh, p);
+    for (int32_t k = 0; k < ne; ++k) e[3 * k + 1] *= 1.0 + 0.1 * (double)(k % 2);
+    cf_edge_poisson *ep = NULL;
+    CHECK_OK(ctx, cf_edge_poisson_create(ctx, mesh, p, 0, NULL, &ep));
+    CHECK_OK(ctx, cf_edge_poisson_solve(ep, e, NULL, x0, NULL));
+    for (int32_t i = 0; i < 3 * nv; ++i) s[i] = 3.0 * p[i];
+    CHECK_OK(ctx, cf_edge_poisson_set_metric(ep, s));
+    CHECK_OK(ctx, cf_edge_poisson_solve(ep, e, NULL, x1, NULL));
+    double d = 0.0;
+    for (int32_t i = 0; i < 3 * nv; ++i) d = fmax(d, fabs((x1[i] - x1[i % 3]) - (x0[i] - x0[i % 3])));
+    CHECK_LE(d, 1e-6);
+    for (int32_t i = 0; i < nv; ++i) s[3 * i] = p[3 * i] + 0.8 * p[3 * i + 1];
+    CHECK_OK(ctx, cf_edge_poisson_set_metric(ep, s));
+    CHECK_OK(ctx, cf_edge_poisson_solve(ep, e, NULL, x1, NULL));
+    d = 0.0;
+    for (int32_t i = 0; i < 3 * nv; ++i) d = fmax(d, fabs((x1[i] - x1[i % 3]) - (x0[i] - x0[i % 3])));
+    CHECK(d > 1e-4);
+    cf_edge_poisson_destroy(&ep);
+    free(s);
+    free(x0);
+    free(x1);
+    free(e);
+    cf_mesh_destroy(&mesh);
+    cf_context_destroy(&ctx);
+}
+
+typedef struct sweep_data {
+    const cf_mesh *mesh;
+    int32_t nk;
+    const int32_t *known;
+} sweep_data;
+
+static cf_status create_and_free(cf_context *ctx, void *user)
+{
+    sweep_data *d = user;
+    cf_edge_poisson *ep = NULL;
+    cf_status st = cf_edge_poisson_create(ctx, d->mesh, NULL, d->nk, d->known, &ep);
+    if (st == CF_OK && !ep) st = CF_ERR_NUMERICAL;
+    cf_edge_poisson_destroy(&ep);
+    return st;
+}
+
+static void test_invalid_and_allocation(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *mesh = NULL;
+    CHECK_OK(ctx, cf_generate_grid(ctx, 4, 4, 1.0, 1.0, &mesh));
+    int32_t nv = cf_mesh_vertex_count(mesh);
+    cf_edge_poisson *ep = NULL;
+    CHECK_STATUS(cf_edge_poisson_create(ctx, NULL, NULL, 0, NULL, &ep), CF_ERR_INVALID_ARG);
+    CHECK_STATUS(cf_edge_poisson_create(ctx, mesh, NULL, 2, NULL, &ep), CF_ERR_INVALID_ARG);
+    CHECK_STATUS(cf_edge_poisson_create(ctx, mesh, NULL, nv, NULL, &ep), CF_ERR_INVALID_ARG);
+    CHECK(strstr(cf_context_message(ctx), "known vertices") != NULL);
+    int32_t twice[2] = {3, 3};
+    CHECK(cf_edge_poisson_create(ctx, mesh, NULL, 2, twice, &ep) != CF_OK);
+    CHECK(ep == NULL);
+    CHECK(isnan(cf_edge_closure_error(NULL, NULL, NULL)));
+    cf_edge_poisson_destroy(NULL);
+    int32_t known[2] = {0, 5};
+    sweep_data d = {mesh, 0, NULL};
+    cft_allocation_sweep(ctx, "edge_poisson free", create_and_free, &d, 1);
+    d.nk = 2;
+    d.known = known;
+    cft_allocation_sweep(ctx, "edge_poisson fixed", create_and_free, &d, 1);
+    cf_mesh_destroy(&mesh);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+int main(void)
+{
+    CFT_RUN(test_integrable_edges_closed);
+    CFT_RUN(test_fixed_values_and_sign);
+    CFT_RUN(test_metric);
+    CFT_RUN(test_invalid_and_allocation);
+    return cft_finish();
+}

@@ -77,6 +77,33 @@ typedef struct cf_flow_options {
     } storage;
 } cf_flow_options;
 
+/* The step policy common to every method (docs/flowcli.md, "Step policy"):
+ * when a step is accepted, retried with a smaller time step, or failed. It
+ * lives in the last CF_STEP_POLICY_STORAGE bytes of cf_flow_options.storage
+ * (method options use the bytes before them) and is set like a method
+ * parameter: cf_flow_options_set(ctx, &o, "backtrack", "false"), or through
+ * cf_flow_options_policy(&o)->backtrack = 0. Which checks apply depends on
+ * the method (a method whose energy need not decrease opts out). */
+#define CF_STEP_POLICY_STORAGE 128
+typedef struct cf_step_policy {
+    int32_t energy_check;       /* 1: reject a step that raises the energy (methods that descend it) [1] */
+    int32_t backtrack;          /* 1: retry a rejected step with half the time step, grow it back after [1] */
+    int32_t max_halvings;       /* retries of one step, 0..60 [10] */
+    int32_t reserved_;          /* (alignment) */
+    double step_growth;         /* factor on the step after an accepted step, up to time_step, [1, 16] [2] */
+    double rise_tolerance;      /* relative rise of the energy in a step taken as rounding, [0, 1] [1e-9] */
+    double divergence_tolerance; /* relative slack of divergence tests against the start, [0, 1] [1e-4] */
+    double energy_floor;        /* absolute slack of every energy test, in the method's unit, [0, 1] [1e-12] */
+} cf_step_policy;
+
+/* The common step policy inside `options` (NULL for NULL). */
+CF_API cf_step_policy *cf_flow_options_policy(cf_flow_options *options);
+CF_API const cf_step_policy *cf_flow_options_policy_const(const cf_flow_options *options);
+
+/* The parameter table of the common step policy (the same for every kind;
+ * set and formatted with cf_flow_options_set / _format like a method's). */
+CF_API cf_status cf_flow_common_params(const cf_param_desc **params, int32_t *count);
+
 /* Fills the defaults of the method. CF_ERR_INVALID_ARG for a bad kind. */
 CF_API cf_status cf_flow_options_default(cf_flow_kind kind, cf_flow_options *options);
 /* The method's options struct inside `options` (cast to cf_<method>_options). */

@@ -64,10 +64,11 @@ cf_status cf_flow_options_default(cf_flow_kind kind, cf_flow_options *options)
 {
     const cfi_flow_method *m = cfi_flow_method_of(kind);
     if (!m || !options) return CF_ERR_INVALID_ARG;
-    if (CF_NEVER(m->options_size > CF_FLOW_OPTIONS_STORAGE)) return CF_ERR_INVALID_ARG;
+    if (CF_NEVER(m->options_size > CFI_STEP_POLICY_OFFSET)) return CF_ERR_INVALID_ARG;
     memset(options, 0, sizeof *options);
     options->kind = kind;
     if (m->options_default) m->options_default(options->storage.bytes);
+    cfi_step_policy_default(cf_flow_options_policy(options));
     return CF_OK;
 }
 
@@ -172,6 +173,9 @@ cf_status cf_flow_options_set(cf_context *ctx, cf_flow_options *options, const c
     const cfi_flow_method *m = cfi_flow_method_of(options->kind);
     if (!m) return cfi_error(ctx, CF_ERR_INVALID_ARG, "options have an invalid method kind %d", (int)options->kind);
     const cf_param_desc *p = find_param(m, name);
+    /* the common step policy's parameters (step_policy.c), after the method's */
+    size_t limit = m->options_size;
+    if (!p && (p = cfi_step_policy_find_param(name)) != NULL) limit = CF_FLOW_OPTIONS_STORAGE;
     if (!p) {
         char known[256];
         list_param_names(m, known, sizeof known);
@@ -179,7 +183,7 @@ cf_status cf_flow_options_set(cf_context *ctx, cf_flow_options *options, const c
                          known[0] ? known : "none");
     }
     size_t field_bytes = p->type == CF_PARAM_DOUBLE ? sizeof(double) : sizeof(int32_t);
-    if (CF_NEVER(p->offset + field_bytes > m->options_size))
+    if (CF_NEVER(p->offset + field_bytes > limit))
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter '%s': table entry outside the options struct", name);
     unsigned char *base = options->storage.bytes;
     switch (p->type) {
@@ -331,6 +335,42 @@ static cf_status measure(cf_flow *flow, cf_flow_info *info)
     return CF_OK;
 }
 
+/* The step policy's state of a new flow: the common options (checked
+ * against their table; a policy left all zero by a caller that filled
+ * cf_flow_options without cf_flow_options_default means the defaults), the
+ * unit of the energy floor, and the method's convergence tolerance (its
+ * parameter `tolerance`) when the flow layer decides convergence. */
+static cf_status policy_init(cf_flow *flow, const cfi_flow_method *m)
+{
+    cfi_step_policy_state *p = &flow->policy;
+    const cf_step_policy *given = cf_flow_options_policy_const(&flow->options);
+    static const cf_step_policy zero;
+    if (memcmp(given, &zero, sizeof zero) == 0)
+        cfi_step_policy_default(&p->opt);
+    else
+        p->opt = *given;
+    cf_status st = cfi_step_policy_validate(flow->ctx, &p->opt);
+    if (st != CF_OK) return st;
+    p->step_scale = 1.0;
+    p->halvings = 0;
+    switch (m->policy.unit) {
+    case CFI_ENERGY_UNIT_4PI: p->unit = 4.0 * 3.14159265358979323846; break;
+    case CFI_ENERGY_UNIT_INITIAL_AREA: p->unit = flow->initial_area > 0.0 ? flow->initial_area : 1.0; break;
+    default: p->unit = 1.0; break;
+    }
+    p->tolerance = 0.0;
+    if (m->policy.convergence) {
+        const cf_param_desc *tol = find_param(m, "tolerance");
+        if (CF_NEVER(!tol || tol->type != CF_PARAM_DOUBLE || tol->offset + sizeof(double) > m->options_size))
+            return cfi_error(flow->ctx, CF_ERR_INVALID_ARG, "%s: no 'tolerance' parameter for the step policy", m->name);
+        memcpy(&p->tolerance, flow->options.storage.bytes + tol->offset, sizeof p->tolerance);
+        if (!(p->tolerance >= 0.0 && p->tolerance <= tol->max_value))
+            return cfi_error(flow->ctx, CF_ERR_INVALID_ARG, "parameter 'tolerance': must be in [0, %g], got %g",
+                             tol->max_value, p->tolerance);
+    }
+    return CF_OK;
+}
+
 void cf_flow_destroy(cf_flow **pflow)
 {
     if (!pflow || !*pflow) return;
@@ -382,6 +422,12 @@ cf_status cf_flow_create(cf_context *ctx, const cf_mesh *mesh, const double *pos
     }
     flow->initial_area = area;
     flow->initial_volume = volume;
+
+    st = policy_init(flow, m);
+    if (st != CF_OK) {
+        cf_flow_destroy(&flow);
+        return st;
+    }
 
     /* Only now is the method attached, so that destroy calls its destructor
      * exactly when its create has run (it must accept a partial state). */
@@ -445,6 +491,49 @@ static cf_status fail_step(cf_flow *flow, cf_status status, int64_t iteration)
     return status;
 }
 
+/* The policy rejected a rising step and may not retry it (no backtracking):
+ * the failure names the energies, the step and what may help. */
+static cf_status fail_rise(cf_flow *flow, double before, const cf_flow_info *step, int64_t iteration)
+{
+    const cfi_flow_method *m = flow->method;
+    cfi_error(flow->ctx, CF_ERR_NUMERICAL, "%s: energy rose from %.9g to %.9g (time step %g): %s", m->name, before,
+              step->energy, step->time_step,
+              m->policy.rise_hint ? m->policy.rise_hint
+                                  : "a smaller time_step or backtrack=true may help; energy_check=false accepts rising "
+                                    "steps");
+    return fail_step(flow, CF_ERR_NUMERICAL, iteration);
+}
+
+/* No time step down to the smallest the policy allows lowers the energy:
+ * the state before the step is kept, the flow reports convergence, and a
+ * warning says why the run ends early. */
+static cf_status stall(cf_flow *flow, double before, const cf_flow_info *step, int64_t iteration, cf_flow_info *info)
+{
+    cf_context *ctx = flow->ctx;
+    memcpy(flow->positions, flow->saved_positions, 3 * (size_t)flow->mesh->nv * sizeof(double));
+    if (flow->method->reset) {
+        cf_status st = flow->method->reset(flow);
+        if (st != CF_OK) return fail_step(flow, st, iteration);
+    }
+    flow->converged = 1;
+    cfi_log(ctx, CF_LOG_WARNING,
+            "iteration %lld: %s: stopped: the energy rises (%.9g -> %.9g) at every time step down to %g (time_step / "
+            "%.0f); the last state that lowered it is kept (energy_check=false accepts rising steps)",
+            (long long)iteration, flow->method->name, before, step->energy, step->time_step,
+            1.0 / flow->policy.step_scale);
+    if (info) *info = flow->info;
+    return CF_OK;
+}
+
+/* One step under the shared safety net and step policy: the method's step,
+ * then finite positions, faces that pass the mesh check, finite energy;
+ * then the policy (methods/step_policy.h): a step that raises the energy
+ * beyond rise_tolerance and energy_floor is rejected when the method asks
+ * for the check; with backtracking it is redone from the saved state with
+ * half the step (up to max_halvings times), otherwise (or when no halving
+ * helps) the step fails and the last good state is kept. After an accepted
+ * step without halving a reduced step grows back by step_growth, and the
+ * convergence tolerance is tested. */
 cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info)
 {
     if (!flow) return CF_ERR_INVALID_ARG;
@@ -452,33 +541,65 @@ cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info)
     int32_t nv = flow->mesh->nv;
     int64_t iteration = flow->info.iteration + 1;
     double t0 = cfi_now_seconds();
+    const cfi_step_policy_desc *desc = &flow->method->policy;
+    cfi_step_policy_state *pol = &flow->policy;
+    int rise_check = desc->rise_check && pol->opt.energy_check;
+    int backtrack = rise_check && desc->backtrack && pol->opt.backtrack;
+    double before = flow->info.energy;
+    int32_t halvings = 0;
 
     memcpy(flow->saved_positions, flow->positions, 3 * (size_t)nv * sizeof(double));
-    cf_flow_info step = {0};
-    step.iteration = iteration;
-    /* so that a failing method that records no message is noticed */
-    cf_context_clear_error(ctx);
-    cf_status st = flow->method->step(flow, &step);
-    if (st != CF_OK) {
-        if (ctx->last_status == CF_OK) cfi_error(ctx, st, "%s step failed (%s)", flow->method->name, cf_status_name(st));
-        /* the input passed the mesh check at creation: a face that degenerates
-         * during a step is a numerical failure of the flow, not bad input */
-        if (st == CF_ERR_DEGENERATE_FACE || st == CF_ERR_BAD_MESH) st = CF_ERR_NUMERICAL;
-        return fail_step(flow, st, iteration);
+    cf_flow_info step;
+    for (;;) {
+        memset(&step, 0, sizeof step);
+        step.iteration = iteration;
+        /* so that a failing method that records no message is noticed */
+        cf_context_clear_error(ctx);
+        cf_status st = flow->method->step(flow, &step);
+        if (st != CF_OK) {
+            if (ctx->last_status == CF_OK)
+                cfi_error(ctx, st, "%s step failed (%s)", flow->method->name, cf_status_name(st));
+            /* the input passed the mesh check at creation: a face that degenerates
+             * during a step is a numerical failure of the flow, not bad input */
+            if (st == CF_ERR_DEGENERATE_FACE || st == CF_ERR_BAD_MESH) st = CF_ERR_NUMERICAL;
+            return fail_step(flow, st, iteration);
+        }
+        if (check_positions(ctx, flow->positions, nv, CF_ERR_NUMERICAL, "position") != CF_OK)
+            return fail_step(flow, CF_ERR_NUMERICAL, iteration);
+        if (check_faces(flow) != CF_OK) return fail_step(flow, CF_ERR_NUMERICAL, iteration);
+        if (!isfinite(step.energy)) {
+            cfi_error(ctx, CF_ERR_NUMERICAL, "energy is %s", isnan(step.energy) ? "NaN" : "infinite");
+            return fail_step(flow, CF_ERR_NUMERICAL, iteration);
+        }
+        if (!rise_check || !cfi_step_policy_rose(pol, before, step.energy)) break;
+        if (!backtrack) return fail_rise(flow, before, &step, iteration);
+        /* max_halvings bounds the step against time_step, not per step (or
+         * a run near its minimum would creep on with ever smaller steps):
+         * when no step down to time_step / 2^max_halvings lowers the energy,
+         * the run stops at the last state that did, as converged (the flow
+         * has reached the state its step can lower no further: the round
+         * sphere of the bi-Laplacian flow, a state from which the
+         * frozen-operator step is no descent direction) */
+        if (pol->step_scale <= ldexp(1.0, -pol->opt.max_halvings)) return stall(flow, before, &step, iteration, info);
+        /* backtrack: the state before the step, the method resynchronised
+         * (its energy is `before` again), half the step */
+        memcpy(flow->positions, flow->saved_positions, 3 * (size_t)nv * sizeof(double));
+        if (flow->method->reset) {
+            st = flow->method->reset(flow);
+            if (st != CF_OK) return fail_step(flow, st, iteration);
+        }
+        pol->step_scale *= 0.5;
+        ++halvings;
     }
-    if (check_positions(ctx, flow->positions, nv, CF_ERR_NUMERICAL, "position") != CF_OK)
-        return fail_step(flow, CF_ERR_NUMERICAL, iteration);
-    if (check_faces(flow) != CF_OK) return fail_step(flow, CF_ERR_NUMERICAL, iteration);
-    if (!isfinite(step.energy)) {
-        cfi_error(ctx, CF_ERR_NUMERICAL, "energy is %s", isnan(step.energy) ? "NaN" : "infinite");
-        return fail_step(flow, CF_ERR_NUMERICAL, iteration);
-    }
-    st = measure(flow, &step);
+    cf_status st = measure(flow, &step);
     if (st != CF_OK) return fail_step(flow, st, iteration);
     if (!isfinite(step.area) || !isfinite(step.volume)) {
         cfi_error(ctx, CF_ERR_NUMERICAL, "area or volume is not finite");
         return fail_step(flow, CF_ERR_NUMERICAL, iteration);
     }
+    pol->halvings = halvings;
+    if (backtrack && halvings == 0) pol->step_scale = fmin(1.0, pol->step_scale * pol->opt.step_growth);
+    if (desc->convergence && cfi_step_policy_converged(before, step.energy, pol->tolerance)) flow->converged = 1;
     step.iteration = iteration;
     step.time = flow->info.time + step.time_step;
     step.total_seconds = cfi_now_seconds() - t0;

@@ -14,6 +14,7 @@
 #include "core/core.h"
 #include "curvflow/flow.h"
 #include "mesh/mesh_internal.h"
+#include "methods/step_policy.h"
 
 typedef struct cfi_flow_method {
     cf_flow_kind kind;
@@ -41,6 +42,9 @@ typedef struct cfi_flow_method {
      * recompute flow->info.energy for the current positions (may be NULL). */
     cf_status (*reset)(cf_flow *flow);
     void (*destroy)(cf_flow *flow);
+    /* Which checks of the shared step policy apply (methods/step_policy.h);
+     * left out (all zero): none, the method accepts its own steps. */
+    cfi_step_policy_desc policy;
 } cfi_flow_method;
 
 struct cf_flow {
@@ -57,7 +61,12 @@ struct cf_flow {
     int32_t converged;          /* set by the method */
     cf_progress_fn progress;
     void *progress_user;
+    cfi_step_policy_state policy; /* the shared step policy (cf_flow_step) */
 };
+
+/* Factor (0, 1] on the method's time step chosen by the step policy
+ * (backtracking); methods with policy.backtrack multiply their step by it. */
+static inline double cfi_flow_step_scale(const cf_flow *flow) { return flow->policy.step_scale; }
 
 
 

@@ -1,0 +1,98 @@
+/*
+ * The step policy shared by every flow method (issue 12 item 4): whether a
+ * step is accepted, retried with a smaller time step, or failed, and when a
+ * run has converged. The common options (cf_step_policy, include/curvflow/
+ * flow.h) are set by the user; each method says in its vtable
+ * (cfi_flow_method.policy) which of the checks apply to it.
+ *
+ * Every energy comparison has a relative tolerance and an absolute floor:
+ *   "b exceeds a" means b > a + rel |a| + floor unit,
+ * so rounding at an equilibrium (a round sphere, a flat sheet whose W is 0
+ * and becomes 6.7e-29) is no rise, and a start at energy 0 does not make
+ * every later rounding error a divergence (issue 15 M1).
+ */
+#ifndef CF_METHODS_STEP_POLICY_H
+#define CF_METHODS_STEP_POLICY_H
+
+#include "curvflow/flow.h"
+
+#include <stdint.h>
+
+/* What the absolute floor (cf_step_policy.energy_floor) is measured in:
+ * the method's energy is scale-free (bi-Laplacian energy; W, whose natural
+ * unit 4 pi is the W of a round sphere), or it scales with the surface
+ * (area: the floor is a fraction of the starting area). */
+typedef enum cfi_energy_unit {
+    CFI_ENERGY_UNIT_ONE = 0,
+    CFI_ENERGY_UNIT_4PI = 1,
+    CFI_ENERGY_UNIT_INITIAL_AREA = 2
+} cfi_energy_unit;
+
+/* A method's part of the policy (a field of cfi_flow_method). All zero (the
+ * default of a designated initialiser) opts out of every shared check: a
+ * method whose energy is not expected to decrease at every step. */
+typedef struct cfi_step_policy_desc {
+    /* 1: the energy should not rise in a step (a gradient flow): a step
+     * that raises it beyond the tolerance and floor is rejected. */
+    int32_t rise_check;
+    /* 1: the method multiplies its time step by cfi_flow_step_scale(flow),
+     * so a rejected step can be retried with half the step and the step
+     * grown back afterwards. 0 (e.g. explicit flows, whose stability the
+     * user chose with time_step): a rejected step fails. */
+    int32_t backtrack;
+    /* 1: the flow layer decides convergence from the method's parameter
+     * `tolerance` (|E - E_prev| < tolerance E_prev); 0: the method sets
+     * flow->converged itself. */
+    int32_t convergence;
+    cfi_energy_unit unit;
+    /* What the message of a failed rise adds, e.g. "the time step is above
+     * the stability limit; a smaller time_step helps" (NULL: a generic hint). */
+    const char *rise_hint;
+} cfi_step_policy_desc;
+
+/* The policy's state inside a flow (cf_flow.policy). */
+typedef struct cfi_step_policy_state {
+    cf_step_policy opt;     /* copy of the common options */
+    double step_scale;      /* (0, 1]: factor on the method's time step */
+    double unit;            /* value of the floor's unit for this flow (> 0) */
+    double tolerance;       /* convergence tolerance (desc.convergence), 0: never */
+    int32_t halvings;       /* of the last accepted step */
+} cfi_step_policy_state;
+
+/* Upper end of the byte range of cf_flow_options.storage a method's options
+ * may use; the common options follow it. */
+#define CFI_STEP_POLICY_OFFSET (CF_FLOW_OPTIONS_STORAGE - CF_STEP_POLICY_STORAGE)
+
+/* Defaults of the common options. */
+void cfi_step_policy_default(cf_step_policy *policy);
+
+/* The parameter table of the common options (offsets into
+ * cf_flow_options.storage, like a method's table, so that the same set /
+ * format code serves both), and the entry named `name` (NULL if none). */
+const cf_param_desc *cfi_step_policy_params(int32_t *count);
+const cf_param_desc *cfi_step_policy_find_param(const char *name);
+
+/* Checks the common options (ranges are those of the table; also for
+ * fields set directly). CF_OK or CF_ERR_INVALID_ARG with a message naming
+ * the parameter. */
+cf_status cfi_step_policy_validate(cf_context *ctx, const cf_step_policy *policy);
+
+/* 1 when `after` exceeds `before` by more than rel |before| + floor (see
+ * the top of this file); NaN exceeds everything. */
+int cfi_step_policy_exceeds(double after, double before, double rel, double floor);
+
+/* 1 when a step from energy `before` to `after` is a rise the policy
+ * rejects (rise_tolerance, energy_floor in the flow's unit). */
+int cfi_step_policy_rose(const cfi_step_policy_state *p, double before, double after);
+
+/* 1 when `energy` is above factor times the starting energy by more than
+ * divergence_tolerance and the floor: the divergence test of methods that
+ * allow single rising steps (spin-willmore's divergence_factor). factor 0:
+ * never. */
+int cfi_step_policy_diverged(const cfi_step_policy_state *p, double energy, double initial, double factor);
+
+/* 1 when a step from `before` to `after` changed the energy by less than
+ * the tolerance (relative to before > 0): the run has converged. */
+int cfi_step_policy_converged(double before, double after, double tolerance);
+
+#endif /* CF_METHODS_STEP_POLICY_H */

@@ -239,6 +239,27 @@ CF_API cf_status cf_inverse_iteration_step(cf_cholesky *chol, const double *m_di
 /* Rayleigh quotient v^T A v / v^T M v; work: n doubles. */
 CF_API double cf_rayleigh_quotient(const cf_sparse *a, const double *m_diag, const double *v, double *work);
 
+/* Block-aware variants for fields of block_size components per element
+ * with one mass per element (a quaternion field: block_size 4, m_diag the
+ * nv vertex masses, v 4 nv entries stored element by element), so the mass
+ * array need not be repeated per component. |v_i|^2 is the squared norm of
+ * block i, and the M-norm sum_i m_i |v_i|^2.
+ * cf_inverse_iteration_blocks: `iterations` times v <- chol^-1 (M v)
+ * (chol: a factorisation of A + s M the caller keeps), each followed by the
+ * scaling to sum_i m_i |v_i|^2 = norm2 (e.g. the total mass, for mean
+ * |v|^2 = 1); v: n = cf_cholesky_size(chol) entries, in/out (the start on
+ * entry); work: n doubles; no allocation. Statuses: CF_ERR_INVALID_ARG
+ * (NULL array, block_size < 1 or not dividing n, iterations < 0, norm2 not
+ * positive and finite), CF_ERR_NUMERICAL (the iterate's M-norm is zero or
+ * not finite), solve errors.
+ * cf_rayleigh_quotient_blocks: v^T A v / sum_i m_i |v_i|^2 (A square, n a
+ * multiple of block_size); work: n doubles; NaN for bad arguments or a
+ * zero denominator. */
+CF_API cf_status cf_inverse_iteration_blocks(cf_cholesky *chol, const double *m_diag, int32_t block_size,
+                                             int32_t iterations, double norm2, double *v, double *work);
+CF_API double cf_rayleigh_quotient_blocks(const cf_sparse *a, const double *m_diag, int32_t block_size,
+                                          const double *v, double *work);
+
 /* Orthonormalises the k columns of basis (n x k, column-major) in place
  * under <u, v> = sum_i w_i u_i v_i (w NULL: identity), by modified
  * Gram-Schmidt with one reorthogonalisation. Columns whose remaining norm is

@@ -287,11 +287,14 @@ cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, in
                 s->lambda[4 * i + 2] = s->lambda[4 * i + 3] = 0.0;
             }
         }
-        st = cfi_spin_power_iteration(s->chol, s->area, nv, s->opt.power_iterations, s->lambda, s->qwork);
+        double total = 0.0; /* lambda normalised to sum M |lambda|^2 = sum M */
+        for (int32_t i = 0; i < nv; ++i) total += s->area[i];
+        st = cf_inverse_iteration_blocks(s->chol, s->area, 4, s->opt.power_iterations, total, s->lambda, s->qwork);
     }
     t->solve += cfi_now_seconds() - tc;
     if (st != CF_OK) return cfi_error(ctx, st, "spin-willmore: eigenvector solve failed");
-    s->diag.eigenvalue = cfi_spin_rayleigh(s->dirac->x, s->area, nv, s->eps, s->lambda, s->qwork);
+    double quotient = cf_rayleigh_quotient_blocks(s->dirac->x, s->area, 4, s->lambda, s->qwork);
+    s->diag.eigenvalue = isnan(quotient) ? 0.0 : quotient - s->eps;
     if (s->restricted_boundary) {
         /* back to lambda = Q mu on the boundary */
         for (int32_t i = 0; i < nv; ++i) {

@@ -66,14 +66,10 @@ void cfi_spin_transform_edges(const cf_mesh *mesh, const double *positions, cons
 #define CFI_SPIN_MAX_HALVINGS 10
 
 /* Inverse power iteration (Crane 2013, Sec. 6.4.2) on a factorisation of
- * X + eps M: lambda <- (X + eps M)^-1 M lambda, normalised to
- * sum_i M_i |lambda_i|^2 = sum_i M_i. lambda (4 nv) holds the start on entry.
- * work: 4 nv. mass: nv barycentric areas. */
-cf_status cfi_spin_power_iteration(cf_cholesky *chol, const double *mass, int32_t nv, int32_t iterations,
-                                   double *lambda, double *work);
-/* Rayleigh quotient lambda^T X lambda / lambda^T M lambda - eps. work: 4 nv. */
-double cfi_spin_rayleigh(const cf_sparse *x, const double *mass, int32_t nv, double eps, const double *lambda,
-                         double *work);
+ * X + eps M and its Rayleigh quotient: cf_inverse_iteration_blocks /
+ * cf_rayleigh_quotient_blocks (curvflow/linalg.h) with block size 4 and the
+ * vertex areas as masses, lambda normalised to sum_i M_i |lambda_i|^2 =
+ * sum_i M_i; the eigenvalue of X is the quotient minus eps. */
 
 /* Positions from the transformed edges: cf_edge_poisson (curvflow/ops.h);
  * the integrability error: cf_edge_closure_error. */

@@ -14,41 +14,6 @@
 
 #define CFI_PI 3.14159265358979323846
 
-cf_status cfi_spin_power_iteration(cf_cholesky *chol, const double *mass, int32_t nv, int32_t iterations,
-                                   double *lambda, double *work)
-{
-    double total = 0.0;
-    for (int32_t i = 0; i < nv; ++i) total += mass[i];
-    for (int32_t it = 0; it < iterations; ++it) {
-        for (int32_t i = 0; i < nv; ++i)
-            for (int c = 0; c < 4; ++c) work[4 * i + c] = mass[i] * lambda[4 * i + c];
-        cf_status st = cf_cholesky_solve(chol, 1, work, lambda);
-        if (st != CF_OK) return st;
-        double n2 = 0.0;
-        for (int32_t i = 0; i < nv; ++i) {
-            const double *l = lambda + 4 * i;
-            n2 += mass[i] * (l[0] * l[0] + l[1] * l[1] + l[2] * l[2] + l[3] * l[3]);
-        }
-        if (!(n2 > 0.0) || !isfinite(n2)) return CF_ERR_NUMERICAL;
-        double s = sqrt(total / n2);
-        for (int32_t i = 0; i < 4 * nv; ++i) lambda[i] *= s;
-    }
-    return CF_OK;
-}
-
-double cfi_spin_rayleigh(const cf_sparse *x, const double *mass, int32_t nv, double eps, const double *lambda,
-                         double *work)
-{
-    cf_sparse_multiply(x, lambda, work);
-    double num = 0.0, den = 0.0;
-    for (int32_t i = 0; i < nv; ++i)
-        for (int c = 0; c < 4; ++c) {
-            num += lambda[4 * i + c] * work[4 * i + c];
-            den += mass[i] * lambda[4 * i + c] * lambda[4 * i + c];
-        }
-    return den > 0.0 ? num / den - eps : 0.0;
-}
-
 cf_status cf_spin_transform(cf_context *ctx, const cf_mesh *mesh, const double *positions, const double *rho,
                             double *out_positions)
 {
@@ -115,9 +80,11 @@ cf_status cf_spin_transform(cf_context *ctx, const cf_mesh *mesh, const double *
     /* converge the eigenvector (the flow itself takes one iteration per step) */
     double gamma_old = INFINITY;
     for (int it = 0; it < 50; ++it) {
-        st = cfi_spin_power_iteration(chol, mass, nv, 1, lambda, work);
+        /* normalised to sum M |lambda|^2 = area (mean |lambda|^2 = 1) */
+        st = cf_inverse_iteration_blocks(chol, mass, 4, 1, area, lambda, work);
         if (st != CF_OK) goto done;
-        double gamma = cfi_spin_rayleigh(dirac->x, mass, nv, eps, lambda, work);
+        double q = cf_rayleigh_quotient_blocks(dirac->x, mass, 4, lambda, work);
+        double gamma = isnan(q) ? 0.0 : q - eps;
         if (fabs(gamma - gamma_old) <= 1e-12 * (fabs(gamma) + eps)) break;
         gamma_old = gamma;
     }

@@ -10,6 +10,7 @@
 #include "curvflow/ops.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 /* Copy of a with column j scaled by colscale[j]. */
@@ -32,6 +33,42 @@ static cf_status scaled_copy(cf_context *ctx, const cf_sparse *a, const double *
     CFI_FREE(ctx, c, nnz);
     CFI_FREE(ctx, v, nnz);
     return st;
+}
+
+/* F fails to factorise when sigma' (M^-1 L)^k dwarfs M by about the
+ * reciprocal of the rounding unit: its constant mode (L 1 = 0, so F 1 = M 1)
+ * is then lost to rounding, and Cholesky breaks down at the last pivot
+ * (issue 15 E3: spot_3k at sigma 1e12, "not positive definite at column
+ * 190"). The largest sigma that still factorises depends on the mesh
+ * (spot_3k 1e11, a 642-vertex icosphere above 1e12), so it is found by
+ * trying sigma / 10, / 100, ... with the same analysis (failure path only),
+ * and the message names the option, the mesh's sizes and that value; the
+ * user's sigma is not changed behind their back. stiff is L (k = 1) or
+ * L (M^-1 L)^(k-1), radius_k R^2k. */
+static cf_status explain_filter_failure(cf_flow *flow, cfi_spin_state *s, const cf_sparse *m, const cf_sparse *stiff,
+                                        double radius_k)
+{
+    cf_context *ctx = flow->ctx;
+    double works = 0.0;
+    for (double trial = s->opt.sigma / 10.0; s->filter_chol && trial >= 1e-6 && works == 0.0; trial /= 10.0) {
+        cf_sparse *f = NULL;
+        if (cf_sparse_add(ctx, 1.0, m, trial * radius_k, stiff, &f) != CF_OK) break;
+        f->symmetric = 1;
+        if (cf_cholesky_factorize(s->filter_chol, f) == CF_OK) works = trial;
+        cf_sparse_destroy(&f);
+    }
+    char hint[96];
+    if (works > 0.0)
+        snprintf(hint, sizeof hint, "sigma = %g factorises on this mesh", works);
+    else
+        snprintf(hint, sizeof hint, "no sigma down to 1e-6 factorises either");
+    return cfi_error(ctx, CF_ERR_NUMERICAL,
+                     "spin-willmore: parameter 'sigma': the spectral filter M + sigma R^%d L (M^-1 L)^%d cannot be "
+                     "factorised in double precision with sigma = %g on this mesh (%d vertices, %d faces, R = "
+                     "sqrt(area / 4pi) = %.4g): its constant mode is lost to rounding; use a smaller sigma (%s; the "
+                     "filter's effect saturates long before) or a smaller filter_k",
+                     2 * s->opt.filter_k, s->opt.filter_k - 1, s->opt.sigma, s->nv, flow->mesh->nf,
+                     sqrt(flow->initial_area / (4.0 * CFI_PI)), hint);
 }
 
 /* Filter matrix F = M + sigma' L (M^-1 L)^(k-1) of the input surface. The
@@ -77,6 +114,7 @@ cf_status cfi_spin_filter_build(cf_flow *flow, cfi_spin_state *s)
     co.block_size = 1;
     st = cf_cholesky_create(ctx, s->filter, &co, &s->filter_chol);
     if (st == CF_OK) st = cf_cholesky_factorize(s->filter_chol, s->filter);
+    if (st == CF_ERR_NOT_POSDEF) st = explain_filter_failure(flow, s, m, k == 1 ? l : p, pow(radius2, (double)k));
 done:
     cf_sparse_destroy(&l);
     cf_sparse_destroy(&m);

@@ -91,10 +91,15 @@ cf_status cfi_spin_check_energy(cf_flow *flow, const cfi_spin_state *s, double e
     /* A Willmore descent that ends above its start has diverged, even when
      * it creeps up by less than blowup_factor per step (elephant_g3_3k at
      * the default tau: 24.99 -> 12.46 -> 26.9 -> 102 -> ...). Prescribed and
-     * cmc boundaries may raise W by design. The slack absorbs rounding at an
-     * equilibrium start (a round sphere). */
+     * cmc boundaries may raise W by design. The test is the shared step
+     * policy's (methods/step_policy.h), with its relative tolerance
+     * (divergence_tolerance) and floor (energy_floor, in units of 4pi): W
+     * creeping up by 7e-8 of itself per step at tau 1e-9 on spot_3k, or a
+     * flat sheet's W going from 0 to 6.7e-29, is no divergence (issue 15
+     * M1; the former slack 1e-9 called both one). */
     if (s->opt.divergence_factor > 0.0 && !s->restricted_boundary &&
-        s->energy > s->opt.divergence_factor * s->initial_energy * (1.0 + 1e-9))
+        cfi_step_policy_exceeds(s->energy, s->opt.divergence_factor * s->initial_energy,
+                                flow->policy.opt.divergence_tolerance, flow->policy.opt.energy_floor * 4.0 * CFI_PI))
         return cfi_error(ctx, CF_ERR_NUMERICAL,
                          "spin-willmore: W/4pi rose to %.6g, above %g times its starting value %.6g: the flow "
                          "diverges (time_step %g is above this mesh's stability limit); try a smaller time_step, "

@@ -2,13 +2,15 @@
  * curvflow edit IN --handles H.json -o OUT [--energy hybrid|stretch|bend|arap|arap-rims]
  * [--lambda L] [--iterations N] [--tol T] [--start S] ...: interactive-style
  * mesh editing with the stretching + bending energy of Zhao & Gortler (and
- * the ARAP energies), by local/global iteration from the public API
- * (include/curvflow/stretch_bend_edit.h).
+ * the ARAP energies), by local/global iteration (include/curvflow/
+ * stretch_bend_edit.h). A front end on `curvflow flow --method
+ * stretch-bend-edit`: each option is a spelling of a parameter of the
+ * method's table (ranges and messages from the table) and the run goes
+ * through cli_flow_execute, the flow command's one run-and-write path.
  */
 #define _GNU_SOURCE
 #include "common.h"
 #include "report.h"
-#include "curvflow/io.h"
 #include "curvflow/stretch_bend_edit.h"
 
 #include <getopt.h>
@@ -21,7 +23,9 @@ static void usage(FILE *out)
             "Usage: curvflow edit IN --handles H.json -o OUT [OPTIONS]\n"
             "Deforms the mesh IN (the rest pose) so that the handle vertices of H.json reach their\n"
             "targets, minimising a stretching + bending energy (Zhao & Gortler) or ARAP by local/global\n"
-            "iteration. One status line per iteration goes to stderr.\n\n"
+            "iteration. One status line per iteration goes to stderr. The same as\n"
+            "`curvflow flow IN -o OUT --method stretch-bend-edit -p handles=H.json ...` with the\n"
+            "options below spelling its parameters (see --list-params there).\n\n"
             "  -H, --handles FILE    JSON handle file (format in docs/edit.md; required)\n"
             "  -e, --energy NAME     hybrid (default), stretch, bend, arap, arap-rims\n"
             "  -L, --lambda L        hybrid weight lambda E_s + (1 - lambda) E_db [0.5]\n"
@@ -50,10 +54,35 @@ static void usage(FILE *out)
             "is still written).\n");
 }
 
+/* --lambda weighs the hybrid energy only: stretch and bend are lambda = 1
+ * and 0, the ARAP energies have none. */
+static int check_lambda(const cli_flow_job *job, const cf_flow_options *options)
+{
+    const cf_stretch_bend_options *o = cf_flow_options_method_as_const(options, CF_FLOW_STRETCH_BEND_EDIT);
+    for (int i = 0; o && i < job->param_count; ++i)
+        if (strcmp(job->params[i].name, "lambda") == 0 && o->energy != CF_STRETCH_BEND_HYBRID)
+            return cli_usage_error(job->command, "--lambda weighs --energy hybrid; it has no effect with --energy %s",
+                                   cf_stretch_bend_energy_name((cf_stretch_bend_energy_kind)o->energy));
+    return CLI_EXIT_OK;
+}
+
+static void edit_summary(const cli_flow_job *job, const cf_flow *flow)
+{
+    const cf_flow_info *last = cf_flow_last_info(flow);
+    const char *conv = cf_flow_converged(flow) ? " (converged)" : "";
+    const char *energy = job->label;
+    if (strcmp(energy, "arap") == 0 || strcmp(energy, "arap-rims") == 0)
+        fprintf(stderr, "curvflow: edit %s: %lld iterations%s, energy %.9g; wrote %s\n", energy,
+                (long long)last->iteration, conv, last->energy, job->output);
+    else
+        fprintf(stderr, "curvflow: edit %s: %lld iterations%s, energy %.9g (stretch %.6g, bend %.6g); wrote %s\n",
+                energy, (long long)last->iteration, conv, last->energy, last->energy_terms[0], last->energy_terms[1],
+                job->output);
+}
+
 int cli_edit(int argc, char **argv)
 {
     enum { OPT_MASS = 256, OPT_NO_SCALE_FREE, OPT_REPORT };
-    long long anderson = -1;
     static const struct option longopts[] = {
         {"handles", required_argument, NULL, 'H'},    {"energy", required_argument, NULL, 'e'},
         {"lambda", required_argument, NULL, 'L'},     {"iterations", required_argument, NULL, 'n'},
@@ -64,161 +93,54 @@ int cli_edit(int argc, char **argv)
         {"anderson", required_argument, NULL, 'a'},   {"force", no_argument, NULL, 'f'},
         {"report", required_argument, NULL, OPT_REPORT},
         {NULL, 0, NULL, 0}};
-    const char *cmd = "edit";
-    const char *handles_path = NULL, *energy = "hybrid", *output = NULL, *log_path = NULL, *start_path = NULL;
-    const char *mass = "voronoi", *report_path = NULL;
-    double lambda = 0.5, tol = 1e-6;
-    long long iterations = 100;
-    bool quiet = false, scale_free = true, force = false, lambda_given = false;
+    static cli_flow_job job; /* large: not on the stack */
+    memset(&job, 0, sizeof job);
+    job.command = "edit";
+    job.kind = CF_FLOW_STRETCH_BEND_EDIT;
+    job.label = "hybrid";
+    job.steps = 100;
+    job.invalid_options_exit = CLI_EXIT_INPUT; /* the handles do not fit the mesh */
+    job.announce_point_sets = true;
+    job.check = check_lambda;
+    job.summary = edit_summary;
+    const char *handles_path = NULL;
     int c;
     optind = 1;
     opterr = 0;
+    /* each option is a table parameter; its text is checked by the table */
     while ((c = getopt_long(argc, argv, ":H:e:L:n:t:s:o:l:a:qfh", longopts, NULL)) != -1) {
+        bool ok = true;
         switch (c) {
         case 'H': handles_path = optarg; break;
-        case 'e': energy = optarg; break;
-        case 'L':
-            if (!cli_parse_double_in(cmd, "--lambda", optarg, 0.0, 1.0, &lambda)) return CLI_EXIT_USAGE;
-            lambda_given = true;
+        case 'e':
+            job.label = optarg;
+            ok = cli_flow_job_param(&job, "--energy", "energy", optarg, true);
             break;
+        case 'L': ok = cli_flow_job_param(&job, "--lambda", "lambda", optarg, true); break;
         case 'n':
-            if (!cli_parse_int(cmd, "--iterations", optarg, 0, 10000000LL, &iterations)) return CLI_EXIT_USAGE;
+            if (!cli_parse_int(job.command, "--iterations", optarg, 0, 10000000LL, &job.steps)) return CLI_EXIT_USAGE;
             break;
-        case 't':
-            if (!cli_parse_double(cmd, "--tol", optarg, &tol)) return CLI_EXIT_USAGE;
-            if (tol < 0.0) return cli_usage_error(cmd, "--tol must be >= 0, got '%s'", optarg);
-            break;
-        case 's': start_path = optarg; break;
-        case 'a':
-            if (!cli_parse_int(cmd, "--anderson", optarg, -1, 10, &anderson)) return CLI_EXIT_USAGE;
-            break;
-        case OPT_MASS: mass = optarg; break;
-        case OPT_NO_SCALE_FREE: scale_free = false; break;
-        case 'o': output = optarg; break;
-        case 'l': log_path = optarg; break;
-        case OPT_REPORT: report_path = optarg; break;
-        case 'q': quiet = true; break;
-        case 'f': force = true; break;
+        case 't': ok = cli_flow_job_param(&job, "--tol", "relative_tolerance", optarg, true); break;
+        case 's': job.start_path = optarg; break;
+        case 'a': ok = cli_flow_job_param(&job, "--anderson", "anderson", optarg, true); break;
+        case OPT_MASS: ok = cli_flow_job_param(&job, "--mass", "mass", optarg, true); break;
+        case OPT_NO_SCALE_FREE: ok = cli_flow_job_param(&job, "--no-scale-free", "scale_free", "false", true); break;
+        case 'o': job.output = optarg; break;
+        case 'l': job.log_path = optarg; break;
+        case OPT_REPORT: job.report_path = optarg; break;
+        case 'q': job.quiet = true; break;
+        case 'f': job.force = true; break;
         case 'h': usage(stdout); return CLI_EXIT_OK;
-        default: return cli_option_error(cmd, c, argv);
+        default: return cli_option_error(job.command, c, argv);
         }
+        if (!ok) return CLI_EXIT_USAGE;
     }
-    if (optind + 1 != argc) return cli_usage_error(cmd, "expected one input mesh");
-    if (!handles_path) return cli_usage_error(cmd, "missing --handles H.json");
-    if (!output) return cli_usage_error(cmd, "missing -o OUT");
-    if (strcmp(mass, "voronoi") != 0 && strcmp(mass, "barycentric") != 0)
-        return cli_usage_error(cmd, "--mass must be voronoi or barycentric, got '%s'", mass);
-    const char *input = argv[optind];
-    cli_files files = {.force = force};
-    cli_files_input(&files, "IN", input);
-    cli_files_input(&files, "--handles", handles_path);
-    cli_files_input(&files, "--start", start_path);
-    cli_files_output(&files, "-o", output, CLI_FILE_MESH);
-    if (log_path) cli_files_output(&files, "--log", log_path, CLI_FILE_LOG);
-    if (report_path) cli_files_output(&files, "--report", report_path, CLI_FILE_HTML);
-    if (report_path && !cli_report_available()) return CLI_EXIT_INPUT;
-
-    cf_context *ctx = cli_context(false);
-    if (!ctx) return CLI_EXIT_NUMERICAL;
-    int out_code = cli_files_check(ctx, &files);
-    if (out_code != CLI_EXIT_OK) {
-        cf_context_destroy(&ctx);
-        return out_code;
-    }
-    cf_flow_options options;
-    cf_flow_options_default(CF_FLOW_STRETCH_BEND_EDIT, &options);
-    cf_stretch_bend_options *o = cf_flow_options_method(&options);
-    cf_stretch_bend_energy_kind kind;
-    cf_status st = cf_stretch_bend_energy_from_name(ctx, energy, &kind);
-    if (st != CF_OK) {
-        int code = cli_usage_error(cmd, "%s", cf_context_message(ctx));
-        cf_context_destroy(&ctx);
-        return code;
-    }
-    if (lambda_given && kind != CF_STRETCH_BEND_HYBRID) {
-        cf_context_destroy(&ctx);
-        /* stretch and bend are lambda = 1 and 0; the ARAP energies have none */
-        return cli_usage_error(cmd, "--lambda weighs --energy hybrid; it has no effect with --energy %s", energy);
-    }
-    o->energy = kind;
-    o->lambda = lambda;
-    o->max_iterations = (int32_t)iterations;
-    o->relative_tolerance = tol;
-    o->mass = strcmp(mass, "barycentric") == 0 ? CF_STRETCH_BEND_MASS_BARYCENTRIC : CF_STRETCH_BEND_MASS_VORONOI;
-    o->scale_free = scale_free;
-    o->anderson = (int32_t)anderson;
-
-    int code = CLI_EXIT_OK;
-    cf_mesh *mesh = NULL, *start_mesh = NULL;
-    cf_handle_set *handles = NULL;
-    cf_flow *flow = NULL;
-    const double *start = NULL;
-    cli_progress progress;
-    cli_progress_init(&progress, energy, iterations, quiet);
-    cli_report_log report_log = {0};
-    code = cli_load_mesh(ctx, input, &mesh);
-    if (code != CLI_EXIT_OK) goto done;
-    if (start_path) {
-        code = cli_load_mesh(ctx, start_path, &start_mesh);
-        if (code != CLI_EXIT_OK) goto done;
-        if (cf_mesh_vertex_count(start_mesh) != cf_mesh_vertex_count(mesh) ||
-            cf_mesh_face_count(start_mesh) != cf_mesh_face_count(mesh) ||
-            memcmp(cf_mesh_triangles(start_mesh), cf_mesh_triangles(mesh),
-                   3 * (size_t)cf_mesh_face_count(mesh) * sizeof(int32_t)) != 0) {
-            fprintf(stderr, "curvflow: %s: connectivity differs from %s (%d vertices, %d faces vs %d, %d)\n",
-                    start_path, input, cf_mesh_vertex_count(start_mesh), cf_mesh_face_count(start_mesh),
-                    cf_mesh_vertex_count(mesh), cf_mesh_face_count(mesh));
-            code = CLI_EXIT_INPUT;
-            goto done;
-        }
-        start = cf_mesh_positions(start_mesh);
-    }
-    st = cf_handle_set_read_json(ctx, mesh, start, handles_path, &handles);
-    if (st != CF_OK) {
-        code = cli_fail(ctx, handles_path, st);
-        if (code == CLI_EXIT_USAGE) code = CLI_EXIT_INPUT;
-        goto done;
-    }
-    o->handles = handles;
-    if (!quiet)
-        fprintf(stderr, "curvflow: %s: %d handle vertices (%d moved), %d free\n", handles_path, handles->count,
-                handles->moved_count, cf_mesh_vertex_count(mesh) - handles->count);
-    st = cf_flow_create(ctx, mesh, start, &options, &flow);
-    if (st != CF_OK) {
-        code = cli_fail(ctx, input, st);
-        if (st == CF_ERR_INVALID_ARG) code = CLI_EXIT_INPUT;
-        goto done;
-    }
-    bool completed = false;
-    double started = cli_now();
-    if (report_path && (code = cli_report_log_capture(&report_log, &progress, log_path)) != CLI_EXIT_OK) goto done;
-    code = cli_run_flow_and_write(ctx, flow, &progress, log_path, iterations, input, mesh, output, &completed);
-    if (report_path) {
-        const char *extra[] = {"handles", handles_path, start_path ? "start" : NULL, start_path, NULL};
-        cli_report_run run;
-        cli_report_run_init(&run);
-        run.command = "edit", run.method = energy, run.input_path = input, run.output_path = output;
-        run.log_path = log_path, run.options = &options, run.extra = extra, run.steps_requested = iterations;
-        run.quiet = quiet, run.seconds_run = cli_now() - started;
-        code = cli_report_after_run(ctx, report_path, &run, mesh, flow, &report_log, code);
-    }
-    if (completed && !quiet) {
-        const cf_flow_info *last = cf_flow_last_info(flow);
-        if (kind == CF_STRETCH_BEND_ARAP || kind == CF_STRETCH_BEND_ARAP_RIMS)
-            fprintf(stderr, "curvflow: edit %s: %lld iterations%s, energy %.9g; wrote %s\n", energy,
-                    (long long)last->iteration, cf_flow_converged(flow) ? " (converged)" : "", last->energy, output);
-        else
-            fprintf(stderr, "curvflow: edit %s: %lld iterations%s, energy %.9g (stretch %.6g, bend %.6g); wrote %s\n",
-                    energy, (long long)last->iteration, cf_flow_converged(flow) ? " (converged)" : "", last->energy,
-                    last->energy_terms[0], last->energy_terms[1], output);
-    }
-done:
-    cli_progress_finish(&progress);
-    cli_report_log_free(&report_log);
-    cf_flow_destroy(&flow);
-    cf_handle_set_destroy(&handles);
-    cf_mesh_destroy(&start_mesh);
-    cf_mesh_destroy(&mesh);
-    cf_context_destroy(&ctx);
-    return code;
+    if (optind + 1 != argc) return cli_usage_error(job.command, "expected one input mesh");
+    if (!handles_path) return cli_usage_error(job.command, "missing --handles H.json");
+    if (!job.output) return cli_usage_error(job.command, "missing -o OUT");
+    job.input = argv[optind];
+    if (!cli_flow_job_param(&job, "--handles", "handles", handles_path, false)) return CLI_EXIT_USAGE;
+    const char *extra[] = {"handles", handles_path, job.start_path ? "start" : NULL, job.start_path, NULL};
+    job.report_extra = extra;
+    return cli_flow_execute(&job);
 }

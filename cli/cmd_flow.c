@@ -2,15 +2,16 @@
  * curvflow flow IN -o OUT --method NAME [--steps N] [--time-step T]
  * [--param k=v]... [--log FILE.jsonl]: runs any method of the flow
  * interface (include/curvflow/flow.h) with a status line per step and an
- * optional JSONL log. --boundary-targets FILE gives spin-willmore's
- * per-vertex boundary directions (boundary=prescribed).
+ * optional JSONL log. Every method parameter goes through the method's
+ * table (-p NAME=VALUE; array parameters NAME=FILE or NAME=@PROPERTY, see
+ * cli/common.h); --handles and --boundary-targets are spellings of
+ * -p handles=FILE and -p boundary_targets=FILE. cli_flow_execute is the one
+ * run-and-write path, also of `curvflow edit` (cli/cmd_edit.c).
  */
 #define _GNU_SOURCE
 #include "common.h"
 #include "report.h"
 #include "curvflow/io.h"
-#include "curvflow/spin_willmore.h"
-#include "curvflow/stretch_bend_edit.h"
 
 #include <errno.h>
 #include <getopt.h>
@@ -38,13 +39,18 @@ static void usage(FILE *out)
             "  -f, --force           replace read-only output files\n"
             "      --report FILE.html  also write the one-file HTML report of the run (docs/report.md):\n"
             "                        3D view of IN and OUT with per-face Q, energy and residual curves\n"
-            "      --handles FILE    handle file of --method stretch-bend-edit (format in docs/edit.md;\n"
-            "                        `curvflow edit` has the editing options)\n"
+            "  -p NAME=FILE, -p NAME=@PROP\n"
+            "                        an array parameter (type vertex-scalars, vertex-vectors, face-scalars or\n"
+            "                        point-set in --list-params): a file (numbers in vertex/face order; lines\n"
+            "                        'VERTEX X Y Z'; a JSON constraint file for point sets, docs/edit.md) or a\n"
+            "                        property of IN (PLY; @X,Y,Z for vectors)\n"
+            "      --handles FILE    -p handles=FILE: handle file of --method stretch-bend-edit (format in\n"
+            "                        docs/edit.md; `curvflow edit` is the editing front end)\n"
             "      --boundary-targets FILE\n"
-            "                        spin-willmore with boundary=prescribed (Sec. 6.3.1): target direction of\n"
-            "                        the boundary vector V at each boundary vertex, one line 'VERTEX X Y Z'\n"
-            "                        per boundary vertex (0-based index, every boundary vertex once; '#'\n"
-            "                        starts a comment). Implies --param boundary=prescribed\n"
+            "                        -p boundary=prescribed -p boundary_targets=FILE of spin-willmore\n"
+            "                        (Sec. 6.3.1): target direction of the boundary vector V at each boundary\n"
+            "                        vertex, one line 'VERTEX X Y Z' per boundary vertex (0-based index, every\n"
+            "                        boundary vertex once; '#' starts a comment)\n"
             "      --list-methods    list the methods and exit\n"
             "      --list-params     list the parameters of --method with their defaults and exit\n"
             "  -h, --help            show this help\n\n"
@@ -77,21 +83,222 @@ static int list_params(cf_flow_kind kind)
         char range[256];
         if (cf_flow_param_range_format(&params[i], range, sizeof range) != CF_OK) strcpy(range, "?");
         bool numeric = params[i].type == CF_PARAM_DOUBLE || params[i].type == CF_PARAM_INT;
-        printf("  %-20s [%s] %s%s\n      %s\n", params[i].name, def, numeric ? "in " : "", range,
-               params[i].help ? params[i].help : "");
+        if (cf_param_type_is_array(params[i].type))
+            printf("  %-20s [%s] %s, %s (NAME=FILE or NAME=@PROPERTY)\n      %s\n", params[i].name, def,
+                   cf_param_type_name(params[i].type), range, params[i].help ? params[i].help : "");
+        else
+            printf("  %-20s [%s] %s%s\n      %s\n", params[i].name, def, numeric ? "in " : "", range,
+                   params[i].help ? params[i].help : "");
     }
     return CLI_EXIT_OK;
 }
 
-/* Reads --boundary-targets: lines "VERTEX X Y Z", each boundary vertex of
- * mesh exactly once, a nonzero finite direction; fills targets (3 nv, zero
- * elsewhere). The library's reader (any line length, '#' comments, BOM)
- * names the file and line; every bad file is an input error (2). */
-static int read_boundary_targets(cf_context *ctx, const char *path, const cf_mesh *mesh, double *targets)
+/* Options that spell an array parameter of one method. */
+static const struct {
+    const char *option, *param, *also, *implies_name, *implies_value;
+} flow_aliases[] = {
+    {"--handles", "handles", "`curvflow edit`", NULL, NULL},
+    {"--boundary-targets", "boundary_targets", NULL, "boundary", "prescribed"},
+};
+enum { FLOW_ALIAS_COUNT = (int)(sizeof flow_aliases / sizeof flow_aliases[0]) };
+
+/* The kind whose table has parameter `name`, or CF_FLOW_KIND_COUNT. */
+static cf_flow_kind kind_with_param(const char *name)
 {
-    cf_status st = cf_read_vertex_directions_file(ctx, path, cf_mesh_vertex_count(mesh),
-                                                  cf_mesh_vertex_on_boundary(mesh), "boundary vertex", targets);
-    return st == CF_OK ? CLI_EXIT_OK : cli_fail(ctx, path, st);
+    for (int k = 0; k < CF_FLOW_KIND_COUNT; ++k) {
+        const cf_param_desc *params = NULL;
+        int32_t count = 0;
+        if (cf_flow_params((cf_flow_kind)k, &params, &count) != CF_OK) continue;
+        for (int32_t i = 0; i < count; ++i)
+            if (strcmp(params[i].name, name) == 0) return (cf_flow_kind)k;
+    }
+    return CF_FLOW_KIND_COUNT;
+}
+
+bool cli_flow_job_param(cli_flow_job *job, const char *option, const char *name, const char *value,
+                        bool alias_message)
+{
+    if (job->param_count == CLI_MAX_PARAM_ARGS) {
+        cli_usage_error(job->command, "too many parameters (at most %d)", CLI_MAX_PARAM_ARGS);
+        return false;
+    }
+    job->params[job->param_count].option = option;
+    job->params[job->param_count].name = name;
+    job->params[job->param_count].value = value;
+    job->params[job->param_count].alias_message = alias_message;
+    ++job->param_count;
+    return true;
+}
+
+/* A required array parameter that was not given: a usage error naming the
+ * ways to give it (M2 of issue 15: never an internal field). */
+static int check_required(const cli_flow_job *job)
+{
+    const cf_param_desc *params = NULL;
+    int32_t count = 0;
+    if (cf_flow_params(job->kind, &params, &count) != CF_OK) return CLI_EXIT_USAGE;
+    for (int32_t i = 0; i < count; ++i) {
+        const cf_param_desc *p = &params[i];
+        if (!cf_param_type_is_array(p->type) || p->min_value < 1.0) continue;
+        bool given = false;
+        for (int j = 0; j < job->param_count; ++j) given = given || strcmp(job->params[j].name, p->name) == 0;
+        if (given) continue;
+        const char *kind_name = cf_flow_kind_name(job->kind);
+        for (int a = 0; a < FLOW_ALIAS_COUNT; ++a)
+            if (strcmp(flow_aliases[a].param, p->name) == 0)
+                return cli_usage_error(job->command, "--method %s needs %s: use %s FILE%s%s (or -p %s=FILE)", kind_name,
+                                       p->name, flow_aliases[a].option, flow_aliases[a].also ? " or " : "",
+                                       flow_aliases[a].also ? flow_aliases[a].also : "", p->name);
+        return cli_usage_error(job->command, "--method %s needs %s: use -p %s=FILE", kind_name, p->name, p->name);
+    }
+    return CLI_EXIT_OK;
+}
+
+/* An alias's implied value overridden by a later -p (--boundary-targets
+ * with -p boundary=fixed) is a usage error, found before any file is read. */
+static int check_implied(const cli_flow_job *job, const cf_flow_options *options)
+{
+    for (int a = 0; a < FLOW_ALIAS_COUNT; ++a) {
+        if (!flow_aliases[a].implies_name) continue;
+        bool given = false;
+        for (int j = 0; j < job->param_count; ++j) given = given || strcmp(job->params[j].option, flow_aliases[a].option) == 0;
+        const cf_param_desc *params = NULL;
+        int32_t count = 0;
+        if (!given || cf_flow_params(job->kind, &params, &count) != CF_OK) continue;
+        for (int32_t i = 0; i < count; ++i) {
+            char value[128];
+            if (strcmp(params[i].name, flow_aliases[a].implies_name) != 0 ||
+                cf_flow_options_format(options, &params[i], value, sizeof value) != CF_OK)
+                continue;
+            if (strcmp(value, flow_aliases[a].implies_value) != 0)
+                return cli_usage_error(job->command, "%s needs %s=%s", flow_aliases[a].option,
+                                       flow_aliases[a].implies_name, flow_aliases[a].implies_value);
+        }
+    }
+    return CLI_EXIT_OK;
+}
+
+/* Loads the start state (same connectivity as the input). */
+static int load_start(cf_context *ctx, const cli_flow_job *job, const cf_mesh *mesh, cf_mesh **start_mesh)
+{
+    int code = cli_load_mesh(ctx, job->start_path, start_mesh);
+    if (code != CLI_EXIT_OK) return code;
+    const cf_mesh *s = *start_mesh;
+    if (cf_mesh_vertex_count(s) != cf_mesh_vertex_count(mesh) || cf_mesh_face_count(s) != cf_mesh_face_count(mesh) ||
+        memcmp(cf_mesh_triangles(s), cf_mesh_triangles(mesh), 3 * (size_t)cf_mesh_face_count(mesh) * sizeof(int32_t)) !=
+            0) {
+        fprintf(stderr, "curvflow: %s: connectivity differs from %s (%d vertices, %d faces vs %d, %d)\n",
+                job->start_path, job->input, cf_mesh_vertex_count(s), cf_mesh_face_count(s), cf_mesh_vertex_count(mesh),
+                cf_mesh_face_count(mesh));
+        return CLI_EXIT_INPUT;
+    }
+    return CLI_EXIT_OK;
+}
+
+static void announce_point_sets(const cli_flow_job *job, const cli_flow_arrays *arrays, const cf_mesh *mesh)
+{
+    for (int i = 0; i < arrays->count; ++i) {
+        const cf_handle_set *h = arrays->items[i].set;
+        if (h)
+            fprintf(stderr, "curvflow: %s: %d handle vertices (%d moved), %d free\n", arrays->items[i].value, h->count,
+                    h->moved_count, cf_mesh_vertex_count(mesh) - h->count);
+    }
+    (void)job;
+}
+
+/* Sets every parameter of the job in order; exit code. */
+static int apply_params(cf_context *ctx, const cli_flow_job *job, cf_flow_options *options, cli_flow_arrays *arrays,
+                        cli_files *files)
+{
+    for (int i = 0; i < job->param_count; ++i) {
+        int code = cli_flow_param_apply(ctx, options, arrays, files, job->params[i].option, job->params[i].name,
+                                        job->params[i].value, job->params[i].alias_message);
+        if (code != CLI_EXIT_OK) return code;
+    }
+    return CLI_EXIT_OK;
+}
+
+static int run_loaded(cf_context *ctx, const cli_flow_job *job, cf_flow_options *options, cli_flow_arrays *arrays)
+{
+    cf_mesh *mesh = NULL, *start_mesh = NULL;
+    cf_flow *flow = NULL;
+    cli_progress progress;
+    cli_progress_init(&progress, job->label, job->steps, job->quiet);
+    cli_report_log report_log = {0};
+    const double *start = NULL;
+    int code = cli_load_mesh(ctx, job->input, &mesh);
+    if (code == CLI_EXIT_OK && job->start_path && (code = load_start(ctx, job, mesh, &start_mesh)) == CLI_EXIT_OK)
+        start = cf_mesh_positions(start_mesh);
+    if (code == CLI_EXIT_OK) code = cli_flow_arrays_load(ctx, arrays, options, job->input, mesh, start);
+    if (code != CLI_EXIT_OK) goto done;
+    if (job->announce_point_sets && !job->quiet) announce_point_sets(job, arrays, mesh);
+    cf_status st = cf_flow_create(ctx, mesh, start, options, &flow);
+    if (st != CF_OK) {
+        code = cli_fail(ctx, job->input, st);
+        if (st == CF_ERR_INVALID_ARG) code = job->invalid_options_exit;
+        goto done;
+    }
+    bool completed = false;
+    double started = cli_now();
+    if (job->report_path && (code = cli_report_log_capture(&report_log, &progress, job->log_path)) != CLI_EXIT_OK)
+        goto done;
+    code = cli_run_flow_and_write(ctx, flow, &progress, job->log_path, job->steps, job->input, mesh, job->output,
+                                  &completed);
+    if (job->report_path) {
+        cli_report_run run;
+        cli_report_run_init(&run);
+        run.command = job->command, run.method = job->label, run.input_path = job->input;
+        run.output_path = job->output, run.log_path = job->log_path, run.options = options;
+        run.extra = job->report_extra, run.steps_requested = job->steps, run.quiet = job->quiet;
+        run.seconds_run = cli_now() - started;
+        code = cli_report_after_run(ctx, job->report_path, &run, mesh, flow, &report_log, code);
+    }
+    if (completed && !job->quiet) {
+        if (job->summary) {
+            job->summary(job, flow);
+        } else {
+            const cf_flow_info *last = cf_flow_last_info(flow);
+            fprintf(stderr, "curvflow: %s: %lld steps, energy %.9g, area drift %+.3e, volume drift %+.3e; wrote %s\n",
+                    job->label, (long long)last->iteration, last->energy, last->area_drift, last->volume_drift,
+                    job->output);
+        }
+    }
+done:
+    cli_progress_finish(&progress);
+    cli_report_log_free(&report_log);
+    cf_flow_destroy(&flow);
+    cf_mesh_destroy(&start_mesh);
+    cf_mesh_destroy(&mesh);
+    return code;
+}
+
+int cli_flow_execute(const cli_flow_job *job)
+{
+    if (!job->output) return cli_usage_error(job->command, "missing -o OUT");
+    int code = check_required(job);
+    if (code != CLI_EXIT_OK) return code;
+    cli_files files = {.force = job->force};
+    cli_files_input(&files, "IN", job->input);
+    cli_files_input(&files, "--start", job->start_path);
+    cf_context *ctx = cli_context(false);
+    if (!ctx) return CLI_EXIT_NUMERICAL;
+    cf_flow_options options;
+    cf_flow_options_default(job->kind, &options);
+    cli_flow_arrays arrays = {0};
+    /* parameters first: their files join the inputs the outputs are checked against */
+    code = apply_params(ctx, job, &options, &arrays, &files);
+    if (code == CLI_EXIT_OK && job->check) code = job->check(job, &options);
+    if (code == CLI_EXIT_OK) {
+        cli_files_output(&files, "-o", job->output, CLI_FILE_MESH);
+        if (job->log_path) cli_files_output(&files, "--log", job->log_path, CLI_FILE_LOG);
+        if (job->report_path) cli_files_output(&files, "--report", job->report_path, CLI_FILE_HTML);
+        if (job->report_path && !cli_report_available()) code = CLI_EXIT_INPUT;
+    }
+    if (code == CLI_EXIT_OK) code = cli_files_check(ctx, &files);
+    if (code == CLI_EXIT_OK) code = run_loaded(ctx, job, &options, &arrays);
+    cli_flow_arrays_free(&arrays);
+    cf_context_destroy(&ctx);
+    return code;
 }
 
 int cli_flow(int argc, char **argv)
@@ -107,173 +314,80 @@ int cli_flow(int argc, char **argv)
         {"handles", required_argument, NULL, OPT_HANDLES}, {"force", no_argument, NULL, 'f'},
         {"report", required_argument, NULL, OPT_REPORT},
         {NULL, 0, NULL, 0}};
-    const char *cmd = "flow";
-    const char *method = NULL, *output = NULL, *log_path = NULL, *time_step = NULL, *targets_path = NULL;
-    const char *handles_path = NULL, *report_path = NULL;
-    long long steps = 10;
-    bool quiet = false, want_methods = false, want_params = false, force = false;
-    /* --param values are applied after the method is known */
-    char **param_args = calloc((size_t)argc + 1, sizeof *param_args);
+    static cli_flow_job job; /* large: not on the stack */
+    memset(&job, 0, sizeof job);
+    job.command = "flow";
+    job.steps = 10;
+    job.invalid_options_exit = CLI_EXIT_USAGE;
+    const char *method = NULL, *time_step = NULL, *alias_value[FLOW_ALIAS_COUNT] = {NULL};
+    const char *param_args[CLI_MAX_PARAM_ARGS];
     int param_count = 0;
-    if (!param_args) return CLI_EXIT_NUMERICAL;
+    bool want_methods = false, want_params = false;
     int c;
     opterr = 0;
     while ((c = getopt_long(argc, argv, ":m:n:t:p:o:l:qfh", longopts, NULL)) != -1) {
         switch (c) {
         case 'm': method = optarg; break;
         case 'n':
-            if (!cli_parse_int(cmd, "--steps", optarg, 0, 1000000000LL, &steps)) { free(param_args); return CLI_EXIT_USAGE; }
+            if (!cli_parse_int(job.command, "--steps", optarg, 0, 1000000000LL, &job.steps)) return CLI_EXIT_USAGE;
             break;
         case 't': time_step = optarg; break;
-        case 'p': param_args[param_count++] = optarg; break;
-        case 'o': output = optarg; break;
-        case 'l': log_path = optarg; break;
-        case 'q': quiet = true; break;
+        case 'p':
+            if (param_count == CLI_MAX_PARAM_ARGS)
+                return cli_usage_error(job.command, "too many --param (at most %d)", CLI_MAX_PARAM_ARGS);
+            param_args[param_count++] = optarg;
+            break;
+        case 'o': job.output = optarg; break;
+        case 'l': job.log_path = optarg; break;
+        case 'q': job.quiet = true; break;
         case OPT_LIST_METHODS: want_methods = true; break;
         case OPT_LIST_PARAMS: want_params = true; break;
-        case OPT_BOUNDARY_TARGETS: targets_path = optarg; break;
-        case OPT_HANDLES: handles_path = optarg; break;
-        case OPT_REPORT: report_path = optarg; break;
-        case 'f': force = true; break;
-        case 'h': usage(stdout); free(param_args); return CLI_EXIT_OK;
-        default: free(param_args); return cli_option_error(cmd, c, argv);
+        case OPT_HANDLES: alias_value[0] = optarg; break;
+        case OPT_BOUNDARY_TARGETS: alias_value[1] = optarg; break;
+        case OPT_REPORT: job.report_path = optarg; break;
+        case 'f': job.force = true; break;
+        case 'h': usage(stdout); return CLI_EXIT_OK;
+        default: return cli_option_error(job.command, c, argv);
         }
     }
     if (want_methods) {
         list_methods();
-        free(param_args);
         return CLI_EXIT_OK;
     }
-    cf_flow_kind kind = CF_FLOW_KIND_COUNT;
-    if (!method) { free(param_args); return cli_usage_error(cmd, "missing --method NAME (see --list-methods)"); }
-    if (cf_flow_kind_from_name(method, &kind) != CF_OK) {
-        free(param_args);
-        return cli_usage_error(cmd, "unknown method '%s' (see --list-methods)", method);
+    if (!method) return cli_usage_error(job.command, "missing --method NAME (see --list-methods)");
+    if (cf_flow_kind_from_name(method, &job.kind) != CF_OK)
+        return cli_usage_error(job.command, "unknown method '%s' (see --list-methods)", method);
+    if (want_params) return list_params(job.kind);
+    if (optind + 1 != argc) return cli_usage_error(job.command, "expected one input mesh");
+    if (!job.output) return cli_usage_error(job.command, "missing -o OUT");
+    job.input = argv[optind];
+    job.label = method;
+    job.check = check_implied;
+    /* the order of the options' effects: an alias's implied value, then
+     * --time-step, then -p in the order given (a later -p wins) */
+    for (int a = 0; a < FLOW_ALIAS_COUNT; ++a) {
+        if (!alias_value[a]) continue;
+        cf_flow_kind owner = kind_with_param(flow_aliases[a].param);
+        if (owner != job.kind)
+            return cli_usage_error(job.command, "%s is an option of --method %s", flow_aliases[a].option,
+                                   cf_flow_kind_name(owner));
+        if (flow_aliases[a].implies_name &&
+            !cli_flow_job_param(&job, flow_aliases[a].option, flow_aliases[a].implies_name,
+                                flow_aliases[a].implies_value, false))
+            return CLI_EXIT_USAGE;
+        if (!cli_flow_job_param(&job, flow_aliases[a].option, flow_aliases[a].param, alias_value[a], false))
+            return CLI_EXIT_USAGE;
     }
-    if (want_params) {
-        free(param_args);
-        return list_params(kind);
-    }
-    if (optind + 1 != argc) { free(param_args); return cli_usage_error(cmd, "expected one input mesh"); }
-    if (!output) { free(param_args); return cli_usage_error(cmd, "missing -o OUT"); }
-    if (targets_path && kind != CF_FLOW_SPIN_WILLMORE) {
-        free(param_args);
-        return cli_usage_error(cmd, "--boundary-targets is an option of --method spin-willmore");
-    }
-    if (kind == CF_FLOW_STRETCH_BEND_EDIT && !handles_path) {
-        free(param_args);
-        return cli_usage_error(cmd, "--method stretch-bend-edit needs handles: use --handles FILE or `curvflow edit`");
-    }
-    if (handles_path && kind != CF_FLOW_STRETCH_BEND_EDIT) {
-        free(param_args);
-        return cli_usage_error(cmd, "--handles is an option of --method stretch-bend-edit");
-    }
-    const char *input = argv[optind];
-    cli_files files = {.force = force};
-    cli_files_input(&files, "IN", input);
-    cli_files_input(&files, "--boundary-targets", targets_path);
-    cli_files_input(&files, "--handles", handles_path);
-    cli_files_output(&files, "-o", output, CLI_FILE_MESH);
-    if (log_path) cli_files_output(&files, "--log", log_path, CLI_FILE_LOG);
-    if (report_path) cli_files_output(&files, "--report", report_path, CLI_FILE_HTML);
-    if (report_path && !cli_report_available()) { free(param_args); return CLI_EXIT_INPUT; }
-
-    cf_context *ctx = cli_context(false);
-    if (!ctx) { free(param_args); return CLI_EXIT_NUMERICAL; }
-    cf_flow_options options;
-    cf_flow_options_default(kind, &options);
-    int code = CLI_EXIT_OK;
-    cf_status st;
-    double *targets = NULL;
-    cf_handle_set *handles = NULL;
-    if ((code = cli_files_check(ctx, &files)) != CLI_EXIT_OK) goto early;
-    if (targets_path && (st = cf_flow_options_set(ctx, &options, "boundary", "prescribed")) != CF_OK) {
-        code = cli_fail(ctx, "--boundary-targets", st);
-        goto early;
-    }
-    if (time_step && (st = cf_flow_options_set(ctx, &options, "time_step", time_step)) != CF_OK) {
-        code = cli_fail(ctx, "--time-step", st);
-        goto early;
-    }
+    if (time_step && !cli_flow_job_param(&job, "--time-step", "time_step", time_step, false)) return CLI_EXIT_USAGE;
+    static char names[CLI_MAX_PARAM_ARGS][128];
     for (int i = 0; i < param_count; ++i) {
-        char *eq = strchr(param_args[i], '=');
-        if (!eq || eq == param_args[i]) {
-            code = cli_usage_error(cmd, "--param: expected KEY=VALUE, got '%s'", param_args[i]);
-            goto early;
-        }
-        *eq = '\0';
-        st = cf_flow_options_set(ctx, &options, param_args[i], eq + 1);
-        *eq = '=';
-        if (st != CF_OK) {
-            code = cli_fail(ctx, "--param", st);
-            goto early;
-        }
+        const char *eq = strchr(param_args[i], '=');
+        if (!eq || eq == param_args[i]) return cli_usage_error(job.command, "--param: expected KEY=VALUE, got '%s'", param_args[i]);
+        size_t n = (size_t)(eq - param_args[i]);
+        if (n >= sizeof names[0]) n = sizeof names[0] - 1;
+        memcpy(names[i], param_args[i], n);
+        names[i][n] = '\0';
+        if (!cli_flow_job_param(&job, "--param", names[i], eq + 1, false)) return CLI_EXIT_USAGE;
     }
-    if (targets_path &&
-        ((const cf_spin_willmore_options *)cf_flow_options_method(&options))->boundary_mode != CF_SPIN_BOUNDARY_PRESCRIBED) {
-        code = cli_usage_error(cmd, "--boundary-targets needs boundary=prescribed");
-        goto early;
-    }
-
-    cf_mesh *mesh = NULL;
-    cf_flow *flow = NULL;
-    cli_progress progress;
-    cli_progress_init(&progress, method, steps, quiet);
-    cli_report_log report_log = {0};
-    code = cli_load_mesh(ctx, input, &mesh);
-    if (code != CLI_EXIT_OK) goto done;
-    if (targets_path) {
-        targets = calloc(3 * (size_t)cf_mesh_vertex_count(mesh), sizeof(double));
-        if (!targets) {
-            fprintf(stderr, "curvflow: out of memory\n");
-            code = CLI_EXIT_NUMERICAL;
-            goto done;
-        }
-        code = read_boundary_targets(ctx, targets_path, mesh, targets);
-        if (code != CLI_EXIT_OK) goto done;
-        ((cf_spin_willmore_options *)cf_flow_options_method(&options))->boundary_targets = targets;
-    }
-    if (handles_path) {
-        st = cf_handle_set_read_json(ctx, mesh, NULL, handles_path, &handles);
-        if (st != CF_OK) {
-            code = cli_fail(ctx, handles_path, st);
-            if (code == CLI_EXIT_USAGE) code = CLI_EXIT_INPUT;
-            goto done;
-        }
-        ((cf_stretch_bend_options *)cf_flow_options_method(&options))->handles = handles;
-    }
-    st = cf_flow_create(ctx, mesh, NULL, &options, &flow);
-    if (st != CF_OK) {
-        code = cli_fail(ctx, input, st);
-        if (st == CF_ERR_INVALID_ARG) code = CLI_EXIT_USAGE;
-        goto done;
-    }
-    bool completed = false;
-    double started = cli_now();
-    if (report_path && (code = cli_report_log_capture(&report_log, &progress, log_path)) != CLI_EXIT_OK) goto done;
-    code = cli_run_flow_and_write(ctx, flow, &progress, log_path, steps, input, mesh, output, &completed);
-    if (report_path) {
-        cli_report_run run;
-        cli_report_run_init(&run);
-        run.command = "flow", run.method = method, run.input_path = input, run.output_path = output;
-        run.log_path = log_path, run.options = &options, run.steps_requested = steps, run.quiet = quiet;
-        run.seconds_run = cli_now() - started;
-        code = cli_report_after_run(ctx, report_path, &run, mesh, flow, &report_log, code);
-    }
-    if (completed && !quiet) {
-        const cf_flow_info *last = cf_flow_last_info(flow);
-        fprintf(stderr, "curvflow: %s: %lld steps, energy %.9g, area drift %+.3e, volume drift %+.3e; wrote %s\n",
-                method, (long long)last->iteration, last->energy, last->area_drift, last->volume_drift, output);
-    }
-done:
-    cli_progress_finish(&progress);
-    cli_report_log_free(&report_log);
-    cf_flow_destroy(&flow);
-    cf_handle_set_destroy(&handles);
-    cf_mesh_destroy(&mesh);
-early:
-    cf_context_destroy(&ctx);
-    free(targets);
-    free(param_args);
-    return code;
+    return cli_flow_execute(&job);
 }

@@ -589,3 +589,197 @@ int cli_progress_finish(cli_progress *p)
     }
     return code;
 }
+
+/* ---- flow parameters from the command line ------------------------------ */
+
+static const cf_param_desc *find_flow_param(cf_flow_kind kind, const char *name)
+{
+    const cf_param_desc *params = NULL;
+    int32_t count = 0;
+    if (cf_flow_params(kind, &params, &count) != CF_OK) return NULL;
+    for (int32_t i = 0; i < count; ++i)
+        if (strcmp(params[i].name, name) == 0) return &params[i];
+    return NULL;
+}
+
+/* The message of a dedicated option (`edit --lambda 2`): the text as given
+ * and the accepted values from the table. */
+static int alias_error(cf_context *ctx, const cf_param_desc *p, const char *option, const char *value)
+{
+    char range[256];
+    if (cf_flow_param_range_format(p, range, sizeof range) != CF_OK) snprintf(range, sizeof range, "?");
+    if (p->type == CF_PARAM_CHOICE)
+        fprintf(stderr, "curvflow: %s: unknown %s '%s' (expected %s)\n", option, p->name, value, range);
+    else if (p->type == CF_PARAM_DOUBLE || p->type == CF_PARAM_INT) {
+        char *end = NULL;
+        double v = strtod(value, &end);
+        if (end != value && *end == '\0' && isfinite(v))
+            fprintf(stderr, "curvflow: %s: '%s' is outside %s\n", option, value, range);
+        else
+            fprintf(stderr, "curvflow: %s: %s\n", option, cf_context_message(ctx));
+    } else {
+        fprintf(stderr, "curvflow: %s: %s\n", option, cf_context_message(ctx));
+    }
+    return CLI_EXIT_USAGE;
+}
+
+int cli_flow_param_apply(cf_context *ctx, cf_flow_options *options, cli_flow_arrays *arrays, cli_files *files,
+                         const char *option, const char *name, const char *value, bool alias_message)
+{
+    const cf_param_desc *p = find_flow_param(options->kind, name);
+    if (p && cf_param_type_is_array(p->type)) {
+        for (int i = 0; i < arrays->count; ++i)
+            if (arrays->items[i].param == p) { /* the last one given wins, as for scalars */
+                arrays->items[i].option = option;
+                arrays->items[i].value = value;
+                if (value[0] != '@') cli_files_input(files, option, value);
+                return CLI_EXIT_OK;
+            }
+        if (arrays->count == CLI_MAX_ARRAY_PARAMS) {
+            fprintf(stderr, "curvflow: %s: too many array parameters\n", option);
+            return CLI_EXIT_USAGE;
+        }
+        if (value[0] == '\0') {
+            fprintf(stderr, "curvflow: %s: parameter '%s' needs a file or @property\n", option, name);
+            return CLI_EXIT_USAGE;
+        }
+        if (value[0] == '@' && p->type == CF_PARAM_POINT_SETS) {
+            fprintf(stderr, "curvflow: %s: parameter '%s' is a point set: give a JSON constraint file, not a "
+                            "property\n", option, name);
+            return CLI_EXIT_USAGE;
+        }
+        arrays->items[arrays->count].param = p;
+        arrays->items[arrays->count].option = option;
+        arrays->items[arrays->count].value = value;
+        arrays->items[arrays->count].values = NULL;
+        arrays->items[arrays->count].set = NULL;
+        ++arrays->count;
+        if (value[0] != '@') cli_files_input(files, option, value);
+        return CLI_EXIT_OK;
+    }
+    cf_status st = cf_flow_options_set(ctx, options, name, value);
+    if (st == CF_OK) return CLI_EXIT_OK;
+    if (alias_message && p) return alias_error(ctx, p, option, value);
+    return cli_fail(ctx, option, st);
+}
+
+bool cli_flow_arrays_has(const cli_flow_arrays *arrays, const char *name)
+{
+    for (int i = 0; i < arrays->count; ++i)
+        if (strcmp(arrays->items[i].param->name, name) == 0) return true;
+    return false;
+}
+
+/* Copies the property (or the three comma-separated properties of
+ * "@x,y,z") of the mesh file into out (count or 3 count doubles). */
+static int load_property(cf_context *ctx, const char *mesh_path, const char *option, const cf_param_desc *p,
+                         const char *spec, int32_t count, double *out)
+{
+    cf_mesh_data *data = NULL;
+    cf_status st = cf_read_mesh_file(ctx, mesh_path, &data);
+    if (st != CF_OK) return cli_fail(ctx, mesh_path, st) == CLI_EXIT_USAGE ? CLI_EXIT_INPUT : cli_exit_code(st);
+    bool face = p->type == CF_PARAM_FACE_SCALARS;
+    int components = p->type == CF_PARAM_VERTEX_VECTORS ? 3 : 1;
+    int32_t have = face ? data->face_count : data->vertex_count;
+    int code = CLI_EXIT_OK;
+    char names[256];
+    snprintf(names, sizeof names, "%s", spec + 1);
+    char *cursor = names;
+    for (int c = 0; c < components && code == CLI_EXIT_OK; ++c) {
+        char *comma = strchr(cursor, ',');
+        if (comma) *comma = '\0';
+        if ((comma != NULL) != (c + 1 < components) || cursor[0] == '\0') {
+            fprintf(stderr, "curvflow: %s: expected @%s for parameter '%s', got '%s'\n", option,
+                    components == 3 ? "X,Y,Z (three property names)" : "PROPERTY", p->name, spec);
+            code = CLI_EXIT_USAGE;
+            break;
+        }
+        const cf_mesh_property *prop =
+            face ? cf_mesh_data_face_property(data, cursor) : cf_mesh_data_vertex_property(data, cursor);
+        if (!prop) {
+            fprintf(stderr, "curvflow: %s: %s: no %s property '%s' (%s)\n", option, mesh_path, face ? "face" : "vertex",
+                    cursor, (face ? data->face_property_count : data->vertex_property_count) ? "see its header"
+                                                                                               : "it has none");
+            code = CLI_EXIT_INPUT;
+            break;
+        }
+        if (have != count) { /* polygons fan-triangulated: the file's faces are not the mesh's */
+            fprintf(stderr, "curvflow: %s: %s has %d %s, the mesh %d\n", option, mesh_path, (int)have,
+                    face ? "faces" : "vertices", (int)count);
+            code = CLI_EXIT_INPUT;
+            break;
+        }
+        for (int32_t i = 0; i < count; ++i) {
+            double v = prop->values[i];
+            if (!isfinite(v)) {
+                fprintf(stderr, "curvflow: %s: %s: property '%s' of %s %d is not finite\n", option, mesh_path, cursor,
+                        face ? "face" : "vertex", (int)i);
+                code = CLI_EXIT_INPUT;
+                break;
+            }
+            out[(size_t)components * i + c] = v;
+        }
+        cursor = comma ? comma + 1 : cursor;
+    }
+    cf_mesh_data_destroy(&data);
+    return code;
+}
+
+int cli_flow_arrays_load(cf_context *ctx, cli_flow_arrays *arrays, cf_flow_options *options, const char *mesh_path,
+                         const cf_mesh *mesh, const double *start)
+{
+    unsigned char *base = cf_flow_options_method(options);
+    int32_t nv = cf_mesh_vertex_count(mesh), nf = cf_mesh_face_count(mesh);
+    for (int i = 0; i < arrays->count; ++i) {
+        const cf_param_desc *p = arrays->items[i].param;
+        const char *option = arrays->items[i].option, *value = arrays->items[i].value;
+        cf_status st = CF_OK;
+        if (p->type == CF_PARAM_POINT_SETS) {
+            st = cf_handle_set_read_json(ctx, mesh, start, value, &arrays->items[i].set);
+            if (st != CF_OK) {
+                int code = cli_fail(ctx, value, st);
+                return code == CLI_EXIT_USAGE ? CLI_EXIT_INPUT : code;
+            }
+            const cf_handle_set *set = arrays->items[i].set;
+            memcpy(base + p->offset, &set, sizeof set);
+            continue;
+        }
+        int32_t count = p->type == CF_PARAM_FACE_SCALARS ? nf : nv;
+        int components = p->type == CF_PARAM_VERTEX_VECTORS ? 3 : 1;
+        double *values = calloc((size_t)components * (size_t)count + 1, sizeof(double));
+        if (!values) {
+            fprintf(stderr, "curvflow: out of memory\n");
+            return CLI_EXIT_NUMERICAL;
+        }
+        arrays->items[i].values = values;
+        if (value[0] == '@') {
+            int code = load_property(ctx, mesh_path, option, p, value, count, values);
+            if (code != CLI_EXIT_OK) return code;
+        } else {
+            if (p->type == CF_PARAM_VERTEX_VECTORS) {
+                bool boundary_only = p->max_value >= 1.0;
+                st = cf_read_vertex_directions_file(ctx, value, nv, boundary_only ? cf_mesh_vertex_on_boundary(mesh) : NULL,
+                                                    boundary_only ? "boundary vertex" : NULL, values);
+            } else {
+                st = cf_read_vertex_scalars_file(ctx, value, count, values);
+            }
+            if (st != CF_OK) {
+                int code = cli_fail(ctx, value, st);
+                return code == CLI_EXIT_USAGE ? CLI_EXIT_INPUT : code;
+            }
+        }
+        cf_param_values field = {values, count};
+        memcpy(base + p->offset, &field, sizeof field);
+    }
+    return CLI_EXIT_OK;
+}
+
+void cli_flow_arrays_free(cli_flow_arrays *arrays)
+{
+    for (int i = 0; i < arrays->count; ++i) {
+        free(arrays->items[i].values);
+        arrays->items[i].values = NULL;
+        cf_handle_set_destroy(&arrays->items[i].set);
+    }
+    arrays->count = 0;
+}

@@ -8,6 +8,7 @@
 #define CF_CLI_COMMON_H
 
 #include "cli.h"
+#include "curvflow/constraints.h"
 #include "curvflow/curvflow.h"
 #include "curvflow/flow.h"
 #include "curvflow/io.h"
@@ -164,5 +165,84 @@ int cli_run_flow_and_write(cf_context *ctx, cf_flow *flow, cli_progress *progres
 
 /* Wall-clock seconds (monotonic). */
 double cli_now(void);
+
+/* ---- flow parameters from the command line ------------------------------
+ * Every method parameter goes through its kind's table (flow.h): scalar ones
+ * as text (cf_flow_options_set, ranges and messages from the table), array
+ * ones (CF_PARAM_VERTEX_SCALARS / _VERTEX_VECTORS / _FACE_SCALARS /
+ * _POINT_SETS) loaded by cli_flow_arrays_load once the mesh is known, from
+ *   NAME=FILE       vertex/face scalars: numbers in element order
+ *                   (cf_read_vertex_scalars_file); vertex vectors: lines
+ *                   "VERTEX X Y Z" (cf_read_vertex_directions_file; every
+ *                   vertex, or every boundary vertex when the table says so);
+ *                   point sets: a JSON constraint ("handle") file
+ *                   (cf_handle_set_read_json, docs/edit.md)
+ *   NAME=@PROP      a property of the input mesh file (PLY): a vertex or face
+ *                   property for scalars, three properties "@nx,ny,nz" for
+ *                   vertex vectors.
+ * The arrays are owned by the cli_flow_arrays and must be freed after the
+ * flow (cli_flow_arrays_free). */
+enum { CLI_MAX_ARRAY_PARAMS = 8 };
+typedef struct cli_flow_arrays {
+    int count;
+    struct {
+        const cf_param_desc *param;
+        const char *option;   /* as the user gave it, for messages ("--handles", "-p handles") */
+        const char *value;    /* FILE or @PROP */
+        double *values;       /* loaded, owned */
+        cf_handle_set *set;   /* loaded, owned */
+    } items[CLI_MAX_ARRAY_PARAMS];
+} cli_flow_arrays;
+
+/* Applies one parameter to options: name and value text, `option` the
+ * command-line spelling for messages. Array parameters are recorded in
+ * `arrays` (their files are added to `files` as inputs) and loaded later.
+ * Scalar failures print "curvflow: OPTION: <library message>" unless
+ * alias_message, which prints "OPTION: 'TEXT' is outside RANGE" (numbers)
+ * or "OPTION: unknown NAME 'TEXT' (expected a|b)" (choices) as the
+ * dedicated options of `curvflow edit` always did. Returns an exit code. */
+int cli_flow_param_apply(cf_context *ctx, cf_flow_options *options, cli_flow_arrays *arrays, cli_files *files,
+                         const char *option, const char *name, const char *value, bool alias_message);
+/* Loads the recorded arrays for `mesh` (read from mesh_path; start: the
+ * positions point sets are evaluated on, NULL = the mesh's) into options.
+ * Returns 0, 2 (bad file or property, with the message), 3 (no memory). */
+int cli_flow_arrays_load(cf_context *ctx, cli_flow_arrays *arrays, cf_flow_options *options, const char *mesh_path,
+                         const cf_mesh *mesh, const double *start);
+/* 1 if the array parameter `name` was given. */
+bool cli_flow_arrays_has(const cli_flow_arrays *arrays, const char *name);
+void cli_flow_arrays_free(cli_flow_arrays *arrays);
+
+/* A flow run as `curvflow flow` does it; `curvflow edit` is a front end
+ * that fills the same job (cli/cmd_edit.c). */
+enum { CLI_MAX_PARAM_ARGS = 64 };
+typedef struct cli_flow_job {
+    const char *command;     /* "flow", "edit": messages and report */
+    cf_flow_kind kind;
+    const char *label;       /* status lines and report: method or energy name */
+    const char *input, *output, *log_path, *report_path, *start_path;
+    long long steps;
+    bool quiet, force;
+    struct {
+        const char *option;  /* "-p", "--lambda", ... */
+        const char *name;
+        const char *value;
+        bool alias_message;
+    } params[CLI_MAX_PARAM_ARGS];
+    int param_count;
+    int invalid_options_exit; /* exit code when cf_flow_create refuses the options (1 flow, 2 edit) */
+    bool announce_point_sets; /* "H: N handle vertices (M moved), K free" */
+    const char *const *report_extra;
+    /* front end's check of the options once set (may be NULL): exit code */
+    int (*check)(const struct cli_flow_job *job, const cf_flow_options *options);
+    /* the closing line after a completed run (may be NULL: flow's line) */
+    void (*summary)(const struct cli_flow_job *job, const cf_flow *flow);
+} cli_flow_job;
+
+/* Adds a parameter to job (name=value as given by `option`). Returns false
+ * (usage error printed) when there are too many. */
+bool cli_flow_job_param(cli_flow_job *job, const char *option, const char *name, const char *value,
+                        bool alias_message);
+/* Loads, creates, runs, writes (also the log and report). Exit code. */
+int cli_flow_execute(const cli_flow_job *job);
 
 #endif /* CF_CLI_COMMON_H */

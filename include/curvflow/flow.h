@@ -6,7 +6,8 @@
  *   cf_flow_options opts;                      // common part + method part
  *   cf_flow_options_default(CF_FLOW_IMPLICIT_MCF, &opts);
  *   cf_flow_options_set(ctx, &opts, "time_step", "0.01");   // by name, or
- *   ((cf_baseline_options *)cf_flow_options_method(&opts))->time_step = 0.01; // by field
+ *   cf_baseline_options *b = cf_flow_options_method_as(&opts, CF_FLOW_IMPLICIT_MCF);
+ *   b->time_step = 0.01;                       // by field (checked by create)
  *   cf_flow *flow;
  *   cf_flow_create(ctx, mesh, NULL, &opts, &flow);
  *   cf_flow_info info;
@@ -47,22 +48,56 @@ CF_API const char *cf_flow_kind_description(cf_flow_kind kind);
 CF_API cf_status cf_flow_kind_from_name(const char *name, cf_flow_kind *kind);
 
 /* Method parameters are described by a table so that front ends can set
- * them by name ("--param sigma=0.5") and list them with their help. */
+ * them by name ("--param sigma=0.5") and list them with their help.
+ *
+ * Scalar types (DOUBLE, INT, BOOL, CHOICE) are set from text by
+ * cf_flow_options_set or directly in the method's options struct; either
+ * way cf_flow_create checks every one against the table (same range and
+ * same message), so a field set by hand out of range is refused there.
+ *
+ * Array types carry data, not text: the field is a cf_param_values
+ * (VERTEX_*, FACE_*) or a `const cf_handle_set *` (POINT_SETS), set in the
+ * options struct by the caller (the CLI loads them from a file or a PLY
+ * property, cli/common.c). The data is caller-owned and must stay valid
+ * until cf_flow_create returns (methods copy what they keep; see each
+ * method's header for exceptions). For array types min_value is 1 when the
+ * method requires the parameter and 0 when it is optional; max_value is
+ * unused. cf_flow_create checks the element count against the mesh (the
+ * message names the parameter and the expected count). */
 typedef enum cf_param_type {
     CF_PARAM_DOUBLE = 0,
     CF_PARAM_INT = 1,     /* int32_t */
     CF_PARAM_BOOL = 2,    /* int32_t, 0 or 1; accepts true/false/yes/no/1/0 */
-    CF_PARAM_CHOICE = 3   /* int32_t index into `choices` (NULL-terminated names) */
+    CF_PARAM_CHOICE = 3,  /* int32_t index into `choices` (NULL-terminated names) */
+    CF_PARAM_VERTEX_SCALARS = 4,  /* cf_param_values: one double per vertex (count = nv) */
+    CF_PARAM_VERTEX_VECTORS = 5,  /* cf_param_values: x y z per vertex (3 nv doubles, count = nv);
+                                   * max_value 1: only boundary vertices carry one (others ignored) */
+    CF_PARAM_FACE_SCALARS = 6,    /* cf_param_values: one double per face (count = nf) */
+    CF_PARAM_POINT_SETS = 7       /* const cf_handle_set * (curvflow/constraints.h): vertices with targets */
 } cf_param_type;
+
+/* The field of a VERTEX_SCALARS / VERTEX_VECTORS / FACE_SCALARS parameter:
+ * `count` elements (vertices or faces) of 1 or 3 doubles each, interleaved.
+ * values NULL (count 0) = not given. Caller-owned, see above. */
+typedef struct cf_param_values {
+    const double *values;
+    int32_t count;
+} cf_param_values;
 
 typedef struct cf_param_desc {
     const char *name;
     cf_param_type type;
     size_t offset;              /* offset of the field in the method's options struct */
-    double min_value, max_value;  /* inclusive range for numbers */
+    double min_value, max_value;  /* inclusive range for numbers; arrays: min_value 1 = required */
     const char *const *choices; /* for CF_PARAM_CHOICE */
     const char *help;
 } cf_param_desc;
+
+/* 1 for the array types (VERTEX_SCALARS .. POINT_SETS), else 0. */
+CF_API int32_t cf_param_type_is_array(cf_param_type type);
+/* "double", "int", "bool", "choice", "vertex-scalars", "vertex-vectors",
+ * "face-scalars", "point-set"; NULL for an unknown type. */
+CF_API const char *cf_param_type_name(cf_param_type type);
 
 /* Options of one flow: the kind and the method's own options struct
  * (cf_<method>_options, see the method's header), stored inline so the
@@ -106,24 +141,34 @@ CF_API cf_status cf_flow_common_params(const cf_param_desc **params, int32_t *co
 
 /* Fills the defaults of the method. CF_ERR_INVALID_ARG for a bad kind. */
 CF_API cf_status cf_flow_options_default(cf_flow_kind kind, cf_flow_options *options);
-/* The method's options struct inside `options` (cast to cf_<method>_options). */
+/* The method's options struct inside `options` when options->kind is
+ * `expected`, else NULL (also for NULL options): the checked way to reach
+ * cf_<method>_options, e.g.
+ *   cf_baseline_options *b = cf_flow_options_method_as(&opts, CF_FLOW_IMPLICIT_MCF); */
+CF_API void *cf_flow_options_method_as(cf_flow_options *options, cf_flow_kind expected);
+CF_API const void *cf_flow_options_method_as_const(const cf_flow_options *options, cf_flow_kind expected);
+/* Unchecked form, kept for compatibility: the method's options struct
+ * whatever the kind (the caller casts it). Prefer cf_flow_options_method_as. */
 CF_API void *cf_flow_options_method(cf_flow_options *options);
 CF_API const void *cf_flow_options_method_const(const cf_flow_options *options);
 
 /* Sets a parameter from its text form; CF_ERR_INVALID_ARG with a message
- * naming the parameter for an unknown name, bad text or value out of range. */
+ * naming the parameter for an unknown name, bad text or value out of range,
+ * and for an array-typed parameter (those are set in the options struct). */
 CF_API cf_status cf_flow_options_set(cf_context *ctx, cf_flow_options *options, const char *name, const char *value);
 
 /* Text form of the current value of one parameter (as accepted by
- * cf_flow_options_set; choices by name, bools as true/false). CF_ERR_INVALID_ARG
- * if buf is too small. */
+ * cf_flow_options_set; choices by name, bools as true/false; array types
+ * "none" or "N values" / "N points", which cf_flow_options_set does not
+ * take). CF_ERR_INVALID_ARG if buf is too small. */
 CF_API cf_status cf_flow_options_format(const cf_flow_options *options, const cf_param_desc *param, char *buf,
                                         size_t size);
 
 /* Text of the values a parameter accepts, as the range messages of
  * cf_flow_options_set name them: "[1e-09, 10]" for numbers (each limit the
  * shortest text that reads back as it, e.g. 1.5707963267948966), "true|false",
- * or the choices "a|b|c". CF_ERR_INVALID_ARG for NULL or a too small buffer. */
+ * the choices "a|b|c", or for array types "required" / "optional".
+ * CF_ERR_INVALID_ARG for NULL or a too small buffer. */
 CF_API cf_status cf_flow_param_range_format(const cf_param_desc *param, char *buf, size_t size);
 
 /* The parameter table of a kind. */

@@ -23,6 +23,7 @@
 #define CURVFLOW_SPIN_WILLMORE_H
 
 #include "curvflow/curvflow.h"
+#include "curvflow/flow.h"
 #include "curvflow/mesh.h"
 
 #ifdef __cplusplus
@@ -140,10 +141,11 @@ typedef struct cf_spin_willmore_options {
                                 * the singular X(0)); 1-100 keeps long thin shapes with a near-kernel
                                 * of X (blade_slivers_8k) stable at small tau, at the price of a
                                 * slower flow on ordinary shapes (docs/spin.md) */
-    const double *boundary_targets; /* PRESCRIBED: target directions V~ per vertex (3 nv doubles,
-                                * x y z; only boundary vertices' entries are read, each must be
-                                * finite and nonzero, and is normalised). Read once by
-                                * cf_flow_create, not kept. NULL (default): the boundary_angle /
+    cf_param_values boundary_targets; /* table parameter "boundary_targets" (vertex vectors, boundary
+                                * vertices only). PRESCRIBED: target directions V~ per vertex (count nv,
+                                * values 3 nv doubles, x y z; only boundary vertices' entries are read,
+                                * each must be finite and nonzero, and is normalised). Read once by
+                                * cf_flow_create, not kept. {NULL, 0} (default): the boundary_angle /
                                 * boundary_axis rule above */
 } cf_spin_willmore_options;
 

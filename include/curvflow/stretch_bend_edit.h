@@ -96,8 +96,9 @@ typedef struct cf_stretch_bend_options {
                                     stretch and bend, 0 for the ARAP energies). A step is kept only if it
                                     lowers the energy, else the plain step is taken, so the energy still
                                     never increases. */
-    const cf_handle_set *handles;   /* required; must outlive the flow */
-    const double *rest_positions;   /* 3 nv rest pose, NULL = the mesh's positions; must outlive the flow */
+    const cf_handle_set *handles;   /* table parameter "handles" (point set, required): copied by create
+                                       (a caller may free it once create returned) */
+    const double *rest_positions;   /* 3 nv rest pose, NULL = the mesh's positions; copied by create */
 } cf_stretch_bend_options;
 
 CF_API void cf_stretch_bend_options_default(cf_stretch_bend_options *options);

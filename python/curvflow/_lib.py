@@ -99,6 +99,11 @@ class FlowOptions(Structure):
     _fields_ = [("kind", c_int), ("storage", c_double * (OPTIONS_STORAGE // 8))]
 
 
+class ParamValues(Structure):
+    # cf_param_values (flow.h): the field of an array-valued table parameter
+    _fields_ = [("values", c_void_p), ("count", c_int32)]
+
+
 class SpinWillmoreOptions(Structure):
     _fields_ = [("time_step", c_double), ("total_curvature", c_int32), ("inversion", c_int32),
                 ("exactness", c_int32), ("mobius", c_int32), ("mobius_weight", c_double), ("sigma", c_double),
@@ -109,7 +114,7 @@ class SpinWillmoreOptions(Structure):
                 ("complex_factorization", c_int32), ("input_metric", c_int32), ("adaptive", c_int32),
                 ("max_scale_change", c_double), ("exactness_linearized", c_int32), ("harmonic_update", c_int32),
                 ("regularization", c_double),
-                ("boundary_targets", c_void_p)]
+                ("boundary_targets", ParamValues)]
 
 
 class StretchBendOptions(Structure):
@@ -158,11 +163,11 @@ _LAYOUT = {
         "input_metric": ("input_metric", 0), "adaptive": ("adaptive", 0),
         "max_scale_change": ("max_scale_change", 0),
         "exactness_linearized": ("exactness_linearized", 0), "regularization": ("regularization", 0),
-        "harmonic_update": ("harmonic_update", 0)}),
+        "harmonic_update": ("harmonic_update", 0), "boundary_targets": ("boundary_targets", 0)}),
     "stretch-bend-edit": (StretchBendOptions, {
         "energy": ("energy", 0), "lambda": ("lambda_", 0), "max_iterations": ("max_iterations", 0),
         "relative_tolerance": ("relative_tolerance", 0), "mass": ("mass", 0), "scale_free": ("scale_free", 0),
-        "anderson": ("anderson", 0)}),
+        "anderson": ("anderson", 0), "handles": ("handles", 0)}),
 }
 
 

@@ -192,7 +192,8 @@ def _kind(method):
     return k.value
 
 
-_TYPES = {0: "double", 1: "int", 2: "bool", 3: "choice"}
+_TYPES = {0: "double", 1: "int", 2: "bool", 3: "choice", 4: "vertex-scalars", 5: "vertex-vectors",
+          6: "face-scalars", 7: "point-set"}
 
 
 def method_params(method):
@@ -379,7 +380,8 @@ def _run(method, V, F, steps, time_step, callback, params, start=None, handles=N
             t = _vertices(targets, "boundary_targets")
             _same_count(V, t, "boundary_targets")
             keep.append(t)
-            m.boundary_targets = t.ctypes.data
+            m.boundary_targets.values = t.ctypes.data
+            m.boundary_targets.count = t.shape[0]
         if method == "stretch-bend-edit":
             if handles is None:
                 raise UsageError("stretch-bend-edit needs handles=... (a JSON file, a JSON document or "

@@ -6,6 +6,7 @@
  */
 #include "methods/flow_internal.h"
 
+#include "curvflow/constraints.h"
 #include "curvflow/ops.h"
 
 #include <errno.h>
@@ -73,6 +74,50 @@ cf_status cf_flow_options_default(cf_flow_kind kind, cf_flow_options *options)
 }
 
 void *cf_flow_options_method(cf_flow_options *options) { return options ? options->storage.bytes : NULL; }
+
+void *cf_flow_options_method_as(cf_flow_options *options, cf_flow_kind expected)
+{
+    return options && options->kind == expected && cfi_flow_method_of(expected) ? options->storage.bytes : NULL;
+}
+
+const void *cf_flow_options_method_as_const(const cf_flow_options *options, cf_flow_kind expected)
+{
+    return options && options->kind == expected && cfi_flow_method_of(expected) ? options->storage.bytes : NULL;
+}
+
+int32_t cf_param_type_is_array(cf_param_type type)
+{
+    return type == CF_PARAM_VERTEX_SCALARS || type == CF_PARAM_VERTEX_VECTORS || type == CF_PARAM_FACE_SCALARS ||
+           type == CF_PARAM_POINT_SETS;
+}
+
+const char *cf_param_type_name(cf_param_type type)
+{
+    switch (type) {
+    case CF_PARAM_DOUBLE: return "double";
+    case CF_PARAM_INT: return "int";
+    case CF_PARAM_BOOL: return "bool";
+    case CF_PARAM_CHOICE: return "choice";
+    case CF_PARAM_VERTEX_SCALARS: return "vertex-scalars";
+    case CF_PARAM_VERTEX_VECTORS: return "vertex-vectors";
+    case CF_PARAM_FACE_SCALARS: return "face-scalars";
+    case CF_PARAM_POINT_SETS: return "point-set";
+    }
+    return NULL;
+}
+
+/* Bytes of a parameter's field in the options struct. */
+static size_t param_field_bytes(const cf_param_desc *p)
+{
+    switch (p->type) {
+    case CF_PARAM_DOUBLE: return sizeof(double);
+    case CF_PARAM_VERTEX_SCALARS:
+    case CF_PARAM_VERTEX_VECTORS:
+    case CF_PARAM_FACE_SCALARS: return sizeof(cf_param_values);
+    case CF_PARAM_POINT_SETS: return sizeof(const cf_handle_set *);
+    default: return sizeof(int32_t);
+    }
+}
 
 const void *cf_flow_options_method_const(const cf_flow_options *options)
 {
@@ -182,7 +227,12 @@ cf_status cf_flow_options_set(cf_context *ctx, cf_flow_options *options, const c
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter '%s': unknown for method %s (known: %s)", name, m->name,
                          known[0] ? known : "none");
     }
-    size_t field_bytes = p->type == CF_PARAM_DOUBLE ? sizeof(double) : sizeof(int32_t);
+    if (cf_param_type_is_array(p->type))
+        return cfi_error(ctx, CF_ERR_INVALID_ARG,
+                         "parameter '%s': a %s parameter takes data, not text (set the options field; the CLI "
+                         "loads it with -p %s=FILE)",
+                         name, cf_param_type_name(p->type), name);
+    size_t field_bytes = param_field_bytes(p);
     if (CF_NEVER(p->offset + field_bytes > limit))
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter '%s': table entry outside the options struct", name);
     unsigned char *base = options->storage.bytes;
@@ -233,6 +283,10 @@ cf_status cf_flow_options_set(cf_context *ctx, cf_flow_options *options, const c
         }
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter '%s': '%s' is not one of: %s", name, value, known);
     }
+    case CF_PARAM_VERTEX_SCALARS:
+    case CF_PARAM_VERTEX_VECTORS:
+    case CF_PARAM_FACE_SCALARS:
+    case CF_PARAM_POINT_SETS: break; /* refused above */
     }
     return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter '%s': unknown parameter type", name);
 }
@@ -241,7 +295,7 @@ cf_status cf_flow_options_format(const cf_flow_options *options, const cf_param_
 {
     if (!options || !param || !buf || size == 0) return CF_ERR_INVALID_ARG;
     const unsigned char *base = options->storage.bytes;
-    size_t field_bytes = param->type == CF_PARAM_DOUBLE ? sizeof(double) : sizeof(int32_t);
+    size_t field_bytes = param_field_bytes(param);
     if (param->offset > CF_FLOW_OPTIONS_STORAGE - field_bytes) return CF_ERR_INVALID_ARG;
     int n = 0;
     switch (param->type) {
@@ -274,6 +328,20 @@ cf_status cf_flow_options_format(const cf_flow_options *options, const cf_param_
         n = snprintf(buf, size, "%s", s ? s : "?");
         break;
     }
+    case CF_PARAM_VERTEX_SCALARS:
+    case CF_PARAM_VERTEX_VECTORS:
+    case CF_PARAM_FACE_SCALARS: {
+        cf_param_values v;
+        memcpy(&v, base + param->offset, sizeof v);
+        n = v.values ? snprintf(buf, size, "%d values", (int)v.count) : snprintf(buf, size, "none");
+        break;
+    }
+    case CF_PARAM_POINT_SETS: {
+        const cf_handle_set *h;
+        memcpy(&h, base + param->offset, sizeof h);
+        n = h ? snprintf(buf, size, "%d points", (int)h->count) : snprintf(buf, size, "none");
+        break;
+    }
     default: return CF_ERR_INVALID_ARG;
     }
     return (n < 0 || (size_t)n >= size) ? CF_ERR_INVALID_ARG : CF_OK;
@@ -299,10 +367,128 @@ cf_status cf_flow_param_range_format(const cf_param_desc *param, char *buf, size
             used += (size_t)n;
         }
         return CF_OK;
+    } else if (cf_param_type_is_array(param->type)) {
+        n = snprintf(buf, size, "%s", param->min_value >= 1.0 ? "required" : "optional");
     } else {
         return CF_ERR_INVALID_ARG;
     }
     return (n < 0 || (size_t)n >= size) ? CF_ERR_INVALID_ARG : CF_OK;
+}
+
+/* ---- validation of a whole options struct (cf_flow_create) --------------- */
+
+/* Checks one parameter's field in `base` against its table entry, with the
+ * messages of cf_flow_options_set (the value as it reads back). Array types:
+ * the element count against the mesh, and presence when required. */
+static cf_status check_param(cf_context *ctx, const char *method, const cf_param_desc *p, const unsigned char *base,
+                             const cf_mesh *mesh)
+{
+    char text[64];
+    switch (p->type) {
+    case CF_PARAM_DOUBLE: {
+        double v;
+        memcpy(&v, base + p->offset, sizeof v);
+        if (!isfinite(v))
+            return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter '%s': '%s' is not a finite number", p->name,
+                             isnan(v) ? "nan" : (v > 0 ? "inf" : "-inf"));
+        if (v < p->min_value || v > p->max_value) {
+            format_number(v, text, sizeof text);
+            return range_error(ctx, p, text, v);
+        }
+        return CF_OK;
+    }
+    case CF_PARAM_INT: {
+        int32_t v;
+        memcpy(&v, base + p->offset, sizeof v);
+        if ((double)v < p->min_value || (double)v > p->max_value) {
+            snprintf(text, sizeof text, "%d", (int)v);
+            return range_error(ctx, p, text, (double)v);
+        }
+        return CF_OK;
+    }
+    case CF_PARAM_BOOL: {
+        int32_t v;
+        memcpy(&v, base + p->offset, sizeof v);
+        if (v != 0 && v != 1)
+            return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter '%s': %d is not a boolean (true|false, stored as 1|0)",
+                             p->name, (int)v);
+        return CF_OK;
+    }
+    case CF_PARAM_CHOICE: {
+        int32_t v, n = 0;
+        memcpy(&v, base + p->offset, sizeof v);
+        while (p->choices && p->choices[n]) ++n;
+        if (v < 0 || v >= n) {
+            char range[256];
+            if (cf_flow_param_range_format(p, range, sizeof range) != CF_OK) snprintf(range, sizeof range, "?");
+            return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter '%s': index %d is not one of %s (0..%d)", p->name,
+                             (int)v, range, (int)n - 1);
+        }
+        return CF_OK;
+    }
+    case CF_PARAM_VERTEX_SCALARS:
+    case CF_PARAM_VERTEX_VECTORS:
+    case CF_PARAM_FACE_SCALARS: {
+        cf_param_values v;
+        memcpy(&v, base + p->offset, sizeof v);
+        int per_face = p->type == CF_PARAM_FACE_SCALARS;
+        int32_t expected = per_face ? mesh->nf : mesh->nv;
+        const char *what = p->type == CF_PARAM_VERTEX_SCALARS ? "vertex values"
+                           : p->type == CF_PARAM_VERTEX_VECTORS ? "vertex vectors (x y z)"
+                                                                 : "face values";
+        if (!v.values) {
+            if (v.count != 0)
+                return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter '%s': count %d given without values", p->name,
+                                 (int)v.count);
+            if (p->min_value >= 1.0)
+                return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter '%s': required by %s (%d %s), not given",
+                                 p->name, method, (int)expected, what);
+            return CF_OK;
+        }
+        if (v.count != expected)
+            return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter '%s': %d %s given, expected %d (one per %s of the mesh)",
+                             p->name, (int)v.count, what, (int)expected, per_face ? "face" : "vertex");
+        return CF_OK;
+    }
+    case CF_PARAM_POINT_SETS: {
+        const cf_handle_set *h;
+        memcpy(&h, base + p->offset, sizeof h);
+        if (!h) {
+            if (p->min_value >= 1.0)
+                return cfi_error(ctx, CF_ERR_INVALID_ARG,
+                                 "parameter '%s': required by %s (a point set: vertices with targets), not given",
+                                 p->name, method);
+            return CF_OK;
+        }
+        if (h->count < 0 || (h->count > 0 && (!h->vertices || !h->targets)))
+            return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter '%s': malformed point set (count %d)", p->name,
+                             (int)h->count);
+        for (int32_t i = 0; i < h->count; ++i)
+            if (h->vertices[i] < 0 || h->vertices[i] >= mesh->nv)
+                return cfi_error(ctx, CF_ERR_INVALID_ARG,
+                                 "parameter '%s': vertex %d out of range (expected 0..%d, the mesh has %d vertices)",
+                                 p->name, (int)h->vertices[i], (int)mesh->nv - 1, (int)mesh->nv);
+        return CF_OK;
+    }
+    }
+    return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter '%s': unknown parameter type %d", p->name, (int)p->type);
+}
+
+/* Every parameter of the method's table, in table order: the single place
+ * where options are validated (cf_flow_options_set checks text on the way
+ * in; this checks the struct, however it was filled). */
+static cf_status check_method_options(cf_context *ctx, const cfi_flow_method *m, const unsigned char *base,
+                                      const cf_mesh *mesh)
+{
+    for (int32_t i = 0; m->params && i < m->param_count; ++i) {
+        const cf_param_desc *p = &m->params[i];
+        if (CF_NEVER(p->offset + param_field_bytes(p) > m->options_size))
+            return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter '%s': table entry outside the options struct",
+                             p->name);
+        cf_status st = check_param(ctx, m->name, p, base, mesh);
+        if (st != CF_OK) return st;
+    }
+    return CF_OK;
 }
 
 /* ---- flow life cycle ---------------------------------------------------- */
@@ -396,7 +582,9 @@ cf_status cf_flow_create(cf_context *ctx, const cf_mesh *mesh, const double *pos
     if (!m) return cfi_error(ctx, CF_ERR_INVALID_ARG, "unknown flow kind %d", (int)options->kind);
     int32_t nv = mesh->nv;
     const double *start = positions ? positions : mesh->positions;
-    cf_status bad = check_positions(ctx, start, nv, CF_ERR_NONFINITE, "starting position");
+    cf_status bad = check_method_options(ctx, m, options->storage.bytes, mesh);
+    if (bad != CF_OK) return bad;
+    bad = check_positions(ctx, start, nv, CF_ERR_NONFINITE, "starting position");
     if (bad != CF_OK) return bad;
 
     cf_flow *flow = CFI_ALLOC(ctx, cf_flow, 1);

@@ -105,10 +105,10 @@ cf_status cfi_spin_boundary_targets(cf_flow *flow, cfi_spin_state *s, const cf_s
     cf_status st = CF_OK;
     double axis_len = sqrt(o->boundary_axis[0] * o->boundary_axis[0] + o->boundary_axis[1] * o->boundary_axis[1] +
                            o->boundary_axis[2] * o->boundary_axis[2]);
-    if (o->boundary_mode == CF_SPIN_BOUNDARY_PRESCRIBED && o->boundary_targets) {
+    if (o->boundary_mode == CF_SPIN_BOUNDARY_PRESCRIBED && o->boundary_targets.values) {
         for (int32_t i = 0; i < mesh->nv; ++i) {
             if (!mesh->vertex_on_boundary[i]) continue;
-            const double *t = o->boundary_targets + 3 * (int64_t)i;
+            const double *t = o->boundary_targets.values + 3 * (int64_t)i;
             double len = sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
             for (int c = 0; c < 3; ++c) s->target[3 * i + c] = t[c] / len;
         }

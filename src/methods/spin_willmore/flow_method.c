@@ -184,7 +184,7 @@ cf_status cfi_spin_create(cf_flow *flow, const void *options)
     flow->impl = s;
     s->ws.ctx = ctx;
     s->opt = *o;
-    s->opt.boundary_targets = NULL; /* the caller's array is read below, not kept */
+    s->opt.boundary_targets = (cf_param_values){NULL, 0}; /* the caller's array is read below, not kept */
     s->tau = o->time_step;
     s->nv = mesh->nv;
     s->ne = mesh->ne;

@@ -103,6 +103,8 @@ static const cf_param_desc params[] = {
     {"anderson", CF_PARAM_INT, offsetof(cf_stretch_bend_options, anderson), -1, 10, NULL,
      "Anderson acceleration depth (0 = plain local/global; -1 = 5 for hybrid/stretch/bend, 0 for ARAP); "
      "energy-safeguarded"},
+    {"handles", CF_PARAM_POINT_SETS, offsetof(cf_stretch_bend_options, handles), 1, 1, NULL,
+     "handle vertices with their targets: a JSON handle file (format in docs/edit.md); required"},
 };
 
 static void free_system(stretch_bend_state *s, cf_context *ctx)
@@ -411,9 +413,8 @@ static cf_status stretch_bend_create(cf_flow *flow, const void *options)
     s->b_cols = CFI_ALLOC(ctx, double, 3 * (size_t)nv);
     s->x_cols = CFI_ALLOC(ctx, double, 3 * (size_t)nv);
     if (!s->rest || !s->rhs || !s->hu || !s->x_start || !s->b_cols || !s->x_cols) return CF_ERR_NOMEM;
-    if (o->anderson < -1 || o->anderson > 10)
-        return cfi_error(ctx, CF_ERR_INVALID_ARG, "stretch-bend-edit: anderson depth %d not in [-1, 10]",
-                         (int)o->anderson);
+    /* every table parameter (ranges, handles given, rest pose count) was
+     * checked by cf_flow_create */
     /* -1 (default): depth 5 for the energies with per-triangle rotations
      * and u', whose plain iteration needs thousands of steps on large
      * edits; off for ARAP, which converges in tens to hundreds of steps,

@@ -179,7 +179,7 @@ static cf_flow *prescribed_flow(cf_context *ctx, const cf_mesh *mesh, double phi
     so->boundary_mode = CF_SPIN_BOUNDARY_PRESCRIBED;
     so->boundary_vector_angle = phi;
     so->boundary_angle = angle;
-    so->boundary_targets = targets;
+    so->boundary_targets = (cf_param_values){targets, targets ? cf_mesh_vertex_count(mesh) : 0};
     cf_flow *flow = NULL;
     CHECK_OK(ctx, cf_flow_create(ctx, mesh, NULL, &o, &flow));
     return flow;
@@ -309,7 +309,7 @@ static void test_per_vertex_targets(void)
     CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o));
     cf_spin_willmore_options *so = cf_flow_options_method(&o);
     so->boundary_mode = CF_SPIN_BOUNDARY_PRESCRIBED;
-    so->boundary_targets = targets;
+    so->boundary_targets = (cf_param_values){targets, targets ? cf_mesh_vertex_count(mesh) : 0};
     CHECK_STATUS(cf_flow_create(ctx, mesh, NULL, &o, &flow), CF_ERR_INVALID_ARG);
     char want[64];
     snprintf(want, sizeof want, "vertex %d: boundary target", v);
@@ -330,7 +330,7 @@ static void test_per_vertex_targets(void)
     CHECK_OK(ctx, cf_generate_grid(ctx, 8, 8, 1.0, 1.0, &grid));
     double *opposite = boundary_vectors(ctx, grid, cf_mesh_positions(grid), 0.0);
     for (int32_t i = 0; i < 3 * cf_mesh_vertex_count(grid); ++i) opposite[i] = -opposite[i];
-    so->boundary_targets = opposite;
+    so->boundary_targets = (cf_param_values){opposite, cf_mesh_vertex_count(grid)};
     CHECK_OK(ctx, cf_flow_create(ctx, grid, NULL, &o, &flow));
     cf_flow_info info;
     if (flow) CHECK_OK(ctx, cf_flow_step(flow, &info));
@@ -368,7 +368,8 @@ static void test_prescribed_tangents(void)
     CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o));
     CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "boundary", "prescribed"));
     CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "boundary_tangent_angle", "1.5707963267948966"));
-    ((cf_spin_willmore_options *)cf_flow_options_method(&o))->boundary_targets = targets;
+    ((cf_spin_willmore_options *)cf_flow_options_method(&o))->boundary_targets =
+        (cf_param_values){targets, cf_mesh_vertex_count(mesh)};
     cf_flow *flow = NULL;
     CHECK_OK(ctx, cf_flow_create(ctx, mesh, NULL, &o, &flow));
     double w0 = flow ? cf_flow_energy(flow) : 0.0;

@@ -143,6 +143,26 @@ CF_API void cf_edge_poisson_destroy(cf_edge_poisson **p);
  * relative part of e~ that no surface realises (Crane 2013, Sec. 6.4). */
 CF_API double cf_edge_closure_error(const cf_mesh *mesh, const double *positions, const double *edges);
 
+/* ---- Spectral filter (src/ops/spectral_filter.c) -------------------------
+ * v <- v - (id + sigma' Delta^k)^-1 v for vertex functions v (nv), with
+ * Delta = M^-1 L, L the positive semi-definite cotan Laplacian and M the
+ * lumped barycentric mass of the surface given at create (Crane, Pinkall,
+ * Schroeder 2013, Sec. 4, Fig. 8): an eigenfunction of Delta with
+ * eigenvalue mu is multiplied by sigma' mu^k / (1 + sigma' mu^k), so
+ * constants vanish and rough components pass. sigma' = sigma R^(2k),
+ * R = sqrt(area / (4 pi)): sigma is scale-free. k = 0 is the constant factor
+ * sigma / (1 + sigma). The matrix F = M + sigma' L (M^-1 L)^(k-1) is built
+ * and factorised once; apply allocates nothing. */
+typedef struct cf_spectral_filter cf_spectral_filter;
+/* positions: 3 nv (NULL: rest positions); sigma > 0 finite; k in 0..3.
+ * Statuses: CF_ERR_INVALID_ARG, CF_ERR_DEGENERATE_FACE, CF_ERR_NOMEM,
+ * factorisation errors. */
+CF_API cf_status cf_spectral_filter_create(cf_context *ctx, const cf_mesh *mesh, const double *positions, double sigma,
+                                           int32_t k, cf_spectral_filter **out);
+/* Filters v (nv) in place; timings (may be NULL) accumulates the solve time. */
+CF_API cf_status cf_spectral_filter_apply(cf_spectral_filter *f, double *v, cf_solver_timings *timings);
+CF_API void cf_spectral_filter_destroy(cf_spectral_filter **f);
+
 typedef enum cf_mass_kind {
     CF_MASS_LUMPED_BARYCENTRIC = 0,
     CF_MASS_LUMPED_VORONOI = 1,

@@ -12,6 +12,12 @@
 #include <math.h>
 #include <string.h>
 
+/* Complex columns (2 per vertex) up to which the quaternion-block analysis
+ * widens CHOLMOD's supernode amalgamation: at 164k / 655k vertices the
+ * default gives a factor 15 % / 14 % smaller (49.0 -> 41.8 M, 218 -> 188 M
+ * complex entries; 3.5 -> 3.0 GB) at the same speed. */
+#define CFI_QUAT_WIDE_RELAX_MAX_COLUMNS 100000
+
 struct cf_cholesky {
     cf_context *ctx;
     cholmod_common *common;
@@ -116,6 +122,53 @@ static cholmod_factor *analyze_blocks(cholmod_sparse *view, int method, double *
     return lb;
 }
 
+/* FNV-1a over the block pattern: with the block and entry counts, the
+ * key of the context's ordering cache. (A collision could only cost fill:
+ * any permutation gives a correct factor.) */
+static uint64_t pattern_hash(const cf_sparse *p)
+{
+    uint64_t h = 1469598103934665603ull;
+    int64_t nnz = p->colptr[p->ncols];
+    for (int32_t j = 0; j <= p->ncols; ++j) h = (h ^ (uint32_t)p->colptr[j]) * 1099511628211ull;
+    for (int64_t k = 0; k < nnz; ++k) h = (h ^ (uint32_t)p->rowind[k]) * 1099511628211ull;
+    return h;
+}
+
+/* The block ordering of method m (0: AMD, 1: METIS) of the block graph
+ * `view` (key nb, nnz, hash), with its flop and fill counts: from the
+ * context's cache when it holds this graph and method, else by a symbolic
+ * analysis, whose result the cache then keeps (a failed cache allocation
+ * only skips the caching). *perm points into the cache or into *own
+ * (nb entries, freed by the caller). */
+static cf_status graph_ordering(cf_cholesky *chol, cholmod_sparse *view, int32_t nb, int64_t nnz, uint64_t hash,
+                                int m, const int32_t **perm, int32_t **own, double *fl, double *lnz)
+{
+    cf_context *ctx = chol->ctx;
+    cholmod_common *c = chol->common;
+    cfi_ordering_cache *cache = cfi_cholmod_ordering_cache(ctx);
+    if (cache->perm[m] && cache->nb == nb && cache->nnz == nnz && cache->hash == hash) {
+        *perm = cache->perm[m];
+        *fl = cache->fl[m];
+        *lnz = cache->lnz[m];
+        return CF_OK;
+    }
+    cholmod_factor *lb = analyze_blocks(view, m ? CHOLMOD_METIS : CHOLMOD_AMD, fl, lnz, c);
+    cf_status st = cfi_cholmod_check(ctx, c, lb != NULL,
+                                     m ? "cholesky analyse (block graph, METIS)" : "cholesky analyse (block graph)");
+    if (st == CF_OK) {
+        int32_t *p = cfi_ordering_cache_store(ctx, nb, nnz, hash, m, *fl, *lnz);
+        if (!p) p = *own = CFI_ALLOC(ctx, int32_t, (size_t)nb);
+        if (p) {
+            memcpy(p, lb->Perm, (size_t)nb * sizeof *p);
+            *perm = p;
+        } else {
+            st = CF_ERR_NOMEM;
+        }
+    }
+    cholmod_free_factor(&lb, c);
+    return st;
+}
+
 /* Fill-reducing permutation of the block graph, expanded to a: perm[b K + d]
  * = b perm_blocks[K] + d. AUTO applies CHOLMOD's own rule (its default
  * nmethods = 0 strategy) with the counts of the expanded matrix: AMD first;
@@ -124,11 +177,12 @@ static cholmod_factor *analyze_blocks(cholmod_sparse *view, int method, double *
  * multiplies lnz and anz by b^2 and the flops by b^3, so fl / lnz grows by
  * b: METIS, whose analysis is 5-7x slower here (176 vs 19 ms at 41k
  * vertices), is tried for the lifted 3x3 / 4x4 operators and large meshes,
- * where it pays back in every refactorisation (docs/linalg.md). */
+ * where it pays back in every refactorisation (docs/linalg.md). The block
+ * orderings of the last block graph are kept in the context, so that the
+ * matrices of one mesh (Laplacians, the Dirac matrix) share them. */
 static cf_status block_ordering(cf_cholesky *chol, const cf_sparse *a, int32_t b, cf_ordering ordering, int32_t *perm)
 {
     cf_context *ctx = chol->ctx;
-    cholmod_common *c = chol->common;
     cf_sparse *pattern = NULL;
     cf_status st = block_pattern(ctx, a, b, &pattern);
     if (st != CF_OK) return st;
@@ -136,32 +190,24 @@ static cf_status block_ordering(cf_cholesky *chol, const cf_sparse *a, int32_t b
     cfi_cholmod_view(pattern, 1, &view);
     view.xtype = CHOLMOD_PATTERN;
     view.x = NULL;
-    double fl = 0.0, lnz = 0.0;
-    int method = ordering == CF_ORDERING_METIS ? CHOLMOD_METIS
-               : ordering == CF_ORDERING_NATURAL ? CHOLMOD_NATURAL : CHOLMOD_AMD;
-    cholmod_factor *lb = analyze_blocks(&view, method, &fl, &lnz, c);
-    st = cfi_cholmod_check(ctx, c, lb != NULL, "cholesky analyse (block graph)");
-    if (st == CF_OK && ordering == CF_ORDERING_AUTO && lnz > 0.0) {
-        double anz = (double)cf_sparse_nnz(pattern); /* upper triangle with diagonal */
-        if (b * fl / lnz >= 500.0 && lnz / anz >= 5.0) {
-            double fl_metis = 0.0, lnz_metis = 0.0;
-            cholmod_factor *lm = analyze_blocks(&view, CHOLMOD_METIS, &fl_metis, &lnz_metis, c);
-            st = cfi_cholmod_check(ctx, c, lm != NULL, "cholesky analyse (block graph, METIS)");
-            if (st == CF_OK && fl_metis < fl) {
-                cholmod_free_factor(&lb, c);
-                lb = lm;
-                lm = NULL;
-            }
-            cholmod_free_factor(&lm, c);
-        }
+    int32_t nb = pattern->ncols;
+    int64_t nnz = cf_sparse_nnz(pattern); /* upper triangle with diagonal */
+    uint64_t hash = pattern_hash(pattern);
+    const int32_t *pb = NULL, *pm = NULL;
+    int32_t *own_b = NULL, *own_m = NULL;
+    double fl = 0.0, lnz = 0.0, fl_metis = 0.0, lnz_metis = 0.0;
+    int first = ordering == CF_ORDERING_METIS;
+    st = graph_ordering(chol, &view, nb, nnz, hash, first, &pb, &own_b, &fl, &lnz);
+    if (st == CF_OK && ordering == CF_ORDERING_AUTO && lnz > 0.0 && b * fl / lnz >= 500.0 && lnz / (double)nnz >= 5.0) {
+        /* (the AMD ordering pb stays valid: storing METIS keeps the cache's AMD entry of the same graph) */
+        st = graph_ordering(chol, &view, nb, nnz, hash, 1, &pm, &own_m, &fl_metis, &lnz_metis);
+        if (st == CF_OK && fl_metis < fl) pb = pm;
     }
-    if (st == CF_OK) {
-        const int *pb = lb->Perm;
-        int32_t nb = pattern->ncols;
+    if (st == CF_OK)
         for (int32_t K = 0; K < nb; ++K)
             for (int32_t d = 0; d < b; ++d) perm[b * K + d] = b * pb[K] + d;
-    }
-    cholmod_free_factor(&lb, c);
+    CFI_FREE(ctx, own_b, nb);
+    CFI_FREE(ctx, own_m, nb);
     cf_sparse_destroy(&pattern);
     return st;
 }
@@ -234,7 +280,7 @@ cf_status cf_cholesky_create(cf_context *ctx, const cf_sparse *a, const cf_chole
         cfi_cholmod_reset_parameters(c);
         c->nmethods = 1;
         c->method[0].ordering = CHOLMOD_GIVEN;
-        if (chol->quat) {
+        if (chol->quat && chol->n / 2 <= CFI_QUAT_WIDE_RELAX_MAX_COLUMNS) {
             /* Twice CHOLMOD's relaxed amalgamation (nrelax 4/16/48 -> 8/32/96,
              * zrelax 0.1/0.05 -> 0.2/0.1): the complex factor of a vertex-graph
              * matrix has many small supernodes whose BLAS calls cost more than
@@ -242,7 +288,9 @@ cf_status cf_cholesky_create(cf_context *ctx, const cf_sparse *a, const cf_chole
              * the spin flow: spot_3k 7.6 -> 6.4 ms, armadillo_26k 78 -> 72 ms,
              * 10k-vertex sphere 46 -> 41 ms, 41k/164k within noise; three times
              * was slower, and for scalar Laplacians it is slower beyond 10k
-             * vertices (docs/linalg.md). */
+             * vertices (docs/linalg.md). Beyond 50k vertices the explicit zeros
+             * cost memory for no measured gain (docs/memory.md): CHOLMOD's
+             * default there. */
             c->nrelax[0] = 8;
             c->nrelax[1] = 32;
             c->nrelax[2] = 96;

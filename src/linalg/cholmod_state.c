@@ -21,6 +21,7 @@ typedef struct linalg_state {
     cholmod_common common; /* first member: cfi_cholmod_reset_parameters casts back */
     int started;
     struct cholmod_method_struct default_methods[CHOLMOD_MAXMETHODS + 1];
+    cfi_ordering_cache orderings;
 } linalg_state;
 
 /* CHOLMOD's error handler receives no user pointer, so the text of the last
@@ -46,9 +47,17 @@ void cfi_cholmod_clear_message(void)
     last_cholmod_error.text[0] = '\0';
 }
 
+static void clear_orderings(cf_context *ctx, cfi_ordering_cache *o)
+{
+    for (int m = 0; m < 2; ++m)
+        if (o->perm[m]) ctx->allocator.free_fn(ctx->allocator.user, o->perm[m], ((size_t)o->nb + 1) * sizeof(int32_t));
+    memset(o, 0, sizeof *o);
+}
+
 static void destroy_state(cf_context *ctx, void *state)
 {
     linalg_state *s = state;
+    clear_orderings(ctx, &s->orderings);
     if (s->started) cholmod_finish(&s->common);
     /* allocated with the context's allocator but outside its byte count:
      * the state lives as long as the context (see cfi_cholmod_common) */
@@ -132,12 +141,42 @@ cf_status cfi_cholmod_common(cf_context *ctx, cholmod_common **out)
     return CF_OK;
 }
 
+cfi_ordering_cache *cfi_cholmod_ordering_cache(cf_context *ctx)
+{
+    return &((linalg_state *)ctx->linalg_state)->orderings;
+}
+
+int32_t *cfi_ordering_cache_store(cf_context *ctx, int32_t nb, int64_t nnz, uint64_t hash, int m, double fl, double lnz)
+{
+    cfi_ordering_cache *o = cfi_cholmod_ordering_cache(ctx);
+    if (o->nb != nb || o->nnz != nnz || o->hash != hash) {
+        clear_orderings(ctx, o);
+        o->nb = nb;
+        o->nnz = nnz;
+        o->hash = hash;
+    }
+    if (!o->perm[m]) {
+        /* outside the context's byte count and failure injection: a cache
+         * entry outlives the objects whose creation filled it */
+        o->perm[m] = ctx->allocator.malloc_fn(ctx->allocator.user, ((size_t)nb + 1) * sizeof(int32_t));
+        if (!o->perm[m]) return NULL;
+    }
+    o->fl[m] = fl;
+    o->lnz[m] = lnz;
+    return o->perm[m];
+}
+
 cf_status cfi_cholmod_check(cf_context *ctx, cholmod_common *c, int ok, const char *what)
 {
     int st = c->status;
     if (st == CHOLMOD_OK && ok) return CF_OK;
     if (st > 0 && st != CHOLMOD_NOT_POSDEF && ok) return CF_OK; /* harmless warning */
     const char *text = last_cholmod_error.status == st ? last_cholmod_error.text : "";
+    /* CHOLMOD reports some failures (out of memory inside a factorisation)
+     * without a message: say so instead of printing empty parentheses */
+    char said[sizeof last_cholmod_error.text];
+    snprintf(said, sizeof said, "%s", text[0] ? text : "no detail from CHOLMOD");
+    text = said;
     cfi_cholmod_clear_message();
     switch (st) {
     case CHOLMOD_OUT_OF_MEMORY:

@@ -17,6 +17,27 @@
  * cf_context_destroy. Statuses: CF_OK, CF_ERR_NOMEM. */
 cf_status cfi_cholmod_common(cf_context *ctx, cholmod_common **out);
 
+/* The context's ordering cache: the fill-reducing orderings (0: AMD,
+ * 1: METIS; NULL if not computed) of the last block graph analysed,
+ * identified by its block count, entry count and a hash of its pattern,
+ * with CHOLMOD's flop and fill counts. It lives in the CHOLMOD state (valid
+ * after cfi_cholmod_common) and is freed with the context; its arrays come
+ * from the context's allocator outside the byte count, like the state. */
+typedef struct cfi_ordering_cache {
+    int32_t nb;
+    int64_t nnz;
+    uint64_t hash;
+    int32_t *perm[2];
+    double fl[2], lnz[2];
+} cfi_ordering_cache;
+cfi_ordering_cache *cfi_cholmod_ordering_cache(cf_context *ctx);
+/* Room (nb entries) for the ordering of method m of the graph (nb, nnz,
+ * hash), recorded with its counts; a different graph replaces the cached
+ * one. The caller fills the permutation. NULL if the allocation fails (no
+ * caching then, not an error). */
+int32_t *cfi_ordering_cache_store(cf_context *ctx, int32_t nb, int64_t nnz, uint64_t hash, int m, double fl,
+                                  double lnz);
+
 /* Restores the analysis parameters of Common that the layer changes
  * (ordering methods, postorder, supernodal switch) to our defaults. */
 void cfi_cholmod_reset_parameters(cholmod_common *c);

@@ -210,6 +210,39 @@ cf_status cf_sparse_kron_identity(cf_context *ctx, const cf_sparse *a, int32_t b
     return CF_OK;
 }
 
+cf_status cf_sparse_kron_dense(cf_context *ctx, const cf_sparse *a, int32_t b, cf_sparse **out)
+{
+    if (!ctx) return CF_ERR_INVALID_ARG;
+    if (!a || !out || b < 1) return cfi_error(ctx, CF_ERR_INVALID_ARG, "kron dense: NULL matrix or block size %d", b);
+    *out = NULL;
+    if (a->upper_only)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "kron dense: the matrix stores its upper triangle only");
+    int64_t nnz = a->colptr[a->ncols];
+    if ((int64_t)a->nrows * b > INT32_MAX || (int64_t)a->ncols * b > INT32_MAX || nnz * b * b > INT32_MAX)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "kron dense: %d x %d matrix with %lld entries times %d x %d blocks "
+                         "exceeds int32 indices", a->nrows, a->ncols, (long long)nnz, b, b);
+    cf_sparse *c = NULL;
+    cf_status st = cfi_sparse_alloc(ctx, a->nrows * b, a->ncols * b, nnz * b * b, &c);
+    if (st != CF_OK) return st;
+    /* column b j + d holds, for every entry (i, j) of a in row order, the
+     * rows b i .. b i + b - 1: rows stay sorted and unique */
+    int32_t e = 0;
+    for (int32_t j = 0; j < a->ncols; ++j) {
+        for (int32_t d = 0; d < b; ++d) {
+            for (int32_t p = a->colptr[j]; p < a->colptr[j + 1]; ++p)
+                for (int32_t r = 0; r < b; ++r) {
+                    c->rowind[e] = b * a->rowind[p] + r;
+                    c->values[e++] = a->values[p];
+                }
+            c->colptr[b * j + d + 1] = e;
+        }
+    }
+    c->symmetric = a->symmetric;
+    c->upper_only = 0;
+    *out = c;
+    return CF_OK;
+}
+
 cf_status cf_sparse_add(cf_context *ctx, double alpha, const cf_sparse *a, double beta, const cf_sparse *b,
                         cf_sparse **out)
 {

@@ -21,10 +21,15 @@ cf_status cfi_dirac_create(cf_context *ctx, const cf_mesh *mesh, cfi_dirac **out
     if (!d) return CF_ERR_NOMEM;
     d->nv = nv;
     d->nf = nf;
-    int64_t ntrip = (int64_t)nf * 144;
-    int32_t *rows = CFI_ALLOC(ctx, int32_t, ntrip);
-    int32_t *cols = CFI_ALLOC(ctx, int32_t, ntrip);
-    int64_t *slots = CFI_ALLOC(ctx, int64_t, ntrip);
+    /* The pattern is the vertex graph with a dense 4 x 4 block per entry:
+     * assembled from 9 vertex pairs per face and lifted, instead of from
+     * 144 triplets per face (at 655k vertices those took 6 GB of index and
+     * sort arrays and 20 s; docs/memory.md). Same pattern and slots. */
+    int64_t npair = (int64_t)nf * 9;
+    int32_t *rows = CFI_ALLOC(ctx, int32_t, npair);
+    int32_t *cols = CFI_ALLOC(ctx, int32_t, npair);
+    int64_t *slots = CFI_ALLOC(ctx, int64_t, npair);
+    cf_sparse *g = NULL;
     d->block_slot = CFI_ALLOC(ctx, int64_t, (int64_t)nf * 36);
     d->diag_slot = CFI_ALLOC(ctx, int64_t, (int64_t)nv * 4);
     cf_status st = CF_OK;
@@ -32,38 +37,38 @@ cf_status cfi_dirac_create(cf_context *ctx, const cf_mesh *mesh, cfi_dirac **out
         st = CF_ERR_NOMEM;
         goto done;
     }
-    /* triplet t = ((k * 9 + m * 3 + n) * 4 + c) * 4 + r: entry (4 i + r, 4 j + c) */
-    int64_t t = 0;
+    /* pair p = k * 9 + m * 3 + n: vertices (tri[m], tri[n]) of face k */
     for (int32_t k = 0; k < nf; ++k) {
         const int32_t *tri = mesh->triangles + 3 * k;
         for (int m = 0; m < 3; ++m)
-            for (int n = 0; n < 3; ++n)
-                for (int c = 0; c < 4; ++c)
-                    for (int r = 0; r < 4; ++r, ++t) {
-                        rows[t] = 4 * tri[m] + r;
-                        cols[t] = 4 * tri[n] + c;
-                    }
+            for (int n = 0; n < 3; ++n) {
+                rows[(int64_t)k * 9 + m * 3 + n] = tri[m];
+                cols[(int64_t)k * 9 + m * 3 + n] = tri[n];
+            }
     }
-    st = cf_sparse_from_triplets(ctx, 4 * nv, 4 * nv, ntrip, rows, cols, NULL, 1, &d->x, slots);
+    st = cf_sparse_from_triplets(ctx, nv, nv, npair, rows, cols, NULL, 1, &g, slots);
+    if (st == CF_OK) st = cf_sparse_kron_dense(ctx, g, 4, &d->x);
     if (st != CF_OK) goto done;
-    for (int64_t b = 0; b < (int64_t)nf * 36; ++b) d->block_slot[b] = slots[4 * b];
-    for (int32_t k = 0; k < nf; ++k) {
+    /* entry (4 i + r, 4 j + c) of the vertex pair in slot q of g (column j)
+     * sits at X.colptr[4 j + c] + 4 (q - g.colptr[j]) + r (cf_sparse_kron_dense) */
+    const int32_t *xcp = d->x->colptr, *gcp = g->colptr;
+    for (int32_t k = 0; k < nf; ++k)
+        for (int p = 0; p < 9; ++p) {
+            int64_t pair = (int64_t)k * 9 + p;
+            int32_t j = mesh->triangles[3 * k + p % 3];
+            for (int c = 0; c < 4; ++c) d->block_slot[pair * 4 + c] = xcp[4 * j + c] + 4 * (slots[pair] - gcp[j]);
+        }
+    for (int32_t k = 0; k < nf; ++k)
         for (int m = 0; m < 3; ++m) {
             int32_t i = mesh->triangles[3 * k + m];
-            for (int c = 0; c < 4; ++c) d->diag_slot[4 * i + c] = slots[(((int64_t)k * 9 + m * 4) * 4 + c) * 4 + c];
+            int64_t q = slots[(int64_t)k * 9 + m * 4];
+            for (int c = 0; c < 4; ++c) d->diag_slot[4 * i + c] = xcp[4 * i + c] + 4 * (q - gcp[i]) + c;
         }
-    }
-    /* The block rows must be contiguous in each column (rows sorted, unique). */
-    for (int64_t b = 0; b < (int64_t)nf * 36; ++b) {
-        if (CF_NEVER(slots[4 * b + 3] != slots[4 * b] + 3)) {
-            st = cfi_error(ctx, CF_ERR_NUMERICAL, "spin: unexpected sparse layout of the Dirac matrix");
-            goto done;
-        }
-    }
 done:
-    CFI_FREE(ctx, rows, ntrip);
-    CFI_FREE(ctx, cols, ntrip);
-    CFI_FREE(ctx, slots, ntrip);
+    cf_sparse_destroy(&g);
+    CFI_FREE(ctx, rows, npair);
+    CFI_FREE(ctx, cols, npair);
+    CFI_FREE(ctx, slots, npair);
     if (st != CF_OK) {
         cfi_dirac_destroy(ctx, &d);
         return st;

@@ -30,6 +30,98 @@ static void usage(FILE *out)
 
 static json_t *num(double v) { return isfinite(v) ? json_real(v) : json_null(); }
 
+/* The validation report as a JSON object. */
+static json_t *validation_json(const cf_mesh_report *report)
+{
+    json_t *val = json_object();
+    json_object_set_new(val, "valid", json_boolean(report->first_status == CF_OK));
+    json_object_set_new(val, "index_out_of_range", json_integer(report->index_out_of_range));
+    json_object_set_new(val, "repeated_index", json_integer(report->repeated_index));
+    json_object_set_new(val, "nonfinite_coordinates", json_integer(report->nonfinite_coordinates));
+    json_object_set_new(val, "degenerate_faces", json_integer(report->degenerate_faces));
+    json_object_set_new(val, "nonmanifold_edges", json_integer(report->nonmanifold_edges));
+    json_object_set_new(val, "nonmanifold_vertices", json_integer(report->nonmanifold_vertices));
+    json_object_set_new(val, "inconsistent_orientation_edges", json_integer(report->inconsistent_orientation_edges));
+    json_object_set_new(val, "unreferenced_vertices", json_integer(report->unreferenced_vertices));
+    json_object_set_new(val, "first_error",
+                        report->first_status == CF_OK ? json_null() : json_string(report->first_message));
+    return val;
+}
+
+/* Topology and the library's quality figures (cf_mesh_quality_compute, the
+ * same the Python package reports) of a valid mesh, into root. */
+static cf_status add_mesh_figures(cf_context *ctx, const cf_mesh *mesh, json_t *root)
+{
+    json_object_set_new(root, "edges", json_integer(cf_mesh_edge_count(mesh)));
+    json_object_set_new(root, "components", json_integer(cf_mesh_component_count(mesh)));
+    json_object_set_new(root, "boundary_loops", json_integer(cf_mesh_boundary_loop_count(mesh)));
+    json_object_set_new(root, "euler_characteristic", json_integer(cf_mesh_euler_characteristic(mesh)));
+    json_object_set_new(root, "genus", json_integer(cf_mesh_genus(mesh)));
+    cf_mesh_quality q;
+    cf_status st = cf_mesh_quality_compute(ctx, mesh, NULL, &q);
+    if (st != CF_OK) return st;
+    const double deg = 180.0 / acos(-1.0);
+    json_t *ang = json_object();
+    json_object_set_new(ang, "min_degrees", num(q.min_angle * deg));
+    json_object_set_new(ang, "median_degrees", num(q.median_angle * deg));
+    json_object_set_new(ang, "max_degrees", num(q.max_angle * deg));
+    json_object_set_new(ang, "fraction_below_10_degrees", num(q.fraction_angles_below_10_degrees));
+    json_object_set_new(ang, "median_face_min_degrees", num(q.median_face_min_angle * deg));
+    json_object_set_new(ang, "fraction_faces_min_below_10_degrees", num(q.fraction_faces_min_below_10_degrees));
+    json_object_set_new(root, "angles", ang);
+    json_t *ar = json_object();
+    json_object_set_new(ar, "total", num(q.total_area));
+    json_object_set_new(ar, "min", num(q.min_face_area));
+    json_object_set_new(ar, "median", num(q.median_face_area));
+    json_object_set_new(ar, "max", num(q.max_face_area));
+    json_object_set_new(ar, "max_over_min", num(q.max_face_area / q.min_face_area));
+    json_object_set_new(root, "face_areas", ar);
+    /* NaN (null) with boundary loops */
+    json_object_set_new(root, "willmore_over_4pi", num(q.willmore_over_4pi));
+    json_object_set_new(root, "volume", num(q.volume));
+    return CF_OK;
+}
+
+/* The text form of root (mesh NULL: the mesh is invalid, report says why). */
+static void print_text(const char *path, const cf_mesh_data *data, const cf_mesh *mesh, const cf_mesh_report *report,
+                       json_t *root)
+{
+    printf("file:          %s\n", path);
+    printf("vertices:      %d\nfaces:         %d\n", (int)data->vertex_count, (int)data->face_count);
+    if (data->polygon_count) printf("polygons:      %d (fan-triangulated)\n", (int)data->polygon_count);
+    printf("uv:            %s\n", json_string_value(json_object_get(root, "texture_coordinates")));
+    if (!mesh) {
+        printf("validation:    INVALID: %s\n", report->first_message);
+        printf("  index out of range %d, repeated index %d, non-finite %d, degenerate faces %d,\n"
+               "  non-manifold edges %d, non-manifold vertices %d, inconsistent orientation %d, unreferenced %d\n",
+               (int)report->index_out_of_range, (int)report->repeated_index, (int)report->nonfinite_coordinates,
+               (int)report->degenerate_faces, (int)report->nonmanifold_edges, (int)report->nonmanifold_vertices,
+               (int)report->inconsistent_orientation_edges, (int)report->unreferenced_vertices);
+        return;
+    }
+    printf("edges:         %d\n", (int)cf_mesh_edge_count(mesh));
+    printf("components:    %d\nboundary loops: %d\n", (int)cf_mesh_component_count(mesh),
+           (int)cf_mesh_boundary_loop_count(mesh));
+    printf("euler char.:   %d\ngenus:         %d\n", (int)cf_mesh_euler_characteristic(mesh), (int)cf_mesh_genus(mesh));
+    json_t *ang = json_object_get(root, "angles"), *ar = json_object_get(root, "face_areas");
+    printf("angles (deg):  min %.4g  median %.4g  max %.4g  below 10 deg: %.2f %%\n",
+           json_real_value(json_object_get(ang, "min_degrees")), json_real_value(json_object_get(ang, "median_degrees")),
+           json_real_value(json_object_get(ang, "max_degrees")),
+           100.0 * json_real_value(json_object_get(ang, "fraction_below_10_degrees")));
+    printf("face min angle: median %.4g deg, faces with min angle below 10 deg: %.2f %%\n",
+           json_real_value(json_object_get(ang, "median_face_min_degrees")),
+           100.0 * json_real_value(json_object_get(ang, "fraction_faces_min_below_10_degrees")));
+    printf("face areas:    total %.6g  min %.4g  median %.4g  max %.4g  (max/min %.3g)\n",
+           json_real_value(json_object_get(ar, "total")), json_real_value(json_object_get(ar, "min")),
+           json_real_value(json_object_get(ar, "median")), json_real_value(json_object_get(ar, "max")),
+           json_real_value(json_object_get(ar, "max_over_min")));
+    json_t *w = json_object_get(root, "willmore_over_4pi");
+    if (json_is_real(w))
+        printf("W/4pi:         %.6g\nvolume:        %.6g\n", json_real_value(w),
+               json_real_value(json_object_get(root, "volume")));
+    printf("validation:    ok\n");
+}
+
 int cli_info(int argc, char **argv)
 {
     static const struct option longopts[] = {
@@ -83,18 +175,7 @@ int cli_info(int argc, char **argv)
     json_object_set_new(root, "polygons_triangulated", json_integer(data->polygon_count));
     json_object_set_new(root, "texture_coordinates",
                         json_string(data->uv_count == 0 ? "none" : data->uv_triangles ? "per-corner" : "per-vertex"));
-    json_t *val = json_object();
-    json_object_set_new(val, "valid", json_boolean(report.first_status == CF_OK));
-    json_object_set_new(val, "index_out_of_range", json_integer(report.index_out_of_range));
-    json_object_set_new(val, "repeated_index", json_integer(report.repeated_index));
-    json_object_set_new(val, "nonfinite_coordinates", json_integer(report.nonfinite_coordinates));
-    json_object_set_new(val, "degenerate_faces", json_integer(report.degenerate_faces));
-    json_object_set_new(val, "nonmanifold_edges", json_integer(report.nonmanifold_edges));
-    json_object_set_new(val, "nonmanifold_vertices", json_integer(report.nonmanifold_vertices));
-    json_object_set_new(val, "inconsistent_orientation_edges", json_integer(report.inconsistent_orientation_edges));
-    json_object_set_new(val, "unreferenced_vertices", json_integer(report.unreferenced_vertices));
-    json_object_set_new(val, "first_error", report.first_status == CF_OK ? json_null() : json_string(report.first_message));
-    json_object_set_new(root, "validation", val);
+    json_object_set_new(root, "validation", validation_json(&report));
 
     if (report.first_status == CF_OK) {
         st = cf_mesh_create(ctx, &desc, &mesh);
@@ -102,37 +183,10 @@ int cli_info(int argc, char **argv)
             code = cli_fail(ctx, path, st);
             goto done;
         }
-        json_object_set_new(root, "edges", json_integer(cf_mesh_edge_count(mesh)));
-        json_object_set_new(root, "components", json_integer(cf_mesh_component_count(mesh)));
-        json_object_set_new(root, "boundary_loops", json_integer(cf_mesh_boundary_loop_count(mesh)));
-        json_object_set_new(root, "euler_characteristic", json_integer(cf_mesh_euler_characteristic(mesh)));
-        json_object_set_new(root, "genus", json_integer(cf_mesh_genus(mesh)));
-
-        /* the library's figures (cf_mesh_quality_compute), the same the Python package reports */
-        cf_mesh_quality q;
-        if ((st = cf_mesh_quality_compute(ctx, mesh, NULL, &q)) != CF_OK) {
+        if ((st = add_mesh_figures(ctx, mesh, root)) != CF_OK) {
             code = cli_fail(ctx, path, st);
             goto done;
         }
-        const double deg = 180.0 / acos(-1.0);
-        json_t *ang = json_object();
-        json_object_set_new(ang, "min_degrees", num(q.min_angle * deg));
-        json_object_set_new(ang, "median_degrees", num(q.median_angle * deg));
-        json_object_set_new(ang, "max_degrees", num(q.max_angle * deg));
-        json_object_set_new(ang, "fraction_below_10_degrees", num(q.fraction_angles_below_10_degrees));
-        json_object_set_new(ang, "median_face_min_degrees", num(q.median_face_min_angle * deg));
-        json_object_set_new(ang, "fraction_faces_min_below_10_degrees", num(q.fraction_faces_min_below_10_degrees));
-        json_object_set_new(root, "angles", ang);
-        json_t *ar = json_object();
-        json_object_set_new(ar, "total", num(q.total_area));
-        json_object_set_new(ar, "min", num(q.min_face_area));
-        json_object_set_new(ar, "median", num(q.median_face_area));
-        json_object_set_new(ar, "max", num(q.max_face_area));
-        json_object_set_new(ar, "max_over_min", num(q.max_face_area / q.min_face_area));
-        json_object_set_new(root, "face_areas", ar);
-        /* NaN (null) with boundary loops */
-        json_object_set_new(root, "willmore_over_4pi", num(q.willmore_over_4pi));
-        json_object_set_new(root, "volume", num(q.volume));
     } else {
         code = CLI_EXIT_INPUT;
     }
@@ -142,41 +196,7 @@ int cli_info(int argc, char **argv)
         if (text) puts(text);
         free(text);
     } else {
-        printf("file:          %s\n", path);
-        printf("vertices:      %d\nfaces:         %d\n", (int)data->vertex_count, (int)data->face_count);
-        if (data->polygon_count) printf("polygons:      %d (fan-triangulated)\n", (int)data->polygon_count);
-        printf("uv:            %s\n", json_string_value(json_object_get(root, "texture_coordinates")));
-        if (mesh) {
-            printf("edges:         %d\n", (int)cf_mesh_edge_count(mesh));
-            printf("components:    %d\nboundary loops: %d\n", (int)cf_mesh_component_count(mesh),
-                   (int)cf_mesh_boundary_loop_count(mesh));
-            printf("euler char.:   %d\ngenus:         %d\n", (int)cf_mesh_euler_characteristic(mesh),
-                   (int)cf_mesh_genus(mesh));
-            json_t *ang = json_object_get(root, "angles"), *ar = json_object_get(root, "face_areas");
-            printf("angles (deg):  min %.4g  median %.4g  max %.4g  below 10 deg: %.2f %%\n",
-                   json_real_value(json_object_get(ang, "min_degrees")),
-                   json_real_value(json_object_get(ang, "median_degrees")),
-                   json_real_value(json_object_get(ang, "max_degrees")),
-                   100.0 * json_real_value(json_object_get(ang, "fraction_below_10_degrees")));
-            printf("face min angle: median %.4g deg, faces with min angle below 10 deg: %.2f %%\n",
-                   json_real_value(json_object_get(ang, "median_face_min_degrees")),
-                   100.0 * json_real_value(json_object_get(ang, "fraction_faces_min_below_10_degrees")));
-            printf("face areas:    total %.6g  min %.4g  median %.4g  max %.4g  (max/min %.3g)\n",
-                   json_real_value(json_object_get(ar, "total")), json_real_value(json_object_get(ar, "min")),
-                   json_real_value(json_object_get(ar, "median")), json_real_value(json_object_get(ar, "max")),
-                   json_real_value(json_object_get(ar, "max_over_min")));
-            json_t *w = json_object_get(root, "willmore_over_4pi");
-            if (json_is_real(w)) printf("W/4pi:         %.6g\nvolume:        %.6g\n", json_real_value(w),
-                                        json_real_value(json_object_get(root, "volume")));
-            printf("validation:    ok\n");
-        } else {
-            printf("validation:    INVALID: %s\n", report.first_message);
-            printf("  index out of range %d, repeated index %d, non-finite %d, degenerate faces %d,\n"
-                   "  non-manifold edges %d, non-manifold vertices %d, inconsistent orientation %d, unreferenced %d\n",
-                   (int)report.index_out_of_range, (int)report.repeated_index, (int)report.nonfinite_coordinates,
-                   (int)report.degenerate_faces, (int)report.nonmanifold_edges, (int)report.nonmanifold_vertices,
-                   (int)report.inconsistent_orientation_edges, (int)report.unreferenced_vertices);
-        }
+        print_text(path, data, mesh, &report, root);
     }
     if (!mesh) fprintf(stderr, "curvflow: %s: %s\n", path, report.first_message);
 

@@ -248,22 +248,12 @@ static double face_longest_component(const double *p, const int32_t *t)
     return m;
 }
 
-/* Runs every check; fills s (sorted halfedges, face_ok). */
-static cf_status run_checks(checker *c, const cf_mesh_desc *d, scratch *s)
+/* Steps 1-2: vertex indices in range, no index repeated in a face (sets s->face_ok). Returns 1 when checking must stop (first defect, no report). */
+static int check_indices(checker *c, const cf_mesh_desc *d, scratch *s, cf_mesh_report *r)
 {
-    cf_context *ctx = c->ctx;
-    cf_mesh_report dummy;
-    cf_mesh_report *r = c->report ? c->report : &dummy;
-    memset(&dummy, 0, sizeof dummy);
-    const int32_t nv = d->vertex_count, nf = d->face_count;
+    const int32_t nv = d->vertex_count;
+    const int32_t nf = d->face_count;
     const int32_t *tri = d->triangles;
-    const double *p = d->positions;
-
-    if (nv == 0 || nf == 0) {
-        defect(c, NULL, CF_ERR_BAD_MESH, "empty mesh (%d vertices, %d faces)", nv, nf);
-        return c->first;
-    }
-
     /* 1. indices in range */
     for (int32_t f = 0; f < nf; ++f) {
         s->face_ok[f] = 1;
@@ -273,7 +263,7 @@ static cf_status run_checks(checker *c, const cf_mesh_desc *d, scratch *s)
                 s->face_ok[f] = 0;
                 if (defect(c, &r->index_out_of_range, CF_ERR_INDEX_RANGE,
                            "face %d: vertex index %d out of range [0, %d)", f, v, nv))
-                    return c->first;
+                    return 1;
                 break;
             }
         }
@@ -286,9 +276,17 @@ static cf_status run_checks(checker *c, const cf_mesh_desc *d, scratch *s)
         if (rep >= 0) {
             s->face_ok[f] = 0;
             if (defect(c, &r->repeated_index, CF_ERR_REPEATED_INDEX, "face %d: vertex %d repeated", f, rep))
-                return c->first;
+                return 1;
         }
     }
+    return 0;
+}
+
+/* Step 3: finite coordinates within CF_MAX_COORDINATE. Returns 1 when checking must stop (first defect, no report). */
+static int check_coordinates(checker *c, const cf_mesh_desc *d, scratch *s, cf_mesh_report *r)
+{
+    const int32_t nv = d->vertex_count;
+    const double *p = d->positions;
     /* 3. non-finite coordinates */
     static const char axis[3] = {'x', 'y', 'z'};
     for (int32_t v = 0; v < nv; ++v)
@@ -297,7 +295,7 @@ static cf_status run_checks(checker *c, const cf_mesh_desc *d, scratch *s)
             if (!isfinite(x)) {
                 if (defect(c, &r->nonfinite_coordinates, CF_ERR_NONFINITE, "vertex %d: coordinate %c is %s", v,
                            axis[k], nonfinite_word(x)))
-                    return c->first;
+                    return 1;
                 break;
             }
             if (fabs(x) > CF_MAX_COORDINATE) {
@@ -307,10 +305,17 @@ static cf_status run_checks(checker *c, const cf_mesh_desc *d, scratch *s)
                            "vertex %d: coordinate %c = %.3g is out of range (|x| > %.0e, volumes would overflow); "
                            "rescale the mesh",
                            v, axis[k], x, CF_MAX_COORDINATE))
-                    return c->first;
+                    return 1;
                 break;
             }
         }
+    return 0;
+}
+
+/* Step 3b: texture coordinate indices and values. Returns 1 when checking must stop (first defect, no report). */
+static int check_uv(checker *c, const cf_mesh_desc *d, scratch *s, cf_mesh_report *r)
+{
+    const int32_t nf = d->face_count;
     /* 3b. texture coordinates */
     if (d->uv) {
         if (d->uv_triangles)
@@ -320,7 +325,7 @@ static cf_status run_checks(checker *c, const cf_mesh_desc *d, scratch *s)
                     if (t < 0 || t >= d->uv_count) {
                         if (defect(c, &r->index_out_of_range, CF_ERR_INDEX_RANGE,
                                    "face %d: uv index %d out of range [0, %d)", f, t, d->uv_count))
-                            return c->first;
+                            return 1;
                         break;
                     }
                 }
@@ -330,11 +335,20 @@ static cf_status run_checks(checker *c, const cf_mesh_desc *d, scratch *s)
                 if (!isfinite(x)) {
                     if (defect(c, &r->nonfinite_coordinates, CF_ERR_NONFINITE, "uv %d: coordinate %c is %s", i,
                                k ? 'v' : 'u', nonfinite_word(x)))
-                        return c->first;
+                        return 1;
                     break;
                 }
             }
     }
+    return 0;
+}
+
+/* Step 4: no zero-area face (scale-free test), edges measurable. Returns 1 when checking must stop (first defect, no report). */
+static int check_areas(checker *c, const cf_mesh_desc *d, scratch *s, cf_mesh_report *r)
+{
+    const int32_t nf = d->face_count;
+    const int32_t *tri = d->triangles;
+    const double *p = d->positions;
     /* 4. zero-area faces: area <= CFI_ZERO_AREA_RATIO * (longest edge)^2 (scale-free) */
     for (int32_t f = 0; f < nf; ++f) {
         if (!s->face_ok[f]) continue;
@@ -349,16 +363,20 @@ static cf_status run_checks(checker *c, const cf_mesh_desc *d, scratch *s)
                        "face %d: its edges are shorter than %.0e (longest component %.3g), below the range of "
                        "lengths this library computes with; rescale the mesh",
                        f, CF_MIN_EDGE_LENGTH, longest))
-                return c->first;
+                return 1;
             continue;
         }
         if (area <= CFI_ZERO_AREA_RATIO * l2) {
-            if (defect(c, &r->degenerate_faces, CF_ERR_DEGENERATE_FACE, "face %d: zero area", f)) return c->first;
+            if (defect(c, &r->degenerate_faces, CF_ERR_DEGENERATE_FACE, "face %d: zero area", f)) return 1;
         }
     }
+    return 0;
+}
 
-    sort_halfedges(tri, s);
-
+/* Step 4b (halfedges sorted): no two faces on the same three vertices. Returns 1 when checking must stop (first defect, no report). */
+static int check_duplicate_faces(checker *c, const cf_mesh_desc *d, scratch *s, cf_mesh_report *r)
+{
+    const int32_t *tri = d->triangles;
     /* 4b. duplicated faces: two faces on the same three vertices (any
      * rotation, either orientation). Checked before the edges because a
      * duplicate otherwise shows as a non-manifold edge or an orientation
@@ -400,10 +418,16 @@ static cf_status run_checks(checker *c, const cf_mesh_desc *d, scratch *s)
             int32_t count = 0;
             defect(c, &count, CF_ERR_BAD_MESH, "faces %d and %d are the same triangle (vertices %d, %d, %d; %s orientation)",
                    bf1, bf2, lo, mid, hi, same ? "same" : "opposite");
-            if (!c->report) return c->first;
+            if (!c->report) return 1;
         }
     }
+    return 0;
+}
 
+/* Step 5: no edge with more than two faces. Returns 1 when checking must stop (first defect, no report). */
+static int check_nonmanifold_edges(checker *c, const cf_mesh_desc *d, scratch *s, cf_mesh_report *r)
+{
+    const int32_t *tri = d->triangles;
     /* 5. edges with more than two faces; report the face that first makes
      * an edge exceed two (the third-lowest face index of its group). */
     {
@@ -426,10 +450,18 @@ static cf_status run_checks(checker *c, const cf_mesh_desc *d, scratch *s)
             int32_t count = 0;
             defect(c, &count, CF_ERR_NONMANIFOLD_EDGE, "face %d: edge (%d, %d) is shared by %d faces", best_face,
                    he_lo(tri, h), he_hi(tri, h), best_n);
-            if (!c->report) return c->first;
+            if (!c->report) return 1;
         }
     }
+    return 0;
+}
 
+/* Step 6: the faces around each vertex form one fan. Returns 1 when checking must stop (first defect, no report). */
+static int check_nonmanifold_vertices(checker *c, const cf_mesh_desc *d, scratch *s, cf_mesh_report *r)
+{
+    const int32_t nv = d->vertex_count;
+    const int32_t nf = d->face_count;
+    const int32_t *tri = d->triangles;
     /* 6. non-manifold vertices: corners around a vertex joined across
      * two-face edges (ignoring direction) must form a single fan. */
     for (int32_t h = 0; h < 3 * nf; ++h) s->uf[h] = h;
@@ -457,10 +489,16 @@ static cf_status run_checks(checker *c, const cf_mesh_desc *d, scratch *s)
             if (fans[v] > 1) {
                 if (defect(c, &r->nonmanifold_vertices, CF_ERR_NONMANIFOLD_VERTEX,
                            "vertex %d: its faces form %d separate fans", v, fans[v]))
-                    return c->first;
+                    return 1;
             }
     }
+    return 0;
+}
 
+/* Step 7: consistent orientation across every two-face edge. Returns 1 when checking must stop (first defect, no report). */
+static int check_orientation(checker *c, const cf_mesh_desc *d, scratch *s, cf_mesh_report *r)
+{
+    const int32_t *tri = d->triangles;
     /* 7. orientation: the two faces of an edge traverse it in opposite
      * directions. Report the pair with the lowest face index. */
     {
@@ -483,10 +521,18 @@ static cf_status run_checks(checker *c, const cf_mesh_desc *d, scratch *s)
             defect(c, &count, CF_ERR_ORIENTATION,
                    "faces %d and %d: edge (%d, %d) is traversed in the same direction by both", bf1, bf2,
                    tri[bh], tri[cfi_he_next(bh)]);
-            if (!c->report) return c->first;
+            if (!c->report) return 1;
         }
     }
+    return 0;
+}
 
+/* Step 8: every vertex is used by a face. Returns 1 when checking must stop (first defect, no report). */
+static int check_unreferenced(checker *c, const cf_mesh_desc *d, scratch *s, cf_mesh_report *r)
+{
+    const int32_t nv = d->vertex_count;
+    const int32_t nf = d->face_count;
+    const int32_t *tri = d->triangles;
     /* 8. unreferenced vertices */
     {
         int32_t *used = s->count;
@@ -497,10 +543,31 @@ static cf_status run_checks(checker *c, const cf_mesh_desc *d, scratch *s)
         for (int32_t v = 0; v < nv; ++v)
             if (!used[v]) {
                 if (defect(c, &r->unreferenced_vertices, CF_ERR_BAD_MESH, "vertex %d is not used by any face", v))
-                    return c->first;
+                    return 1;
             }
     }
-    (void)ctx;
+    return 0;
+}
+
+/* Runs every check; fills s (sorted halfedges, face_ok). */
+static cf_status run_checks(checker *c, const cf_mesh_desc *d, scratch *s)
+{
+    cf_mesh_report dummy;
+    cf_mesh_report *r = c->report ? c->report : &dummy;
+    memset(&dummy, 0, sizeof dummy);
+    const int32_t nv = d->vertex_count, nf = d->face_count;
+
+    if (nv == 0 || nf == 0) {
+        defect(c, NULL, CF_ERR_BAD_MESH, "empty mesh (%d vertices, %d faces)", nv, nf);
+        return c->first;
+    }
+    if (check_indices(c, d, s, r) || check_coordinates(c, d, s, r) || (d->uv && check_uv(c, d, s, r)) ||
+        check_areas(c, d, s, r))
+        return c->first;
+    sort_halfedges(d->triangles, s);
+    if (check_duplicate_faces(c, d, s, r) || check_nonmanifold_edges(c, d, s, r) ||
+        check_nonmanifold_vertices(c, d, s, r) || check_orientation(c, d, s, r) || check_unreferenced(c, d, s, r))
+        return c->first;
     return c->report ? CF_OK : c->first;
 }
 

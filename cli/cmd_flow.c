@@ -57,6 +57,9 @@ static void usage(FILE *out)
             "OUT is .obj, .off or .ply; it must not be IN (nor the log), and is checked before the run.\n"
             "On a numerical failure (a step that produces NaN, blows up or fails to factorise) the last\n"
             "good state is still written to OUT, the message names the iteration, and the exit status is 3.\n"
+            "A flow that fails in its set-up, before any step (e.g. a filter matrix that does not\n"
+            "factorise), exits 3 and writes nothing. A run that stops early because no time step lowers\n"
+            "the energy any more (step policy, --list-params) keeps the last state that did and exits 0.\n"
             "Exit status: 0 ok, 1 usage error or bad parameter, 2 invalid input or an output that cannot\n"
             "or must not be written, 3 numerical failure.\n");
 }
@@ -89,6 +92,17 @@ static int list_params(cf_flow_kind kind)
         else
             printf("  %-20s [%s] %s%s\n      %s\n", params[i].name, def, numeric ? "in " : "", range,
                    params[i].help ? params[i].help : "");
+    }
+    /* the step policy common to every method (scalars only; docs/flowcli.md) */
+    if (cf_flow_common_params(&params, &count) != CF_OK) return CLI_EXIT_USAGE;
+    printf("Step policy, common to every method (--param NAME=VALUE; docs/flowcli.md):\n");
+    for (int32_t i = 0; i < count; ++i) {
+        char def[64], range[256];
+        if (cf_flow_options_format(&o, &params[i], def, sizeof def) != CF_OK) strcpy(def, "?");
+        if (cf_flow_param_range_format(&params[i], range, sizeof range) != CF_OK) strcpy(range, "?");
+        bool numeric = params[i].type == CF_PARAM_DOUBLE || params[i].type == CF_PARAM_INT;
+        printf("  %-20s [%s] %s%s\n      %s\n", params[i].name, def, numeric ? "in " : "", range,
+               params[i].help ? params[i].help : "");
     }
     return CLI_EXIT_OK;
 }

@@ -37,11 +37,11 @@ static const cf_param_desc policy_params[] = {
      "step policy: reject a step that raises the energy by more than rise_tolerance (methods that descend their "
      "energy: the baseline flows)"},
     {"backtrack", CF_PARAM_BOOL, POL(backtrack), 0, 1, NULL,
-     "step policy: retry a rejected step with half the time step (up to max_halvings times) and grow the step back "
-     "by step_growth after each accepted one (implicit-mcf, conformal-mcf, implicit-bilaplacian); 0: a rejected step "
-     "fails"},
+     "step policy: redo a rejected step with half the time step and grow the step back by step_growth after each "
+     "accepted one (implicit-mcf, conformal-mcf, implicit-bilaplacian); false: a rejected step fails (exit 3)"},
     {"max_halvings", CF_PARAM_INT, POL(max_halvings), 0, 60, NULL,
-     "step policy: halvings of one step before it fails"},
+     "step policy: the step never goes below time_step / 2^max_halvings; when no step down to that lowers the "
+     "energy, the run stops there as converged (the last state that lowered it kept)"},
     {"step_growth", CF_PARAM_DOUBLE, POL(step_growth), 1.0, 16.0, NULL,
      "step policy: factor on a reduced time step after an accepted step (up to time_step)"},
     {"rise_tolerance", CF_PARAM_DOUBLE, POL(rise_tolerance), 0.0, 1.0, NULL,

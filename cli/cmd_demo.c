@@ -59,7 +59,8 @@ static char *join(const char *dir, const char *name)
 
 enum { P_IN, P_OUT, P_PLY, P_LOG, P_BEFORE, P_AFTER, P_Q, P_RUN, P_REPORT, P_COUNT };
 
-int cli_demo(int argc, char **argv)
+/* Options of the demo; returns -1 to go on, else the exit code. */
+static int parse_args(int argc, char **argv, const char **dir, long long *steps, bool *quiet, bool *force)
 {
     static const struct option longopts[] = {{"output-dir", required_argument, NULL, 'd'},
                                              {"steps", required_argument, NULL, 'n'},
@@ -67,25 +68,92 @@ int cli_demo(int argc, char **argv)
                                              {"help", no_argument, NULL, 'h'},
                                              {"force", no_argument, NULL, 'f'},
                                              {NULL, 0, NULL, 0}};
-    const char *dir = "demo-output";
-    long long steps = -1;
-    bool quiet = false, force = false;
     int c;
     opterr = 0;
     while ((c = getopt_long(argc, argv, ":d:n:qfh", longopts, NULL)) != -1) {
         switch (c) {
-        case 'd': dir = optarg; break;
+        case 'd': *dir = optarg; break;
         case 'n':
-            if (!cli_parse_int("demo", "--steps", optarg, 1, 100000, &steps)) return CLI_EXIT_USAGE;
+            if (!cli_parse_int("demo", "--steps", optarg, 1, 100000, steps)) return CLI_EXIT_USAGE;
             break;
-        case 'q': quiet = true; break;
-        case 'f': force = true; break;
+        case 'q': *quiet = true; break;
+        case 'f': *force = true; break;
         case 'h': usage(stdout); return CLI_EXIT_OK;
         default: return cli_option_error("demo", c, argv);
         }
     }
     if (optind != argc) return cli_usage_error("demo", "unexpected argument '%s'", argv[optind]);
-    int code = cli_make_dir(dir);
+    return -1;
+}
+
+/* input.obj, output.obj, output.ply (Q and log area distortion per face)
+ * and the three pictures; returns the exit code. */
+static int write_meshes_and_pictures(cf_context *ctx, char *const *p, const char *dir, const cf_mesh *mesh,
+                                     const double *x0, const double *x1, cli_report_figures *fig)
+{
+    cf_status st;
+    int code;
+    cf_field fields[2] = {{"Q", CF_FIELD_FACE, fig->q}, {"log_area_distortion", CF_FIELD_FACE, fig->log_area}};
+    if ((st = cf_write_mesh_file(ctx, p[P_IN], mesh, NULL, NULL, 0)) != CF_OK ||
+        (st = cf_write_mesh_file(ctx, p[P_OUT], mesh, x1, NULL, 0)) != CF_OK ||
+        (st = cf_write_mesh_file(ctx, p[P_PLY], mesh, x1, fields, 2)) != CF_OK) {
+        code = cli_fail(ctx, dir, st);
+        if (code == CLI_EXIT_USAGE) code = CLI_EXIT_INPUT;
+        return code;
+    }
+    cf_render_options ro;
+    cf_render_options_default(&ro);
+    ro.width = ro.height = 600;
+    ro.uv_checker = 1;
+    if ((st = cf_render_png(ctx, p[P_BEFORE], mesh, x0, &ro)) != CF_OK ||
+        (st = cf_render_png(ctx, p[P_AFTER], mesh, x1, &ro)) != CF_OK) {
+        code = cli_fail(ctx, dir, st);
+        return code;
+    }
+    ro.uv_checker = 0;
+    ro.face_field = fig->q;
+    ro.field_min = 1.0; /* the report's colour bar: Q 1 (blue) .. 1.5 (red) */
+    ro.field_max = 1.5;
+    if ((st = cf_render_png(ctx, p[P_Q], mesh, x1, &ro)) != CF_OK) {
+        code = cli_fail(ctx, dir, st);
+        return code;
+    }
+    return CLI_EXIT_OK;
+}
+
+static void print_summary(const char *method, const cf_mesh *mesh, const cf_flow *flow, const cli_report_figures *fig,
+                          double flow_seconds, char *const *p, bool report_written, double started)
+{
+    const cf_flow_info *last = cf_flow_last_info(flow);
+    int32_t nf = cf_mesh_face_count(mesh);
+    const double four_pi = 4.0 * acos(-1.0);
+    printf("shape:               eight-armed star (limb-sphere, %d vertices, %d faces, per-corner uv)\n",
+           (int)cf_mesh_vertex_count(mesh), (int)nf);
+    printf("method:              %s at its defaults, %lld steps%s in %.2f s\n", method, (long long)last->iteration,
+           cf_flow_converged(flow) ? " (converged)" : "", flow_seconds);
+    printf("W/4pi:               %.6f -> %.6f  (1 for a round sphere)\n", fig->willmore_before / four_pi,
+           fig->willmore_after / four_pi);
+    printf("quasi-conformal Q:   mean %.6f  p95 %.6f  max %.6f  (1 = conformal)\n", fig->q_stats.weighted_mean,
+           fig->q_stats.p95, fig->q_stats.max);
+    printf("log area distortion: mean %+.3e  std %.3e\n", fig->log_area_stats.weighted_mean,
+           fig->log_area_stats.weighted_std);
+    printf("outputs:             %s  %s  %s  %s  %s\n", p[P_IN], p[P_OUT], p[P_PLY], p[P_LOG], p[P_RUN]);
+    printf("pictures:            %s  %s  %s\n", p[P_BEFORE], p[P_AFTER], p[P_Q]);
+    if (report_written)
+        printf("report:              %s  (one file; open it in a browser, no network needed)\n", p[P_REPORT]);
+    else
+        printf("report:              not written (see the message above)\n");
+    printf("total time:          %.2f s\n", cli_now() - started);
+}
+
+int cli_demo(int argc, char **argv)
+{
+    const char *dir = "demo-output";
+    long long steps = -1;
+    bool quiet = false, force = false;
+    int code = parse_args(argc, argv, &dir, &steps, &quiet, &force);
+    if (code >= 0) return code;
+    code = cli_make_dir(dir);
     if (code != CLI_EXIT_OK) return code;
 
     static const char *const names[P_COUNT] = {"input.obj", "output.obj", "output.ply", "log.jsonl", "before.png",
@@ -142,7 +210,6 @@ int cli_demo(int argc, char **argv)
     const char *method = cf_flow_kind_name(options.kind);
     progress.method = method;
     progress.total_steps = steps;
-    int32_t nf = cf_mesh_face_count(mesh);
     const double *x0 = cf_mesh_positions(mesh);
     if ((code = cli_progress_open_log(&progress, ctx, p[P_LOG])) != CLI_EXIT_OK) goto done;
     cli_progress_log(&progress, cf_flow_last_info(flow));
@@ -164,31 +231,7 @@ int cli_demo(int argc, char **argv)
         if (code == CLI_EXIT_OK) code = fcode != CLI_EXIT_OK ? fcode : CLI_EXIT_NUMERICAL;
         goto done;
     }
-    cf_field fields[2] = {{"Q", CF_FIELD_FACE, fig.q}, {"log_area_distortion", CF_FIELD_FACE, fig.log_area}};
-    if ((st = cf_write_mesh_file(ctx, p[P_IN], mesh, NULL, NULL, 0)) != CF_OK ||
-        (st = cf_write_mesh_file(ctx, p[P_OUT], mesh, x1, NULL, 0)) != CF_OK ||
-        (st = cf_write_mesh_file(ctx, p[P_PLY], mesh, x1, fields, 2)) != CF_OK) {
-        code = cli_fail(ctx, dir, st);
-        if (code == CLI_EXIT_USAGE) code = CLI_EXIT_INPUT;
-        goto done;
-    }
-    cf_render_options ro;
-    cf_render_options_default(&ro);
-    ro.width = ro.height = 600;
-    ro.uv_checker = 1;
-    if ((st = cf_render_png(ctx, p[P_BEFORE], mesh, x0, &ro)) != CF_OK ||
-        (st = cf_render_png(ctx, p[P_AFTER], mesh, x1, &ro)) != CF_OK) {
-        code = cli_fail(ctx, dir, st);
-        goto done;
-    }
-    ro.uv_checker = 0;
-    ro.face_field = fig.q;
-    ro.field_min = 1.0; /* the report's colour bar: Q 1 (blue) .. 1.5 (red) */
-    ro.field_max = 1.5;
-    if ((st = cf_render_png(ctx, p[P_Q], mesh, x1, &ro)) != CF_OK) {
-        code = cli_fail(ctx, dir, st);
-        goto done;
-    }
+    if ((code = write_meshes_and_pictures(ctx, p, dir, mesh, x0, x1, &fig)) != CLI_EXIT_OK) goto done;
     const cf_flow_info *last = cf_flow_last_info(flow);
     cli_report_run rr;
     cli_report_run_init(&rr);
@@ -218,24 +261,7 @@ int cli_demo(int argc, char **argv)
             report_written = true;
         }
     }
-    const double four_pi = 4.0 * acos(-1.0);
-    printf("shape:               eight-armed star (limb-sphere, %d vertices, %d faces, per-corner uv)\n",
-           (int)cf_mesh_vertex_count(mesh), (int)nf);
-    printf("method:              %s at its defaults, %lld steps%s in %.2f s\n", method, (long long)last->iteration,
-           cf_flow_converged(flow) ? " (converged)" : "", flow_seconds);
-    printf("W/4pi:               %.6f -> %.6f  (1 for a round sphere)\n", fig.willmore_before / four_pi,
-           fig.willmore_after / four_pi);
-    printf("quasi-conformal Q:   mean %.6f  p95 %.6f  max %.6f  (1 = conformal)\n", fig.q_stats.weighted_mean,
-           fig.q_stats.p95, fig.q_stats.max);
-    printf("log area distortion: mean %+.3e  std %.3e\n", fig.log_area_stats.weighted_mean,
-           fig.log_area_stats.weighted_std);
-    printf("outputs:             %s  %s  %s  %s  %s\n", p[P_IN], p[P_OUT], p[P_PLY], p[P_LOG], p[P_RUN]);
-    printf("pictures:            %s  %s  %s\n", p[P_BEFORE], p[P_AFTER], p[P_Q]);
-    if (report_written)
-        printf("report:              %s  (one file; open it in a browser, no network needed)\n", p[P_REPORT]);
-    else
-        printf("report:              not written (see the message above)\n");
-    printf("total time:          %.2f s\n", cli_now() - started);
+    print_summary(method, mesh, flow, &fig, flow_seconds, p, report_written, started);
 done:
     cli_progress_finish(&progress);
     cli_report_figures_free(&fig);

@@ -546,12 +546,12 @@ static cf_status policy_init(cf_flow *flow, const cfi_flow_method *m)
     }
     p->tolerance = 0.0;
     if (m->policy.convergence) {
-        const cf_param_desc *tol = find_param(m, "tolerance");
+        const cf_param_desc *tol = find_param(m, m->policy.tolerance_param ? m->policy.tolerance_param : "tolerance");
         if (CF_NEVER(!tol || tol->type != CF_PARAM_DOUBLE || tol->offset + sizeof(double) > m->options_size))
-            return cfi_error(flow->ctx, CF_ERR_INVALID_ARG, "%s: no 'tolerance' parameter for the step policy", m->name);
+            return cfi_error(flow->ctx, CF_ERR_INVALID_ARG, "%s: no tolerance parameter for the step policy", m->name);
         memcpy(&p->tolerance, flow->options.storage.bytes + tol->offset, sizeof p->tolerance);
         if (!(p->tolerance >= 0.0 && p->tolerance <= tol->max_value))
-            return cfi_error(flow->ctx, CF_ERR_INVALID_ARG, "parameter 'tolerance': must be in [0, %g], got %g",
+            return cfi_error(flow->ctx, CF_ERR_INVALID_ARG, "parameter '%s': must be in [0, %g], got %g", tol->name,
                              tol->max_value, p->tolerance);
     }
     return CF_OK;
@@ -704,11 +704,17 @@ static cf_status stall(cf_flow *flow, double before, const cf_flow_info *step, i
         if (st != CF_OK) return fail_step(flow, st, iteration);
     }
     flow->converged = 1;
-    cfi_log(ctx, CF_LOG_WARNING,
-            "iteration %lld: %s: stopped: the energy rises (%.9g -> %.9g) at every time step down to %g (time_step / "
-            "%.0f); the last state that lowered it is kept (energy_check=false accepts rising steps)",
-            (long long)iteration, flow->method->name, before, step->energy, step->time_step,
-            1.0 / flow->policy.step_scale);
+    if (!flow->method->policy.backtrack)
+        cfi_log(ctx, CF_LOG_WARNING,
+                "iteration %lld: %s: stopped: the step raised the energy (%.9g -> %.9g); the state before it is kept "
+                "(energy_check=false accepts rising steps)",
+                (long long)iteration, flow->method->name, before, step->energy);
+    else
+        cfi_log(ctx, CF_LOG_WARNING,
+                "iteration %lld: %s: stopped: the energy rises (%.9g -> %.9g) at every time step down to %g "
+                "(time_step / %.0f); the last state that lowered it is kept (energy_check=false accepts rising steps)",
+                (long long)iteration, flow->method->name, before, step->energy, step->time_step,
+                1.0 / flow->policy.step_scale);
     if (info) *info = flow->info;
     return CF_OK;
 }
@@ -760,7 +766,10 @@ cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info)
             return fail_step(flow, CF_ERR_NUMERICAL, iteration);
         }
         if (!rise_check || !cfi_step_policy_rose(pol, before, step.energy)) break;
-        if (!backtrack) return fail_rise(flow, before, &step, iteration);
+        if (!backtrack) {
+            if (desc->rise_stops) return stall(flow, before, &step, iteration, info);
+            return fail_rise(flow, before, &step, iteration);
+        }
         /* max_halvings bounds the step against time_step, not per step (or
          * a run near its minimum would creep on with ever smaller steps):
          * when no step down to time_step / 2^max_halvings lowers the energy,

@@ -127,5 +127,5 @@ int cfi_step_policy_diverged(const cfi_step_policy_state *p, double energy, doub
 
 int cfi_step_policy_converged(double before, double after, double tolerance)
 {
-    return tolerance > 0.0 && before > 0.0 && fabs(before - after) < tolerance * before;
+    return tolerance > 0.0 && ((before > 0.0 && fabs(before - after) < tolerance * before) || after == 0.0);
 }

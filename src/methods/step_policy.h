@@ -40,10 +40,17 @@ typedef struct cfi_step_policy_desc {
      * grown back afterwards. 0 (e.g. explicit flows, whose stability the
      * user chose with time_step): a rejected step fails. */
     int32_t backtrack;
+    /* 1 (without backtrack): a rejected rise ends the run as converged,
+     * keeping the state before it, instead of failing (a method without a
+     * time step to reduce, whose iteration has stopped lowering its
+     * energy: stretch-bend-edit). */
+    int32_t rise_stops;
     /* 1: the flow layer decides convergence from the method's parameter
-     * `tolerance` (|E - E_prev| < tolerance E_prev); 0: the method sets
-     * flow->converged itself. */
+     * named tolerance_param (NULL: "tolerance"): |E - E_prev| <
+     * tolerance E_prev, or E = 0; 0: the method sets flow->converged
+     * itself. */
     int32_t convergence;
+    const char *tolerance_param;
     cfi_energy_unit unit;
     /* What the message of a failed rise adds, e.g. "the time step is above
      * the stability limit; a smaller time_step helps" (NULL: a generic hint). */
@@ -92,7 +99,8 @@ int cfi_step_policy_rose(const cfi_step_policy_state *p, double before, double a
 int cfi_step_policy_diverged(const cfi_step_policy_state *p, double energy, double initial, double factor);
 
 /* 1 when a step from `before` to `after` changed the energy by less than
- * the tolerance (relative to before > 0): the run has converged. */
+ * the tolerance (relative to before > 0), or reached energy 0: the run has
+ * converged. tolerance 0: never. */
 int cfi_step_policy_converged(double before, double after, double tolerance);
 
 #endif /* CF_METHODS_STEP_POLICY_H */

@@ -593,10 +593,10 @@ static cf_status stretch_bend_step(cf_flow *flow, cf_flow_info *info)
         }
         t3 = cfi_now_seconds();
     }
-    /* Stopping rule: relative energy decrease below the tolerance. */
+    /* Stopping rule (the flow layer's step policy, see the vtable): relative
+     * energy decrease below relative_tolerance; a rise stops the run. */
     double scale = fabs(previous) > 0.0 ? fabs(previous) : 1.0;
     double decrease = (previous - s->energy) / scale;
-    if (decrease < s->options.relative_tolerance || s->energy == 0.0) flow->converged = 1;
 
     info->time_step = 1.0;
     fill_terms(s, info);
@@ -645,6 +645,9 @@ const cfi_flow_method cfi_stretch_bend_edit_method = {
     .step = stretch_bend_step,
     .reset = stretch_bend_reset,
     .destroy = stretch_bend_destroy,
+    /* no time step to reduce: a step that raises the energy ends the run
+     * (the state before it kept); converged below relative_tolerance */
+    .policy = {.rise_check = 1, .rise_stops = 1, .convergence = 1, .tolerance_param = "relative_tolerance"},
 };
 
 cf_status cf_stretch_bend_set_handles(cf_flow *flow, const cf_handle_set *handles)

@@ -204,10 +204,11 @@ int main(int argc, char **argv)
     int32_t saddle = -1;
     int32_t max_vertices = 700000;
     int repeat = 3;
+    int32_t threads = 1; /* --no-thread-fix: 0 */
     for (int i = 1; i < argc; ++i) {
         if (!strcmp(argv[i], "--max-vertices") && i + 1 < argc) max_vertices = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--repeat") && i + 1 < argc) repeat = atoi(argv[++i]);
-        else if (!strcmp(argv[i], "--no-thread-fix")) cf_linalg_set_thread_fix(0);
+        else if (!strcmp(argv[i], "--no-thread-fix")) threads = 0; /* the OpenMP runtime as the process set it */
         else if (!strcmp(argv[i], "--saddle") && i + 1 < argc) saddle = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--ordering") && i + 1 < argc) {
             ++i;
@@ -222,6 +223,7 @@ int main(int argc, char **argv)
     if (repeat < 1) repeat = 1;
     cf_context *ctx = NULL;
     if (cf_context_create(&ctx) != CF_OK) return 1;
+    cf_context_set_threads(ctx, threads);
     if (saddle >= 0) {
         int r = run_saddle(ctx, saddle);
         cf_context_destroy(&ctx);

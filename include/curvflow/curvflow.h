@@ -124,6 +124,25 @@ CF_API void cf_context_fail_allocation(cf_context *ctx, int64_t n, int sticky);
 /* Number of allocations made through the context so far. */
 CF_API int64_t cf_context_allocation_count(const cf_context *ctx);
 
+/* Threads of the library's OpenMP parallel regions (those of CHOLMOD's
+ * factorisations) for work done with this context:
+ *   1 (default): serial. Debian's CHOLMOD 3.0.14 opens its regions with 4
+ *     threads, which on small machines fight OpenBLAS's threads
+ *     (factorisations about 2x slower on 2 cores, docs/linalg.md);
+ *   0: the library leaves the OpenMP runtime as the process set it
+ *     (OMP_THREAD_LIMIT, OMP_MAX_ACTIVE_LEVELS, the application's omp_*
+ *     calls): for applications that manage OpenMP themselves;
+ *   n > 1: parallel regions allowed (CHOLMOD picks its own count, capped
+ *     by OMP_THREAD_LIMIT; n itself is not a count CHOLMOD can take).
+ * The setting is applied through OpenMP's max-active-levels ICV (0 for 1,
+ * 1 for n > 1) of the calling thread just before each call into CHOLMOD
+ * made with this context, never at load time, never with 0. Results do not
+ * depend on it; OpenBLAS's own threads (OPENBLAS_NUM_THREADS) are not
+ * affected. Statuses: CF_ERR_INVALID_ARG (NULL ctx, threads < 0). */
+CF_API cf_status cf_context_set_threads(cf_context *ctx, int32_t threads);
+/* The context's setting (1 for a NULL ctx). */
+CF_API int32_t cf_context_threads(const cf_context *ctx);
+
 /* "0.1.0" */
 CF_API const char *cf_version_string(void);
 

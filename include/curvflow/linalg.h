@@ -159,12 +159,8 @@ CF_API void cf_cholesky_timings(const cf_cholesky *chol, cf_solver_timings *timi
 
 CF_API void cf_cholesky_destroy(cf_cholesky **chol);
 
-/* Process-wide switch, default on: stop CHOLMOD's OpenMP parallel regions
- * (CHOLMOD 3.0.14 asks for 4 threads in each; on 2 cores they fight
- * OpenBLAS's threads and factorisations run about 2x slower, see
- * docs/linalg.md). Takes effect when a context first uses CHOLMOD; call it
- * before creating any factorisation. OpenBLAS keeps its own threads. */
-CF_API void cf_linalg_set_thread_fix(int enabled);
+/* CHOLMOD's OpenMP threads: a context option, cf_context_set_threads
+ * (curvflow.h; default serial). */
 
 /* ---- Saddle-point systems --------------------------------------------- */
 

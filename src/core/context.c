@@ -67,6 +67,7 @@ cf_status cf_context_create_with_allocator(const cf_allocator *allocator, cf_con
         ctx->allocator.free_fn = default_free;
     }
     ctx->log_min_level = CF_LOG_INFO;
+    ctx->threads = 1;
     *out = ctx;
     return CF_OK;
 }
@@ -84,6 +85,16 @@ void cf_context_destroy(cf_context **pctx)
     else free(ctx);
     *pctx = NULL;
 }
+
+cf_status cf_context_set_threads(cf_context *ctx, int32_t threads)
+{
+    if (!ctx) return CF_ERR_INVALID_ARG;
+    if (threads < 0) return cfi_error(ctx, CF_ERR_INVALID_ARG, "context: threads must be >= 0, got %d", threads);
+    ctx->threads = threads;
+    return CF_OK;
+}
+
+int32_t cf_context_threads(const cf_context *ctx) { return ctx ? ctx->threads : 1; }
 
 void cf_context_set_log(cf_context *ctx, cf_log_fn fn, void *user, cf_log_level min_level)
 {

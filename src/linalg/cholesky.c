@@ -331,6 +331,7 @@ static cf_status factorize(cf_cholesky *chol, const cf_sparse *a, double shift)
     }
     double t0 = cfi_now_seconds();
     cholmod_common *c = chol->common;
+    cfi_cholmod_apply_threads(ctx); /* the context's OpenMP setting (cf_context_set_threads) */
     c->status = CHOLMOD_OK;
     cfi_cholmod_clear_message();
     cholmod_sparse view;

@@ -22,6 +22,8 @@ typedef struct linalg_state {
     int started;
     struct cholmod_method_struct default_methods[CHOLMOD_MAXMETHODS + 1];
     cfi_ordering_cache orderings;
+    void (*set_levels)(int);  /* omp_set_max_active_levels, NULL if absent */
+    int set_levels_looked_up;
 } linalg_state;
 
 /* CHOLMOD's error handler receives no user pointer, so the text of the last
@@ -64,25 +66,24 @@ static void destroy_state(cf_context *ctx, void *state)
     ctx->allocator.free_fn(ctx->allocator.user, s, sizeof *s);
 }
 
-/* Stops the OpenMP parallel regions inside CHOLMOD. CHOLMOD 3.0.14 opens
- * its loops with num_threads(4), which omp_set_num_threads cannot lower;
- * setting the max-active-levels ICV to 0 makes every region run on the
- * calling thread alone, the in-program equivalent of OMP_THREAD_LIMIT=1.
- * libgomp is already loaded (CHOLMOD needs it), so the symbol is looked up
- * at run time instead of linking libgomp ourselves. OpenBLAS (pthreads)
- * keeps its own threads. */
-static void limit_openmp_threads(void)
+/* The context's thread setting (cf_context_set_threads) for CHOLMOD's
+ * OpenMP regions. CHOLMOD 3.0.14 opens its loops with num_threads(4), which
+ * omp_set_num_threads cannot lower; the max-active-levels ICV can: 0 makes
+ * every region run on the calling thread alone (the in-program equivalent
+ * of OMP_THREAD_LIMIT=1), 1 lets them run in parallel. libgomp is already
+ * loaded (CHOLMOD needs it), so the symbol is looked up at run time (once
+ * per context) instead of linking libgomp ourselves. threads = 0 leaves the
+ * runtime alone. OpenBLAS (pthreads) keeps its own threads. */
+static void apply_threads(cf_context *ctx, linalg_state *s)
 {
-    void *sym = dlsym(RTLD_DEFAULT, "omp_set_max_active_levels");
-    if (!sym) return;
-    void (*set_levels)(int);
-    memcpy(&set_levels, &sym, sizeof set_levels); /* object -> function pointer without a cast warning */
-    set_levels(0);
+    if (ctx->threads == 0) return;
+    if (!s->set_levels_looked_up) {
+        void *sym = dlsym(RTLD_DEFAULT, "omp_set_max_active_levels");
+        if (sym) memcpy(&s->set_levels, &sym, sizeof s->set_levels); /* object -> function pointer, no cast warning */
+        s->set_levels_looked_up = 1;
+    }
+    if (s->set_levels) s->set_levels(ctx->threads == 1 ? 0 : 1);
 }
-
-static int thread_fix_enabled = 1; /* set once by cf_linalg_set_thread_fix before first use */
-
-void cf_linalg_set_thread_fix(int enabled) { thread_fix_enabled = enabled != 0; }
 
 void cfi_cholmod_reset_parameters(cholmod_common *c)
 {
@@ -110,6 +111,11 @@ void cfi_cholmod_reset_parameters(cholmod_common *c)
     c->zrelax[2] = 0.05;
 }
 
+void cfi_cholmod_apply_threads(cf_context *ctx)
+{
+    if (ctx && ctx->linalg_state) apply_threads(ctx, ctx->linalg_state);
+}
+
 cf_status cfi_cholmod_common(cf_context *ctx, cholmod_common **out)
 {
     *out = NULL;
@@ -126,7 +132,7 @@ cf_status cfi_cholmod_common(cf_context *ctx, cholmod_common **out)
         ctx->linalg_state_destroy = destroy_state;
     }
     if (!s->started) {
-        if (thread_fix_enabled) limit_openmp_threads();
+        apply_threads(ctx, s);
         cholmod_start(&s->common);
         s->common.print = 0;
         s->common.error_handler = record_cholmod_error;
@@ -135,6 +141,7 @@ cf_status cfi_cholmod_common(cf_context *ctx, cholmod_common **out)
         cfi_cholmod_reset_parameters(&s->common);
         s->started = 1;
     }
+    apply_threads(ctx, s); /* every call: the setting may have changed, another context may have run */
     s->common.status = CHOLMOD_OK;
     cfi_cholmod_clear_message();
     *out = &s->common;

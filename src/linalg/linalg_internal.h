@@ -16,6 +16,9 @@
  * installed, OpenMP threads limited; see cholmod_state.c) and finished by
  * cf_context_destroy. Statuses: CF_OK, CF_ERR_NOMEM. */
 cf_status cfi_cholmod_common(cf_context *ctx, cholmod_common **out);
+/* Applies the context's thread setting (cf_context_set_threads) to OpenMP
+ * before a parallel CHOLMOD call (no-op before CHOLMOD started in ctx). */
+void cfi_cholmod_apply_threads(cf_context *ctx);
 
 /* The context's ordering cache: the fill-reducing orderings (0: AMD,
  * 1: METIS; NULL if not computed) of the last block graph analysed,

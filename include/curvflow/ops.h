@@ -156,6 +156,9 @@ CF_API double cf_edge_closure_error(const cf_mesh *mesh, const double *positions
 typedef struct cf_spectral_filter cf_spectral_filter;
 /* positions: 3 nv (NULL: rest positions); sigma > 0 finite; k in 0..3.
  * Statuses: CF_ERR_INVALID_ARG, CF_ERR_DEGENERATE_FACE, CF_ERR_NOMEM,
+ * CF_ERR_NUMERICAL when F cannot be factorised in double precision (sigma'
+ * so large that F's constant mode is lost to rounding; the message names
+ * the mesh's sizes and the largest sigma / 10^n that works), other
  * factorisation errors. */
 CF_API cf_status cf_spectral_filter_create(cf_context *ctx, const cf_mesh *mesh, const double *positions, double sigma,
                                            int32_t k, cf_spectral_filter **out);

@@ -13,6 +13,7 @@
 #include "mesh/mesh_internal.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 #define CFI_PI 3.14159265358979323846
@@ -49,9 +50,46 @@ static cf_status scaled_copy(cf_context *ctx, const cf_sparse *a, const double *
     return st;
 }
 
-/* F = M + sig L (M^-1 L)^(k-1) and its factorisation; f->u is scratch here. */
-static cf_status build(cf_spectral_filter *f, const cf_mesh *mesh, const double *positions, double sig)
+/* F fails to factorise when sigma' (M^-1 L)^k dwarfs M by about the
+ * reciprocal of the rounding unit: its constant mode (L 1 = 0, so F 1 = M 1)
+ * is then lost to rounding, and Cholesky breaks down at the last pivot
+ * (issue 15 E3: spot_3k at sigma 1e12, "not positive definite at column
+ * 190"). The largest sigma that still factorises depends on the mesh
+ * (spot_3k 1e11, a 642-vertex icosphere above 1e12), so it is found by
+ * trying sigma / 10, / 100, ... with the same analysis (failure path only),
+ * and the message names the mesh's sizes and that value; the caller's
+ * sigma is not changed behind its back. stiff is L (k = 1) or
+ * L (M^-1 L)^(k-1), radius_k R^2k. (Written for spin-willmore's filter by
+ * the step-policy work of issue 15, moved here with the filter.) */
+static cf_status explain_failure(cf_spectral_filter *f, const cf_mesh *mesh, const cf_sparse *m, const cf_sparse *stiff,
+                                 double sigma, double radius_k, double radius)
 {
+    cf_context *ctx = f->ctx;
+    double works = 0.0;
+    for (double trial = sigma / 10.0; f->chol && trial >= 1e-6 && works == 0.0; trial /= 10.0) {
+        cf_sparse *t = NULL;
+        if (cf_sparse_add(ctx, 1.0, m, trial * radius_k, stiff, &t) != CF_OK) break;
+        t->symmetric = 1;
+        if (cf_cholesky_factorize(f->chol, t) == CF_OK) works = trial;
+        cf_sparse_destroy(&t);
+    }
+    char hint[96];
+    if (works > 0.0)
+        snprintf(hint, sizeof hint, "sigma = %g factorises on this mesh", works);
+    else
+        snprintf(hint, sizeof hint, "no sigma down to 1e-6 factorises either");
+    return cfi_error(ctx, CF_ERR_NUMERICAL,
+                     "the spectral filter M + sigma R^%d L (M^-1 L)^%d cannot be factorised in double precision with "
+                     "sigma = %g on this mesh (%d vertices, %d faces, R = sqrt(area / 4pi) = %.4g): its constant mode "
+                     "is lost to rounding; use a smaller sigma (%s; the filter's effect saturates long before) or a "
+                     "smaller filter power k",
+                     2 * f->k, f->k - 1, sigma, mesh->nv, mesh->nf, radius, hint);
+}
+
+/* F = M + sig L (M^-1 L)^(k-1) and its factorisation; f->u is scratch here. */
+static cf_status build(cf_spectral_filter *f, const cf_mesh *mesh, const double *positions, double sigma, double radius2)
+{
+    double sig = sigma * pow(radius2, (double)f->k);
     cf_context *ctx = f->ctx;
     cf_sparse *l = NULL, *m = NULL, *lminv = NULL, *p = NULL, *p2 = NULL;
     cf_status st = cf_cotan_laplacian(ctx, mesh, positions, &l);
@@ -78,6 +116,8 @@ static cf_status build(cf_spectral_filter *f, const cf_mesh *mesh, const double 
     co.block_size = 1;
     st = cf_cholesky_create(ctx, f->f, &co, &f->chol);
     if (st == CF_OK) st = cf_cholesky_factorize(f->chol, f->f);
+    if (st == CF_ERR_NOT_POSDEF)
+        st = explain_failure(f, mesh, m, f->k == 1 ? l : p, sigma, pow(radius2, (double)f->k), sqrt(radius2));
 done:
     cf_sparse_destroy(&l);
     cf_sparse_destroy(&m);
@@ -120,7 +160,7 @@ cf_status cf_spectral_filter_create(cf_context *ctx, const cf_mesh *mesh, const 
     if (st == CF_OK) st = cf_total_area(ctx, mesh, positions, &area);
     if (st != CF_OK) goto fail;
     double radius2 = area / (4.0 * CFI_PI);
-    st = build(f, mesh, positions, sigma * pow(radius2, (double)k));
+    st = build(f, mesh, positions, sigma, radius2);
     if (st != CF_OK) goto fail;
     *out = f;
     return CF_OK;

@@ -80,8 +80,7 @@ void cfi_spin_destroy(cf_flow *flow)
     cf_cholesky_destroy(&s->chol0);
     cf_edge_poisson_destroy(&s->poisson);
     cf_edge_poisson_destroy(&s->poisson_input);
-    cf_sparse_destroy(&s->filter);
-    cf_cholesky_destroy(&s->filter_chol);
+    cf_spectral_filter_destroy(&s->filter);
     cfi_spin_ws_free_all(&s->ws);
     CFI_FREE(ctx, s, 1);
     flow->impl = NULL;
@@ -221,7 +220,12 @@ cf_status cfi_spin_create(cf_flow *flow, const void *options)
     s->eps = o->regularization * 4.0 * CFI_PI / flow->initial_area;
     st = cfi_spin_boundary_targets(flow, s, o);
     if (st == CF_OK) st = create_dirac(flow, s);
-    if (st == CF_OK && o->sigma > 0.0) st = cfi_spin_filter_build(flow, s);
+    /* the filter is built on the input: the weak cotan Laplacian is invariant
+     * under conformal maps, and the flow is conformal */
+    if (st == CF_OK && o->sigma > 0.0) {
+        st = cf_spectral_filter_create(ctx, mesh, flow->positions, o->sigma, o->filter_k, &s->filter);
+        if (st == CF_ERR_NUMERICAL) cfi_error_prefix(ctx, "spin-willmore: parameter 'sigma'");
+    }
     if (st != CF_OK) goto fail;
 
     flow->info.energy = s->energy;
@@ -373,7 +377,9 @@ cf_status cfi_spin_step(cf_flow *flow, cf_flow_info *info)
 
     /* I-II. rhodot = -2 H (Sec. 6.1), then the spectral filter (Sec. 4) */
     for (int32_t i = 0; i < nv; ++i) s->rhodot[i] = -2.0 * s->h[i];
-    cf_status st = cfi_spin_filter_apply(s, &t.solve);
+    cf_solver_timings tm = {0.0, 0.0, 0.0};
+    cf_status st = s->filter ? cf_spectral_filter_apply(s->filter, s->rhodot, &tm) : CF_OK;
+    t.solve += tm.solve_seconds;
     /* III. constraints (Sec. 6.2) */
     if (st == CF_OK) st = cfi_spin_apply_constraints(flow, s, x, &t.factorize, &t.solve);
     /* IV-VI under the step policy, then its checks */

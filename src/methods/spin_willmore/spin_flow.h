@@ -5,7 +5,6 @@
  * live in one file each:
  *   options.c          defaults, parameter table, validation of the options
  *   boundary_frames.c  boundary vectors and frames, prescribed targets (Sec. 6.3.1)
- *   spectral_filter.c  the filter v <- v - (id + sigma Delta^k)^-1 v (Sec. 4)
  *   exactness.c        harmonic 1-forms and the exactness columns (App. C; genus > 0, holes)
  *   mobius.c           Moebius balancing (App. E.1)
  *   constraints.c      assembling and projecting the constraints (Sec. 6.2)
@@ -45,10 +44,7 @@ typedef struct cfi_spin_state {
     cf_cholesky *chol0;      /* X(0) + eps M, exactness only */
     cf_edge_poisson *poisson;       /* cotan Laplacian of the current surface (H; fixed-boundary positions) */
     cf_edge_poisson *poisson_input; /* input_metric: that of the starting surface, factorised once */
-    cf_sparse *filter;       /* M + sigma' L (M^-1 L)^(k-1), built from the input */
-    cf_cholesky *filter_chol;
-    double filter_scale;     /* k = 0: sigma / (1 + sigma) */
-    double *filter_mass;     /* nv: M of the filter (input areas) */
+    cf_spectral_filter *filter; /* sigma > 0: the spectral filter of the input (Sec. 4; curvflow/ops.h) */
     int32_t harmonic_dim;    /* dim H^1 (2g + b - 1 with boundary) if the exactness constraint is active */
     int32_t linearized;      /* exactness by the discrete linearisation instead of App. C's Z_i */
     double *hweights;        /* ne: cotan weights of the input (the *1 of the harmonic basis), linearized only */
@@ -102,11 +98,6 @@ void cfi_spin_boundary_frames(const cf_flow *flow, cfi_spin_state *s);
  * (normalised) or the input's binormals rotated on loops 1, 2, ... */
 cf_status cfi_spin_boundary_targets(cf_flow *flow, cfi_spin_state *s, const cf_spin_willmore_options *o);
 
-/* ---- spectral_filter.c ---- */
-/* Builds and factorises the filter of the input surface (sigma > 0). */
-cf_status cfi_spin_filter_build(cf_flow *flow, cfi_spin_state *s);
-/* rhodot <- rhodot - (id + sigma Delta^k)^-1 rhodot (sigma > 0 only); adds the solve time. */
-cf_status cfi_spin_filter_apply(cfi_spin_state *s, double *solve_seconds);
 
 /* ---- exactness.c ---- */
 /* Harmonic dimension the exactness constraint needs for these options (0: off). */

@@ -125,6 +125,15 @@ CF_API cf_status cf_edge_poisson_set_metric(cf_edge_poisson *p, const double *po
  * accumulates factorise / solve seconds. Solver statuses. */
 CF_API cf_status cf_edge_poisson_solve(cf_edge_poisson *p, const double *edges, const double *fixed, double *out,
                                        cf_solver_timings *timings);
+/* The same fit solved for the displacement from `base` (3 nv, interleaved;
+ * NULL: as cf_edge_poisson_solve): L (f - base) = b - L base, with the edge
+ * differences e~_e - (base_j - base_i) built per edge. Use it when f is a
+ * step away from known positions: the solve's rounding error is then
+ * relative to the step, not to the coordinates, which matters where a flow
+ * has crowded triangles far below the mesh's scale (docs/spin.md). out may
+ * not alias base. */
+CF_API cf_status cf_edge_poisson_solve_from(cf_edge_poisson *p, const double *base, const double *edges,
+                                            const double *fixed, double *out, cf_solver_timings *timings);
 /* (L + shift I) u = b for ncols scalar columns (nv each, column-major) with
  * the current metric, factorising only if the metric changed since the last
  * factorisation (a position solve of the same metric shares it). Only

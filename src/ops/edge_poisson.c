@@ -188,6 +188,18 @@ cf_status cf_edge_poisson_solve_scalar(cf_edge_poisson *p, int32_t ncols, const 
 cf_status cf_edge_poisson_solve(cf_edge_poisson *p, const double *edges, const double *fixed, double *out,
                                 cf_solver_timings *timings)
 {
+    return cf_edge_poisson_solve_from(p, NULL, edges, fixed, out, timings);
+}
+
+/* With a base, the unknown is the displacement d = f - base and the right-hand
+ * side is built from e~ - e(base): since div e(base) = L base exactly for
+ * these weights, L d = b - L base is the same least-squares problem, but the
+ * rounding error of the solve is relative to |d| (the step) instead of |f|
+ * (the coordinates). Where a flow has crowded a region to 1e-8 of the mean
+ * edge length, the absolute solve's error is larger than its triangles. */
+cf_status cf_edge_poisson_solve_from(cf_edge_poisson *p, const double *base, const double *edges, const double *fixed,
+                                     double *out, cf_solver_timings *timings)
+{
     if (!p || !edges || !out || (p->known_count > 0 && !fixed)) return CF_ERR_INVALID_ARG;
     const cf_mesh *mesh = p->mesh;
     int32_t nv = p->nv;
@@ -198,8 +210,9 @@ cf_status cf_edge_poisson_solve(cf_edge_poisson *p, const double *edges, const d
         int32_t i = mesh->edge_vertices[2 * e], j = mesh->edge_vertices[2 * e + 1];
         double w = -l->values[p->edge_slot[e]];
         for (int c = 0; c < 3; ++c) {
-            rhs[c * nv + i] -= w * edges[3 * e + c];
-            rhs[c * nv + j] += w * edges[3 * e + c];
+            double d = base ? edges[3 * e + c] - (base[3 * j + c] - base[3 * i + c]) : edges[3 * e + c];
+            rhs[c * nv + i] -= w * d;
+            rhs[c * nv + j] += w * d;
         }
     }
     cf_status st = p->factored ? CF_OK : factorize(p, timings);
@@ -209,7 +222,10 @@ cf_status cf_edge_poisson_solve(cf_edge_poisson *p, const double *edges, const d
         /* min 1/2 f^T L f - rhs^T f with the known values: b = -rhs */
         for (int64_t k = 0; k < 3 * (int64_t)nv; ++k) rhs[k] = -rhs[k];
         for (int32_t k = 0; k < p->known_count; ++k)
-            for (int c = 0; c < 3; ++c) p->y[c * p->known_count + k] = fixed[3 * p->known[k] + c];
+            for (int c = 0; c < 3; ++c) {
+                int64_t v = 3 * (int64_t)p->known[k] + c;
+                p->y[c * p->known_count + k] = base ? fixed[v] - base[v] : fixed[v];
+            }
         st = cf_min_quad_solve(p->quad, 3, rhs, p->y, NULL, p->sol);
     } else {
         st = cf_cholesky_solve(p->chol, 3, rhs, p->sol);
@@ -217,7 +233,11 @@ cf_status cf_edge_poisson_solve(cf_edge_poisson *p, const double *edges, const d
     if (timings) timings->solve_seconds += cfi_now_seconds() - t1;
     if (st != CF_OK) return st;
     for (int32_t v = 0; v < nv; ++v)
-        for (int c = 0; c < 3; ++c) out[3 * v + c] = p->sol[c * nv + v];
+        for (int c = 0; c < 3; ++c) out[3 * v + c] = base ? base[3 * v + c] + p->sol[c * nv + v] : p->sol[c * nv + v];
+    /* the known vertices get their fixed values exactly, also with a base */
+    if (base)
+        for (int32_t k = 0; k < p->known_count; ++k)
+            for (int c = 0; c < 3; ++c) out[3 * p->known[k] + c] = fixed[3 * p->known[k] + c];
     return CF_OK;
 }
 

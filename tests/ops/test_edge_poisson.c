@@ -119,6 +119,92 @@ static void test_fixed_values_and_sign(void)
     cf_context_destroy(&ctx);
 }
 
+/* cf_edge_poisson_solve_from: the same least-squares fit solved for the
+ * displacement from a base. A zero step gives the base back bit for bit
+ * (also 1e6 away from the origin); a tiny integrable step (1e-9 of the size)
+ * is recovered to 1e-4 of the step, while the absolute solve's error is
+ * relative to the coordinates (the shift and rounding), above the step
+ * itself; with fixed vertices both forms agree and the fixed values are
+ * exact. */
+static void test_solve_from(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *mesh = NULL;
+    CHECK_OK(ctx, cf_generate_bumpy_sphere(ctx, 3, 0.2, 7, &mesh));
+    int32_t nv = cf_mesh_vertex_count(mesh), ne = cf_mesh_edge_count(mesh);
+    const int32_t *ev = cf_mesh_edge_vertices(mesh);
+    double *base = malloc(3 * (size_t)nv * sizeof(double)), *x = malloc(3 * (size_t)nv * sizeof(double));
+    double *y = malloc(3 * (size_t)nv * sizeof(double)), *moved = malloc(3 * (size_t)nv * sizeof(double));
+    const double *p = cf_mesh_positions(mesh);
+    for (int32_t i = 0; i < 3 * nv; ++i) base[i] = p[i] + 1e6;
+    cf_edge_poisson *ep = NULL;
+    CHECK_OK(ctx, cf_edge_poisson_create(ctx, mesh, NULL, 0, NULL, &ep));
+    /* zero step */
+    double *e = edges_of(mesh, base);
+    CHECK_OK(ctx, cf_edge_poisson_solve_from(ep, base, e, NULL, x, NULL));
+    CHECK(memcmp(x, base, 3 * (size_t)nv * sizeof(double)) == 0);
+    free(e);
+    memcpy(base, p, 3 * (size_t)nv * sizeof(double));
+    /* a tiny smooth step: g = 1e-9 (z^2, xy, sin x) */
+    for (int32_t i = 0; i < nv; ++i) {
+        const double *q = p + 3 * i;
+        double g[3] = {q[2] * q[2], q[0] * q[1], sin(q[0])};
+        for (int c = 0; c < 3; ++c) moved[3 * i + c] = base[3 * i + c] + 1e-9 * g[c];
+    }
+    /* target edges from the small differences (exact to rounding of 1e-9 g) */
+    e = malloc(3 * (size_t)ne * sizeof(double));
+    for (int32_t k = 0; k < ne; ++k)
+        for (int c = 0; c < 3; ++c) {
+            const double *a = p + 3 * ev[2 * k], *b = p + 3 * ev[2 * k + 1];
+            double ga[3] = {a[2] * a[2], a[0] * a[1], sin(a[0])}, gb[3] = {b[2] * b[2], b[0] * b[1], sin(b[0])};
+            e[3 * k + c] = (b[c] - a[c]) + 1e-9 * (gb[c] - ga[c]);
+        }
+    CHECK_OK(ctx, cf_edge_poisson_solve_from(ep, base, e, NULL, x, NULL));
+    CHECK_OK(ctx, cf_edge_poisson_solve(ep, e, NULL, y, NULL));
+    double err_from = 0.0, err_abs = 0.0, step = 0.0;
+    for (int32_t k = 0; k < ne; ++k) {
+        int32_t i = ev[2 * k], j = ev[2 * k + 1];
+        for (int c = 0; c < 3; ++c) {
+            double want = e[3 * k + c];
+            step = fmax(step, fabs(e[3 * k + c] - (base[3 * j + c] - base[3 * i + c])));
+            err_from = fmax(err_from, fabs(x[3 * j + c] - x[3 * i + c] - want));
+            err_abs = fmax(err_abs, fabs(y[3 * j + c] - y[3 * i + c] - want));
+        }
+    }
+    fprintf(stderr, "   step 1e-9: largest edge change %.2e, edge error from the base %.2e, "
+                    "absolute solve %.2e\n", step, err_from, err_abs);
+    CHECK(step > 1e-10);
+    CHECK_LE(err_from, 1e-4 * step);
+    CHECK(err_abs > err_from); /* what the displacement form is for */
+    cf_edge_poisson_destroy(&ep);
+    free(e);
+    /* fixed vertices: both forms give the same fit, fixed values exactly */
+    int32_t *known = malloc(2 * sizeof(int32_t));
+    known[0] = 0;
+    known[1] = nv / 2;
+    CHECK_OK(ctx, cf_edge_poisson_create(ctx, mesh, NULL, 2, known, &ep));
+    e = edges_of(mesh, p);
+    for (int32_t k = 0; k < ne; ++k) e[3 * k + 1] += 0.01 * (double)(k % 3);
+    CHECK_OK(ctx, cf_edge_poisson_solve_from(ep, p, e, moved, x, NULL));
+    CHECK_OK(ctx, cf_edge_poisson_solve(ep, e, moved, y, NULL));
+    double diff = 0.0;
+    for (int32_t i = 0; i < 3 * nv; ++i) diff = fmax(diff, fabs(x[i] - y[i]));
+    CHECK_LE(diff, 1e-12);
+    for (int k = 0; k < 2; ++k)
+        for (int c = 0; c < 3; ++c) CHECK(x[3 * known[k] + c] == moved[3 * known[k] + c]);
+    CHECK_STATUS(cf_edge_poisson_solve_from(ep, p, e, NULL, x, NULL), CF_ERR_INVALID_ARG);
+    cf_edge_poisson_destroy(&ep);
+    free(known);
+    free(e);
+    free(base);
+    free(x);
+    free(y);
+    free(moved);
+    cf_mesh_destroy(&mesh);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 /* The metric switch: after set_metric to a scaled copy (cotan weights depend
  * only on angles, so the solve must not change) and to a sheared one (it
  * must, for non-integrable edges). */
@@ -205,6 +291,7 @@ int main(void)
     CFT_RUN(test_integrable_edges_closed);
     CFT_RUN(test_fixed_values_and_sign);
     CFT_RUN(test_metric);
+    CFT_RUN(test_solve_from);
     CFT_RUN(test_invalid_and_allocation);
     return cft_finish();
 }

@@ -326,8 +326,10 @@ cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, in
     cfi_spin_transform_edges(mesh, x, s->lambda, s->edges);
     t->assemble += cfi_now_seconds() - ta;
     cf_solver_timings tm = {0.0, 0.0, 0.0};
-    st = cf_edge_poisson_solve(s->poisson_input ? s->poisson_input : s->poisson, s->edges,
-                               s->fixed_boundary ? x : NULL, s->newpos, &tm);
+    /* for the displacement from x: the recovery's rounding error then scales
+     * with the step, not with the coordinates (docs/spin.md, "Stalls") */
+    st = cf_edge_poisson_solve_from(s->poisson_input ? s->poisson_input : s->poisson, x, s->edges,
+                                    s->fixed_boundary ? x : NULL, s->newpos, &tm);
     t->factorize += tm.factorize_seconds;
     t->solve += tm.solve_seconds;
     if (st != CF_OK) return st;

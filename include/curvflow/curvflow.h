@@ -30,13 +30,10 @@ extern "C" {
 #define CF_VERSION_MINOR 1
 #define CF_VERSION_PATCH 0
 
-/* The range of geometry the library computes with. Volumes are cubes of
- * coordinates, and the Willmore flow's eigenproblem and the Gram matrices of
- * its constraints multiply areas: a 1e60 (or 1e-60) copy of spot_3k fails in
- * the Willmore flow, 1e90 already in implicit MCF (areas squared overflow),
- * while every flow gives the unit result, scaled, at 1e+-45. Coordinates
- * beyond CF_MAX_COORDINATE and faces (or curve edges) whose edges are all
- * shorter than CF_MIN_EDGE_LENGTH are refused with a message to rescale. */
+/* The range of geometry the library computes with (volumes are cubes of
+ * coordinates; measured limits in docs/mesh.md). Coordinates beyond
+ * CF_MAX_COORDINATE and faces (or curve edges) whose edges are all shorter
+ * than CF_MIN_EDGE_LENGTH are refused with a message to rescale. */
 #define CF_MAX_COORDINATE 1e50
 #define CF_MIN_EDGE_LENGTH 1e-50
 

@@ -86,61 +86,38 @@ typedef struct cf_spin_willmore_options {
                                 * it is a numerical failure (CF_ERR_NUMERICAL, the last good state
                                 * is kept). Default 10; 0 disables the check */
     double divergence_factor;  /* a step that leaves W above this factor times the starting W is a
-                                * numerical failure (the last good state is kept): a Willmore descent
-                                * that ends above where it started has diverged, even when no single
-                                * step grows tenfold (elephant_g3_3k at tau 0.5: W/4pi 24.99 ->
-                                * 12.46 -> 26.9 -> 102 -> ... -> 133 in 10 steps). Prescribed and
+                                * numerical failure (the last good state is kept). Prescribed and
                                 * cmc boundaries are exempt (they may raise W by design). Default 1;
-                                * 0 disables the check */
+                                * 0 disables the check (docs/spin.md, "Option notes") */
     int32_t complex_factorization; /* factorise the quaternionic matrices as their complex
-                                * Hermitian form of half the size (about 2x faster, same
-                                * result to rounding); 0 uses the real 4 nv x 4 nv form.
-                                * Prescribed/cmc boundaries always use the real form (their
-                                * boundary frames are not quaternion blocks). Default 1 */
+                                * Hermitian form of half the size (same result to rounding); 0 uses
+                                * the real 4 nv x 4 nv form. Prescribed/cmc boundaries always use
+                                * the real form. Default 1 */
     int32_t input_metric;      /* recover positions (Eq. 6) with the cotan Laplacian of the starting
                                 * surface, factorised once, instead of the current surface's each
-                                * step: the Dirichlet energy is conformally invariant, so for a
-                                * conformal flow both pose the same problem (as cMCF; the paper is
-                                * silent). Measured: far less conformal drift on long flows
-                                * (docs/spin.md). Not with a fixed boundary. Default 1 */
+                                * step (the paper is silent; docs/spin.md). Not with a fixed
+                                * boundary. Default 1 */
     int32_t adaptive;          /* adaptive time steps (the paper is silent): a step that would raise W,
                                 * change the conformal scale across an edge by more than
-                                * max_scale_change, or fails numerically is redone from the same
-                                * state with a smaller tau (halved, or cut in proportion to the scale
-                                * change; at most 10 retries, then the state is kept and the flow
-                                * reports convergence: W stopped decreasing); after a step taken
-                                * without a retry tau doubles again up to time_step. The log's
-                                * time_step and residuals time_step_halvings / scale_change show it.
-                                * Default 1 (0: the paper's fixed step, which fails on meshes with
-                                * thin limbs, needles or slivers: docs/spin.md, "Robustness") */
+                                * max_scale_change, or fails numerically is redone with a smaller
+                                * tau (at most 10 retries, then the state is kept and the flow
+                                * reports convergence); tau grows back after. Default 1 (0: the
+                                * paper's fixed step; docs/spin.md, "Robustness") */
     double max_scale_change;   /* with adaptive: the largest change of the log conformal scale
-                                * |log(|lambda_i|^2 / |lambda_j|^2)| across an edge in one step. A
-                                * vertex-based lambda that jumps by more than this along one edge
-                                * gives transformed edges that no similar triangle fits (the step's
-                                * quasi-conformal error follows the target edges'), and the
-                                * non-integrable residue lands in regions the flow has already
-                                * crowded (docs/spin.md). Measured per first step at tau 0.5: spot
-                                * 0.69, bunny 1.11, cow 3.4, triceratops 6.6. Default 1.2; 0 = no
-                                * bound */
+                                * |log(|lambda_i|^2 / |lambda_j|^2)| across an edge in one step
+                                * (docs/spin.md, "Option notes"). Default 1.2; 0 = no bound */
     int32_t exactness_linearized; /* exactness constraint (genus > 0, or holes with a free
                                 * boundary) as the discrete linearisation of "the transformed edges
-                                * have no periods" through one step (exact to first order in tau);
-                                * 0 uses App. C.1's Z_i on closed surfaces, which remove the periods
-                                * only approximately (docs/spin.md). Surfaces with boundary always
-                                * use the linearisation. Default 1 */
+                                * have no periods" (first order in tau); 0 uses App. C.1's Z_i on
+                                * closed surfaces (docs/spin.md). Surfaces with boundary always use
+                                * the linearisation. Default 1 */
     int32_t harmonic_update;   /* with App. C's Z_i (exactness_linearized = 0): re-project the
-                                * input's harmonic 1-forms onto the harmonic forms of the current
-                                * surface every step (one Laplacian solve per form with the current
-                                * surface's Laplacian); 0 keeps the input's forms, as the paper.
-                                * Default 1 */
+                                * input's harmonic 1-forms onto the current surface's every step;
+                                * 0 keeps the input's forms, as the paper. Default 1 */
     double regularization;     /* weight alpha of |lambda - 1|^2 in the step's eigenproblem, in units
-                                * of 4 pi / area (the paper is silent): one inverse iteration from
-                                * lambda = 1 on X(rho) + alpha M minimises |(D - rho) lambda|^2 +
-                                * alpha |lambda - 1|^2, so alpha damps the modes of X whose
-                                * eigenvalue is below it. Default 1e-3 (just enough to factorise
-                                * the singular X(0)); 1-100 keeps long thin shapes with a near-kernel
-                                * of X (blade_slivers_8k) stable at small tau, at the price of a
-                                * slower flow on ordinary shapes (docs/spin.md) */
+                                * of 4 pi / area (the paper is silent): damps the modes of X whose
+                                * eigenvalue is below alpha. Default 1e-3 (enough to factorise the
+                                * singular X(0)); docs/spin.md, "Option notes" */
     cf_param_values boundary_targets; /* table parameter "boundary_targets" (vertex vectors, boundary
                                 * vertices only). PRESCRIBED: target directions V~ per vertex (count nv,
                                 * values 3 nv doubles, x y z; only boundary vertices' entries are read,

@@ -62,7 +62,7 @@ static const struct {
     {"constraints.h", "constraints", ""},
     {"flow.h", "methods", ""},
     {"baseline_flows.h", "methods", "baseline_flows"},
-    {"curve_flow.h", "methods", "isometric_curve_flow"},
+    {"curve_flow.h", "methods", "curve_flow"},
     {"spin_willmore.h", "methods", "spin_willmore"},
     {"stretch_bend_edit.h", "methods", "stretch_bend_edit"},
 };

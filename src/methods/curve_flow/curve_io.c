@@ -1,5 +1,5 @@
 /*
- * Polyline files for the isometric curve flow (curvflow/curve_flow.h):
+ * Polyline files for the curve flow (curvflow/curve_flow.h):
  * CSV ("x,y" or "x y" per line) and a small SVG subset (first polygon /
  * polyline "points", or first path "d" with M, L, H, V, Z in absolute and
  * relative form). Files are read whole (lines of any length) and checked

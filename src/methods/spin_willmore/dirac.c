@@ -120,13 +120,14 @@ cf_status cfi_dirac_fill(cfi_dirac *d, const cf_mesh *mesh, const double *positi
                                 em[0] * en[1] - em[1] * en[0]};
                 for (int c = 0; c < 3; ++c) q[1 + c] = -cr[c] / (4.0 * area) + (r[m] * en[c] - r[n] * em[c]) / 6.0;
                 if (m == n) q[0] += shift * area / 3.0;
-                /* columns of the left-multiplication matrix of q */
+                /* the left-multiplication matrix of q (Le Folgoc Eq. (7)), column by column */
                 const int64_t *s = d->block_slot + ((int64_t)k * 9 + m * 3 + n) * 4;
-                double *c0 = val + s[0], *c1 = val + s[1], *c2 = val + s[2], *c3 = val + s[3];
-                c0[0] += q[0]; c0[1] += q[1]; c0[2] += q[2]; c0[3] += q[3];
-                c1[0] -= q[1]; c1[1] += q[0]; c1[2] += q[3]; c1[3] -= q[2];
-                c2[0] -= q[2]; c2[1] -= q[3]; c2[2] += q[0]; c2[3] += q[1];
-                c3[0] -= q[3]; c3[1] += q[2]; c3[2] -= q[1]; c3[3] += q[0];
+                double lq[16];
+                cf_quat_left_matrix(cf_quat_load(q), lq);
+                for (int col = 0; col < 4; ++col) {
+                    double *v = val + s[col];
+                    for (int row = 0; row < 4; ++row) v[row] += lq[4 * row + col];
+                }
             }
         }
     }

@@ -147,6 +147,14 @@ CF_API cf_status cf_cholesky_factorize_shifted(cf_cholesky *chol, const cf_spars
  * in b or in the solution: CF_ERR_NUMERICAL naming the column and row. */
 CF_API cf_status cf_cholesky_solve(cf_cholesky *chol, int32_t nrhs, const double *b, double *x);
 
+/* Allocates now the library's solve workspace for up to nrhs columns (the
+ * complex-form buffer of quaternion_blocks factorisations), so that later
+ * solves of at most nrhs columns allocate nothing through the context: for
+ * objects that must not allocate in their steps. CHOLMOD's own solve
+ * storage is allocated by CHOLMOD at the first solve, outside the context's
+ * allocator. Statuses: CF_ERR_INVALID_ARG (NULL, nrhs < 0), CF_ERR_NOMEM. */
+CF_API cf_status cf_cholesky_reserve_solve(cf_cholesky *chol, int32_t nrhs);
+
 CF_API int32_t cf_cholesky_size(const cf_cholesky *chol);
 
 /* Timings of the last analyse / factorise / solve, in seconds. */

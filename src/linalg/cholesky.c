@@ -374,6 +374,26 @@ cf_status cf_cholesky_factorize_shifted(cf_cholesky *chol, const cf_sparse *a, d
     return factorize(chol, a, shift);
 }
 
+/* The complex-form buffer of quaternion-block solves, grown to nrhs columns. */
+static cf_status reserve_zwork(cf_cholesky *chol, int32_t nrhs)
+{
+    if (!chol->quat || nrhs <= chol->zwork_cols) return CF_OK;
+    cf_context *ctx = chol->ctx;
+    double *w = CFI_ALLOC(ctx, double, (size_t)chol->n * (size_t)nrhs);
+    if (!w) return CF_ERR_NOMEM;
+    CFI_FREE(ctx, chol->zwork, (size_t)chol->n * chol->zwork_cols);
+    chol->zwork = w;
+    chol->zwork_cols = nrhs;
+    return CF_OK;
+}
+
+cf_status cf_cholesky_reserve_solve(cf_cholesky *chol, int32_t nrhs)
+{
+    if (!chol) return CF_ERR_INVALID_ARG;
+    if (nrhs < 0) return cfi_error(chol->ctx, CF_ERR_INVALID_ARG, "cholesky reserve: %d right-hand sides", nrhs);
+    return reserve_zwork(chol, nrhs);
+}
+
 cf_status cf_cholesky_solve(cf_cholesky *chol, int32_t nrhs, const double *b, double *x)
 {
     if (!chol) return CF_ERR_INVALID_ARG;
@@ -401,13 +421,8 @@ cf_status cf_cholesky_solve(cf_cholesky *chol, int32_t nrhs, const double *b, do
     bd.xtype = CHOLMOD_REAL;
     bd.dtype = CHOLMOD_DOUBLE;
     if (chol->quat) {
-        if (nrhs > chol->zwork_cols) {
-            double *w = CFI_ALLOC(ctx, double, (size_t)total);
-            if (!w) return CF_ERR_NOMEM;
-            CFI_FREE(ctx, chol->zwork, (size_t)chol->n * chol->zwork_cols);
-            chol->zwork = w;
-            chol->zwork_cols = nrhs;
-        }
+        cf_status sz = reserve_zwork(chol, nrhs);
+        if (sz != CF_OK) return sz;
         cfi_quat_to_complex(chol->n, nrhs, b, chol->zwork);
         bd.nrow = bd.d = (size_t)chol->n / 2;
         bd.nzmax = (size_t)total / 2;

@@ -167,6 +167,10 @@ static cf_status create_dirac(cf_flow *flow, cfi_spin_state *s)
     st = cf_cholesky_create(ctx, s->dirac->x, &co, &s->chol);
     co.quaternion_blocks = s->opt.complex_factorization != 0;
     if (st == CF_OK && s->harmonic_dim) st = cf_cholesky_create(ctx, s->dirac->x, &co, &s->chol0);
+    /* the solve workspaces now: steps allocate nothing (lambda: one column;
+     * exactness: one per form, three per form when linearised) */
+    if (st == CF_OK) st = cf_cholesky_reserve_solve(s->chol, 1);
+    if (st == CF_OK && s->chol0) st = cf_cholesky_reserve_solve(s->chol0, s->linearized ? 3 * s->harmonic_dim : s->harmonic_dim);
     return st;
 }
 

@@ -852,6 +852,7 @@ cf_status cf_flow_set_positions(cf_flow *flow, const double *positions)
         return st;
     }
     flow->converged = 0;
+    flow->policy.step_scale = 1.0; /* a new state: the step policy starts from time_step again */
     return CF_OK;
 }
 

@@ -219,6 +219,11 @@ static void test_halving_and_growth(void)
     /* cf_flow_run stops at once on a converged flow */
     CHECK_OK(ctx, cf_flow_run(flow, 5, NULL));
     CHECK(cf_flow_last_info(flow)->iteration == 3);
+    /* new positions: a new start, from time_step again (the same halvings) */
+    CHECK_OK(ctx, cf_flow_set_positions(flow, cf_mesh_positions(mesh)));
+    CHECK(!cf_flow_converged(flow));
+    CHECK_OK(ctx, cf_flow_step(flow, &info4));
+    CHECK(info4.time_step == steps[0]);
     cf_flow_destroy(&flow);
 
     /* step_growth 1: the reduced step stays */

@@ -10,6 +10,11 @@
  *   constraints.c      assembling and projecting the constraints (Sec. 6.2)
  *   step_policy.c      adaptive retries, blow-up and divergence checks, convergence
  *   workspace.c        the flow's arrays, recorded and freed in one call
+ * and the shared machinery one layer down: the spectral filter and the
+ * position recovery from edges (curvflow/ops.h: cf_spectral_filter,
+ * cf_edge_poisson, cf_edge_closure_error), the block-aware inverse iteration
+ * (curvflow/linalg.h: cf_inverse_iteration_blocks) and quaternions
+ * (curvflow/quaternion.h).
  */
 #ifndef CF_METHODS_SPIN_WILLMORE_SPIN_FLOW_H
 #define CF_METHODS_SPIN_WILLMORE_SPIN_FLOW_H

@@ -477,6 +477,66 @@ static void test_m1_spot_tiny_steps(void)
     cf_context_destroy(&ctx);
 }
 
+/* spin-willmore's adaptive step takes its halvings per step and growth
+ * factor from the shared policy. Bumpy sphere (subdivision 3), time_step 5:
+ * by default the steps are 1.25 (2 halvings), 1.25, 0.625 (2 halvings),
+ * 0.625, 1.25, 2.5 (growth by 2); with step_growth 1.5 step 3 tries 1.875
+ * and is halved once; with max_halvings 1 the first step finds no W-lowering
+ * tau and the flow stops as converged (time step 0, spin's own report). */
+static void test_spin_uses_policy(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *mesh = NULL;
+    CHECK_OK(ctx, cf_generate_bumpy_sphere(ctx, 3, 0.25, 1u, &mesh));
+    if (!mesh) { cf_context_destroy(&ctx); return; }
+    const char *growth[] = {"2", "1.5"};
+    for (int g = 0; g < 2; ++g) {
+        cf_flow_options o;
+        CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o));
+        CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "time_step", "5"));
+        CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "tolerance", "0"));
+        CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "step_growth", growth[g]));
+        cf_flow *flow = NULL;
+        CHECK_OK(ctx, cf_flow_create(ctx, mesh, NULL, &o, &flow));
+        if (!flow) continue;
+        double ts[6] = {0};
+        double prev = cf_flow_energy(flow);
+        for (int i = 0; i < 6; ++i) {
+            cf_flow_info info;
+            CHECK_OK(ctx, cf_flow_step(flow, &info));
+            ts[i] = info.time_step;
+            CHECK_LE(info.energy, prev);
+            prev = info.energy;
+        }
+        fprintf(stderr, "   spin step_growth %s: time steps %g %g %g %g %g %g\n", growth[g], ts[0], ts[1], ts[2], ts[3],
+                ts[4], ts[5]);
+        CHECK(ts[0] == 1.25 && ts[1] == 1.25);
+        if (g == 0) CHECK(ts[2] == 0.625 && ts[3] == 0.625 && ts[4] == 1.25 && ts[5] == 2.5);
+        else CHECK(ts[2] == 1.25 * 1.5 / 2.0); /* grown to 1.875, halved once */
+        cf_flow_destroy(&flow);
+    }
+    cf_flow_options o;
+    CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o));
+    CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "time_step", "5"));
+    CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "max_halvings", "1"));
+    cf_flow *flow = NULL;
+    CHECK_OK(ctx, cf_flow_create(ctx, mesh, NULL, &o, &flow));
+    if (flow) {
+        double e0 = cf_flow_energy(flow);
+        cf_flow_info info;
+        CHECK_OK(ctx, cf_flow_step(flow, &info));
+        CHECK(cf_flow_converged(flow));
+        CHECK(info.time_step == 0.0);
+        CHECK(info.energy == e0);
+        CHECK(memcmp(cf_flow_positions(flow), cf_mesh_positions(mesh),
+                     3 * (size_t)cf_mesh_vertex_count(mesh) * sizeof(double)) == 0);
+        cf_flow_destroy(&flow);
+    }
+    cf_mesh_destroy(&mesh);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 int main(void)
 {
     CFT_RUN(test_tolerance_and_floor);
@@ -488,5 +548,6 @@ int main(void)
     CFT_RUN(test_s3_shared);
     CFT_RUN(test_m1_flat_sheet);
     CFT_RUN(test_m1_spot_tiny_steps);
+    CFT_RUN(test_spin_uses_policy);
     return cft_finish();
 }

@@ -39,7 +39,13 @@ cf_status cfi_spin_advance(cf_flow *flow, cfi_spin_state *s, double energy_befor
     /* IV-VI, and with adaptive time steps the step is redone from the same
      * rhodot with tau halved while W would rise (or the step fails
      * numerically); when no halving helps, the state is kept and the flow
-     * reports convergence (W stopped decreasing). */
+     * reports convergence (W stopped decreasing). The number of halvings
+     * per step and the growth factor are the shared step policy's
+     * (max_halvings, step_growth; docs/flowcli.md), the rise test its
+     * comparison with no slack: the flow's claim is that W never rises.
+     * The retry stays here since it redoes only IV-VI from the same rhodot,
+     * which a flow-layer retry of the whole step could not. */
+    const cfi_step_policy_state *policy = &flow->policy;
     double tau = s->tau; /* opt.time_step unless adaptive steps changed it */
     int32_t halvings = 0;
     int stalled = 0;
@@ -50,13 +56,15 @@ cf_status cfi_spin_advance(cf_flow *flow, cfi_spin_state *s, double energy_befor
         st = cfi_spin_realise_step(flow, s, tau, &too_large, t);
         if (!s->opt.adaptive) break;
         /* prescribed and cmc boundaries may raise W by design: only the scale bound applies */
-        if (st == CF_OK && !too_large && (s->energy <= energy_before || s->restricted_boundary)) break;
+        if (st == CF_OK && !too_large &&
+            (!cfi_step_policy_exceeds(s->energy, energy_before, 0.0, 0.0) || s->restricted_boundary))
+            break;
         if (st != CF_OK && st != CF_ERR_NUMERICAL && st != CF_ERR_NOT_POSDEF && st != CF_ERR_DEGENERATE_FACE)
             return st;
         memcpy(x, s->xsave, 3 * (size_t)nv * sizeof(double));
         cf_status sg = cfi_spin_update_geometry(flow, s, x);
         if (sg != CF_OK) return sg;
-        if (halvings == CFI_SPIN_MAX_HALVINGS) {
+        if (halvings >= policy->opt.max_halvings) {
             stalled = 1;
             st = CF_OK;
             cfi_log(ctx, CF_LOG_INFO,
@@ -69,7 +77,7 @@ cf_status cfi_spin_advance(cf_flow *flow, cfi_spin_state *s, double energy_befor
         tau *= too_large ? fmin(0.5, 0.9 * s->opt.max_scale_change / s->diag.scale_change) : 0.5;
     }
     if (st != CF_OK) return st;
-    if (s->opt.adaptive && !stalled) s->tau = halvings ? tau : fmin(s->opt.time_step, 2.0 * tau);
+    if (s->opt.adaptive && !stalled) s->tau = halvings ? tau : fmin(s->opt.time_step, policy->opt.step_growth * tau);
     out->tau = tau;
     out->halvings = halvings;
     out->stalled = stalled;

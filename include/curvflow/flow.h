@@ -217,14 +217,22 @@ CF_API cf_status cf_flow_create(cf_context *ctx, const cf_mesh *mesh, const doub
 
 /* One step. On failure the state is the one before the step and the
  * context message is prefixed "iteration N: ". The context's recorded error
- * is cleared when the step starts. info may be NULL. Statuses: the
- * method's errors, CF_ERR_NUMERICAL for a non-finite position, energy,
- * area or volume after the step, CF_ERR_CANCELLED when the progress
- * callback asks to stop (the step is kept). */
+ * is cleared when the step starts. info may be NULL. The step policy
+ * (cf_step_policy) applies: a step that raises the energy of a method that
+ * descends it is redone with half the time step (backtracking methods) or
+ * fails; when no step down to time_step / 2^max_halvings lowers the energy
+ * (or, for a method without a time step, the step raised it) the state is
+ * kept, the flow is marked converged, a warning is logged and CF_OK is
+ * returned without advancing the iteration (info then describes the kept
+ * state). Statuses: the method's errors, CF_ERR_NUMERICAL for a non-finite
+ * position, energy, area or volume after the step, a face that
+ * degenerated, or a rejected rise without backtracking, CF_ERR_CANCELLED
+ * when the progress callback asks to stop (the step is kept). */
 CF_API cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info);
 
 /* Up to `steps` steps, calling the progress callback after each. Stops
- * early with CF_OK when the method reports convergence. steps >= 0
+ * early with CF_OK when the flow has converged (the method's or the step
+ * policy's convergence tolerance, or the policy's stop). steps >= 0
  * (CF_ERR_INVALID_ARG otherwise); the first failing step's status is
  * returned with the state before it. info (optional) receives the last
  * accepted step's info. */

@@ -724,10 +724,11 @@ static cf_status stall(cf_flow *flow, double before, const cf_flow_info *step, i
  * then the policy (methods/step_policy.h): a step that raises the energy
  * beyond rise_tolerance and energy_floor is rejected when the method asks
  * for the check; with backtracking it is redone from the saved state with
- * half the step (up to max_halvings times), otherwise (or when no halving
- * helps) the step fails and the last good state is kept. After an accepted
- * step without halving a reduced step grows back by step_growth, and the
- * convergence tolerance is tested. */
+ * half the step, down to time_step / 2^max_halvings, below which the run
+ * stops as converged at the state before the step (stall); without
+ * backtracking the step fails (or, with rise_stops, stops the run). After
+ * an accepted step without halving a reduced step grows back by
+ * step_growth, and the convergence tolerance is tested. */
 cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info)
 {
     if (!flow) return CF_ERR_INVALID_ARG;

@@ -796,7 +796,16 @@ cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info)
         return fail_step(flow, CF_ERR_NUMERICAL, iteration);
     }
     pol->halvings = halvings;
-    if (backtrack && halvings == 0) pol->step_scale = fmin(1.0, pol->step_scale * pol->opt.step_growth);
+    if (backtrack) {
+        /* in the log like spin-willmore's own: the first free residual slot */
+        for (int r = 0; r < CF_FLOW_MAX_RESIDUALS; ++r) {
+            if (step.residual_names[r]) continue;
+            step.residuals[r] = halvings;
+            step.residual_names[r] = "time_step_halvings";
+            break;
+        }
+        if (halvings == 0) pol->step_scale = fmin(1.0, pol->step_scale * pol->opt.step_growth);
+    }
     if (desc->convergence && cfi_step_policy_converged(before, step.energy, pol->tolerance)) flow->converged = 1;
     step.iteration = iteration;
     step.time = flow->info.time + step.time_step;

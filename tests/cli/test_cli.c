@@ -8,7 +8,7 @@
 #include "curvflow/generate.h"
 #include "curvflow/io.h"
 #include "curvflow/mesh.h"
-#include "test.h"
+#include "cli_test.h"
 
 #include <dirent.h>
 #include <fcntl.h>
@@ -21,70 +21,18 @@
 #include <time.h>
 #include <unistd.h>
 
-static char dir[1024];
-static char out_text[1 << 16];
-static char err_text[1 << 16];
-
-static void read_file(const char *path, char *buf, size_t size)
-{
-    buf[0] = '\0';
-    FILE *f = fopen(path, "rb");
-    if (!f) return;
-    size_t n = fread(buf, 1, size - 1, f);
-    buf[n] = '\0';
-    fclose(f);
-}
-
-/* Runs "curvflow ARGS" in the test folder; returns the exit status and
- * leaves stdout / stderr in out_text / err_text. */
-static int run(const char *args)
-{
-    char cmd[4096];
-    snprintf(cmd, sizeof cmd, "cd '%s' && '%s' %s > stdout.txt 2> stderr.txt", dir, CF_TEST_CLI, args);
-    int st = system(cmd);
-    char path[1200];
-    snprintf(path, sizeof path, "%s/stdout.txt", dir);
-    read_file(path, out_text, sizeof out_text);
-    snprintf(path, sizeof path, "%s/stderr.txt", dir);
-    read_file(path, err_text, sizeof err_text);
-    if (st == -1 || !WIFEXITED(st)) return -1;
-    return WEXITSTATUS(st);
-}
-
-static const char *in_dir(const char *name)
-{
-    static char path[2048];
-    snprintf(path, sizeof path, "%s/%s", dir, name);
-    return path;
-}
-
-static int exists(const char *name)
-{
-    struct stat sb;
-    return stat(in_dir(name), &sb) == 0;
-}
-
-#define CHECK_RUN(args, expected)                                                                        \
-    do {                                                                                                 \
-        int rc_ = run(args);                                                                             \
-        ++cft_checks;                                                                                    \
-        if (rc_ != (expected))                                                                           \
-            cft_fail(__FILE__, __LINE__, "curvflow %s: exit %d, expected %d\nstdout: %s\nstderr: %s", args, \
-                     rc_, (expected), out_text, err_text);                                               \
-    } while (0)
-
 static int count_lines(const char *text);
 
 static void test_help_and_usage(void)
 {
     CHECK_RUN("--help", 0);
-    CHECK(strstr(out_text, "Usage: curvflow COMMAND") != NULL);
+    CHECK(strstr(cft_out, "Usage: curvflow COMMAND") != NULL);
     CHECK_RUN("--version", 0);
-    CHECK(strncmp(out_text, "curvflow ", 9) == 0);
-    CHECK(strstr(out_text, cf_version_string()) != NULL);
+    CHECK(strncmp(cft_out, "curvflow ", 9) == 0);
+    CHECK(strstr(cft_out, cf_version_string()) != NULL);
     CHECK_RUN("", 1);
     CHECK_RUN("frobnicate", 1);
-    CHECK(strstr(err_text, "unknown command 'frobnicate'") != NULL);
+    CHECK(strstr(cft_err, "unknown command 'frobnicate'") != NULL);
     /* every command refuses an unknown option the same way (spin and curve
      * too, which once had parsers of their own) */
     const char *cmds[] = {"info", "generate", "flow", "compare", "demo", "render", "spin", "curve", "edit"};
@@ -92,24 +40,24 @@ static void test_help_and_usage(void)
         char args[64];
         snprintf(args, sizeof args, "%s --help", cmds[i]);
         CHECK_RUN(args, 0);
-        CHECK(strstr(out_text, "Usage: curvflow") != NULL);
+        CHECK(strstr(cft_out, "Usage: curvflow") != NULL);
         snprintf(args, sizeof args, "%s --no-such-option", cmds[i]);
         CHECK_RUN(args, 1);
-        CHECK(strstr(err_text, "--help") != NULL);
+        CHECK(strstr(cft_err, "--help") != NULL);
         /* one message line in the tool's format naming the option, then the
          * hint; getopt's own "<cmd>: unrecognized option" line is silenced */
         const char *expected = "curvflow: unrecognized option '--no-such-option'\n";
-        CHECK(strncmp(err_text, expected, strlen(expected)) == 0);
-        CHECK(count_lines(err_text) == 2);
+        CHECK(strncmp(cft_err, expected, strlen(expected)) == 0);
+        CHECK(count_lines(cft_err) == 2);
     }
     CHECK_RUN("flow --method implicit-mcf ico.obj -o", 1);
-    CHECK(strstr(err_text, "option '-o' requires an argument") != NULL);
+    CHECK(strstr(cft_err, "option '-o' requires an argument") != NULL);
     CHECK_RUN("flow ico.obj --output", 1);
-    CHECK(strstr(err_text, "option '--output' requires an argument") != NULL);
+    CHECK(strstr(cft_err, "option '--output' requires an argument") != NULL);
     CHECK_RUN("info --json=yes ico.obj", 1);
-    CHECK(strstr(err_text, "option '--json' does not take an argument") != NULL);
+    CHECK(strstr(cft_err, "option '--json' does not take an argument") != NULL);
     CHECK_RUN("render -z ico.obj", 1);
-    CHECK(strstr(err_text, "invalid option '-z'") != NULL);
+    CHECK(strstr(cft_err, "invalid option '-z'") != NULL);
 }
 
 static void test_generate(void)
@@ -123,42 +71,42 @@ static void test_generate(void)
         char args[128];
         snprintf(args, sizeof args, "generate %s -o kind%d.ply", kinds[i], i);
         CHECK_RUN(args, 0);
-        CHECK(exists(args + strlen(args) - 9));
+        CHECK(cft_exists(args + strlen(args) - 9));
     }
     cf_context *ctx = cft_context();
     cf_mesh *mesh = NULL;
-    CHECK_OK(ctx, cf_load_mesh(ctx, in_dir("ico.obj"), &mesh));
+    CHECK_OK(ctx, cf_load_mesh(ctx, cft_in_dir("ico.obj"), &mesh));
     if (mesh) CHECK(cf_mesh_vertex_count(mesh) == 642 && cf_mesh_face_count(mesh) == 1280);
     cf_mesh_destroy(&mesh);
-    CHECK_OK(ctx, cf_load_mesh(ctx, in_dir("torus.ply"), &mesh));
+    CHECK_OK(ctx, cf_load_mesh(ctx, cft_in_dir("torus.ply"), &mesh));
     if (mesh) CHECK(cf_mesh_vertex_count(mesh) == 24 * 12 && cf_mesh_genus(mesh) == 1);
     cf_mesh_destroy(&mesh);
-    CHECK_OK(ctx, cf_load_mesh(ctx, in_dir("grid.off"), &mesh));
+    CHECK_OK(ctx, cf_load_mesh(ctx, cft_in_dir("grid.off"), &mesh));
     if (mesh) CHECK(cf_mesh_vertex_count(mesh) == 5 * 4 && cf_mesh_boundary_loop_count(mesh) == 1);
     cf_mesh_destroy(&mesh);
-    CHECK_OK(ctx, cf_load_mesh(ctx, in_dir("bumpy.obj"), &mesh));
+    CHECK_OK(ctx, cf_load_mesh(ctx, cft_in_dir("bumpy.obj"), &mesh));
     if (mesh) CHECK(cf_mesh_uv_count(mesh) > 0); /* the bumpy sphere carries its uv through the file */
     cf_mesh_destroy(&mesh);
     cf_context_destroy(&ctx);
 
     CHECK_RUN("generate teapot -o x.obj", 1);
-    CHECK(strstr(err_text, "teapot") != NULL);
+    CHECK(strstr(cft_err, "teapot") != NULL);
     CHECK_RUN("generate icosphere --radius 1e300 -o x.obj", 1); /* beyond the accepted range: usage */
-    CHECK(strstr(err_text, "--radius: 1e+300 is beyond the range") != NULL);
+    CHECK(strstr(cft_err, "--radius: 1e+300 is beyond the range") != NULL);
     CHECK_RUN("generate icosphere", 1);
     CHECK_RUN("generate icosphere --subdivisions 12 -o x.obj", 1);
-    CHECK(strstr(err_text, "--subdivisions") != NULL);
+    CHECK(strstr(cft_err, "--subdivisions") != NULL);
     CHECK_RUN("generate icosphere --radius abc -o x.obj", 1);
     /* an explicit negative value is passed on (and rejected), not replaced by the default */
     CHECK_RUN("generate grid --width -2 -o x.obj", 1);
-    CHECK(strstr(err_text, "-2") != NULL);
+    CHECK(strstr(cft_err, "-2") != NULL);
     CHECK_RUN("generate bumpy-sphere --subdivisions 1 --amplitude -0.2 -o neg.obj", 0);
     CHECK_RUN("generate bumpy-sphere --subdivisions 1 -o pos.obj", 0);
     {
         cf_context *c2 = cft_context();
         cf_mesh *neg = NULL, *pos = NULL;
-        CHECK_OK(c2, cf_load_mesh(c2, in_dir("neg.obj"), &neg));
-        CHECK_OK(c2, cf_load_mesh(c2, in_dir("pos.obj"), &pos));
+        CHECK_OK(c2, cf_load_mesh(c2, cft_in_dir("neg.obj"), &neg));
+        CHECK_OK(c2, cf_load_mesh(c2, cft_in_dir("pos.obj"), &pos));
         if (neg && pos) {
             CHECK(cf_mesh_vertex_count(neg) == cf_mesh_vertex_count(pos));
             CHECK(memcmp(cf_mesh_positions(neg), cf_mesh_positions(pos),
@@ -170,17 +118,17 @@ static void test_generate(void)
     }
     CHECK_RUN("generate icosphere -o x.xyz", 2);
     CHECK_RUN("generate icosphere -o no_such_dir/x.obj", 2);
-    CHECK(!exists("x.obj"));
+    CHECK(!cft_exists("x.obj"));
 }
 
 static void test_info(void)
 {
     CHECK_RUN("info ico.obj", 0);
-    CHECK(strstr(out_text, "genus:         0") != NULL);
-    CHECK(strstr(out_text, "validation:    ok") != NULL);
+    CHECK(strstr(cft_out, "genus:         0") != NULL);
+    CHECK(strstr(cft_out, "validation:    ok") != NULL);
     CHECK_RUN("info ico.obj --json", 0);
     json_error_t jerr;
-    json_t *root = json_loads(out_text, 0, &jerr);
+    json_t *root = json_loads(cft_out, 0, &jerr);
     CHECK(root != NULL);
     if (root) {
         CHECK(json_integer_value(json_object_get(root, "vertices")) == 642);
@@ -199,7 +147,7 @@ static void test_info(void)
     }
     json_decref(root);
     CHECK_RUN("info grid.off --json", 0);
-    root = json_loads(out_text, 0, &jerr);
+    root = json_loads(cft_out, 0, &jerr);
     CHECK(root != NULL);
     if (root) {
         CHECK(json_integer_value(json_object_get(root, "boundary_loops")) == 1);
@@ -208,18 +156,18 @@ static void test_info(void)
     json_decref(root);
 
     /* a broken file: exit 2, the message names the file */
-    FILE *f = fopen(in_dir("broken.obj"), "w");
+    FILE *f = fopen(cft_in_dir("broken.obj"), "w");
     if (f) {
         fputs("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2\n", f);
         fclose(f);
     }
     CHECK_RUN("info broken.obj", 2);
-    CHECK(strstr(err_text, "curvflow: broken.obj:") != NULL);
+    CHECK(strstr(cft_err, "curvflow: broken.obj:") != NULL);
     CHECK_RUN("info missing.obj", 2);
-    CHECK(strstr(err_text, "missing.obj") != NULL);
+    CHECK(strstr(cft_err, "missing.obj") != NULL);
     /* --json keeps stdout one JSON object also when the file cannot be read */
     CHECK_RUN("info --json broken.obj", 2);
-    root = json_loads(out_text, 0, &jerr);
+    root = json_loads(cft_out, 0, &jerr);
     CHECK(root != NULL);
     if (root) {
         CHECK(json_is_false(json_object_get(root, "readable")));
@@ -227,17 +175,17 @@ static void test_info(void)
         const char *status = json_string_value(json_object_get(root, "status"));
         CHECK(status && strncmp(status, "CF_ERR_", 7) == 0);
         const char *error = json_string_value(json_object_get(root, "error"));
-        CHECK(error && strstr(err_text, error) != NULL); /* the same message as on stderr */
+        CHECK(error && strstr(cft_err, error) != NULL); /* the same message as on stderr */
     }
     json_decref(root);
     /* a non-manifold edge: the file reads, validation reports it, exit 2 */
-    f = fopen(in_dir("fin.obj"), "w");
+    f = fopen(cft_in_dir("fin.obj"), "w");
     if (f) {
         fputs("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nf 1 2 3\nf 2 1 4\nf 1 2 5\n", f);
         fclose(f);
     }
     CHECK_RUN("info fin.obj --json", 2);
-    root = json_loads(out_text, 0, &jerr);
+    root = json_loads(cft_out, 0, &jerr);
     CHECK(root != NULL);
     if (root) {
         json_t *val = json_object_get(root, "validation");
@@ -245,7 +193,7 @@ static void test_info(void)
         CHECK(json_integer_value(json_object_get(val, "nonmanifold_edges")) >= 1);
     }
     json_decref(root);
-    CHECK(strstr(err_text, "fin.obj") != NULL);
+    CHECK(strstr(cft_err, "fin.obj") != NULL);
     CHECK_RUN("info", 1);
     CHECK_RUN("info a.obj b.obj", 1);
 
@@ -261,7 +209,7 @@ static void test_info(void)
         char args[4200];
         snprintf(args, sizeof args, "info '%s'", path);
         CHECK_RUN(args, 2);
-        CHECK(strstr(err_text, bad[i] + 4) != NULL);
+        CHECK(strstr(cft_err, bad[i] + 4) != NULL);
     }
 
     /* info against ../shared/meshes/CHECKS.tsv (independently computed):
@@ -279,7 +227,7 @@ static void test_info(void)
         char args[4200];
         snprintf(args, sizeof args, "info '%s' --json", path);
         CHECK_RUN(args, 0);
-        root = json_loads(out_text, 0, &jerr);
+        root = json_loads(cft_out, 0, &jerr);
         CHECK(root != NULL);
         if (!root) continue;
         CHECK(json_integer_value(json_object_get(root, "vertices")) == rows[i].v);
@@ -303,18 +251,18 @@ static int count_lines(const char *text)
 static void test_flow(void)
 {
     CHECK_RUN("flow --list-methods", 0);
-    CHECK(strstr(out_text, "implicit-mcf") != NULL && strstr(out_text, "spin-willmore") != NULL);
-    CHECK(count_lines(out_text) == 7);
+    CHECK(strstr(cft_out, "implicit-mcf") != NULL && strstr(cft_out, "spin-willmore") != NULL);
+    CHECK(count_lines(cft_out) == 7);
     CHECK_RUN("flow --method implicit-mcf --list-params", 0);
-    CHECK(strstr(out_text, "time_step") != NULL && strstr(out_text, "[0.001]") != NULL);
+    CHECK(strstr(cft_out, "time_step") != NULL && strstr(cft_out, "[0.001]") != NULL);
 
     CHECK_RUN("flow bumpy.obj -o smooth.obj --method implicit-mcf --steps 3 --log run.jsonl", 0);
-    CHECK(count_lines(err_text) >= 3); /* one status line per step */
-    CHECK(strstr(err_text, "step 3/3") != NULL);
+    CHECK(count_lines(cft_err) >= 3); /* one status line per step */
+    CHECK(strstr(cft_err, "step 3/3") != NULL);
     cf_context *ctx = cft_context();
     cf_mesh *in = NULL, *out = NULL;
-    CHECK_OK(ctx, cf_load_mesh(ctx, in_dir("bumpy.obj"), &in));
-    CHECK_OK(ctx, cf_load_mesh(ctx, in_dir("smooth.obj"), &out));
+    CHECK_OK(ctx, cf_load_mesh(ctx, cft_in_dir("bumpy.obj"), &in));
+    CHECK_OK(ctx, cf_load_mesh(ctx, cft_in_dir("smooth.obj"), &out));
     if (in && out) {
         CHECK(cf_mesh_vertex_count(in) == cf_mesh_vertex_count(out));
         CHECK(cf_mesh_uv_count(in) == cf_mesh_uv_count(out)); /* texture coordinates pass through */
@@ -326,7 +274,7 @@ static void test_flow(void)
 
     /* the log: one object per step plus the start, energies decreasing */
     static char log[1 << 16];
-    read_file(in_dir("run.jsonl"), log, sizeof log);
+    cft_read_small(cft_in_dir("run.jsonl"), log, sizeof log);
     CHECK(count_lines(log) == 4);
     char *save = NULL;
     double prev = INFINITY;
@@ -348,51 +296,51 @@ static void test_flow(void)
     }
 
     CHECK_RUN("flow bumpy.obj -o p.ply -m conformal-mcf -n 2 -p rescale=true -p mass=voronoi -q", 0);
-    CHECK(err_text[0] == '\0');
-    CHECK(exists("p.ply"));
+    CHECK(cft_err[0] == '\0');
+    CHECK(cft_exists("p.ply"));
     CHECK_RUN("flow bumpy.obj -o x.obj --method no-such", 1);
     CHECK_RUN("flow bumpy.obj -o x.obj", 1);
     CHECK_RUN("flow bumpy.obj --method implicit-mcf", 1);
     CHECK_RUN("flow bumpy.obj -o x.obj --method implicit-mcf --param colour=red", 1);
-    CHECK(strstr(err_text, "colour") != NULL);
+    CHECK(strstr(cft_err, "colour") != NULL);
     CHECK_RUN("flow bumpy.obj -o x.obj --method implicit-mcf --time-step -2", 1);
-    CHECK(strstr(err_text, "time_step") != NULL);
+    CHECK(strstr(cft_err, "time_step") != NULL);
     CHECK_RUN("flow bumpy.obj -o x.obj --method implicit-mcf --param rescale", 1);
     CHECK_RUN("flow missing.obj -o x.obj --method implicit-mcf", 2);
     CHECK_RUN("flow broken.obj -o x.obj --method implicit-mcf", 2);
     CHECK_RUN("flow bumpy.obj -o no_such_dir/x.obj --method implicit-mcf -n 1 -q", 2);
-    CHECK(strstr(err_text, "no_such_dir/x.obj") != NULL);
+    CHECK(strstr(cft_err, "no_such_dir/x.obj") != NULL);
     /* an output that could not be written is refused before the run: no
      * step is taken (the log is never opened) */
     CHECK_RUN("flow bumpy.obj -o no_such_dir/x.obj --method implicit-mcf -n 1000 --log early.jsonl", 2);
-    CHECK(strstr(err_text, "no_such_dir/x.obj: cannot write: directory no_such_dir does not exist") != NULL);
-    CHECK(!exists("early.jsonl"));
+    CHECK(strstr(cft_err, "no_such_dir/x.obj: cannot write: directory no_such_dir does not exist") != NULL);
+    CHECK(!cft_exists("early.jsonl"));
     CHECK_RUN("flow bumpy.obj -o x.xyz --method implicit-mcf -n 1000 --log early.jsonl", 2);
-    CHECK(strstr(err_text, "unknown mesh format") != NULL);
-    CHECK(!exists("early.jsonl"));
+    CHECK(strstr(cft_err, "unknown mesh format") != NULL);
+    CHECK(!cft_exists("early.jsonl"));
     CHECK_RUN("flow bumpy.obj -o . --method implicit-mcf -n 1 -q", 2);
     CHECK_RUN("spin bumpy.obj --rho no_rho.txt -o no_such_dir/x.obj", 2);
-    CHECK(strstr(err_text, "does not exist") != NULL);
+    CHECK(strstr(cft_err, "does not exist") != NULL);
     CHECK_RUN("render bumpy.obj -o no_such_dir/x.png", 2);
-    CHECK(strstr(err_text, "does not exist") != NULL);
+    CHECK(strstr(cft_err, "does not exist") != NULL);
     CHECK_RUN("flow bumpy.obj -o x.obj --method implicit-mcf -n 1 --log no_such_dir/l.jsonl", 2);
     CHECK_RUN("flow bumpy.obj -o x.obj --method implicit-mcf --steps -3", 1);
-    CHECK(!exists("x.obj"));
+    CHECK(!cft_exists("x.obj"));
 
     /* numerical failure: exit 3, message names the iteration, last good state written */
     CHECK_RUN("flow bumpy.obj -o blown.obj --method explicit-mcf --time-step 10 --steps 20", 3);
-    CHECK(strstr(err_text, "iteration") != NULL);
-    CHECK(strstr(err_text, "stability limit") != NULL);
-    CHECK(exists("blown.obj"));
+    CHECK(strstr(cft_err, "iteration") != NULL);
+    CHECK(strstr(cft_err, "stability limit") != NULL);
+    CHECK(cft_exists("blown.obj"));
 }
 
 static void test_compare(void)
 {
     CHECK_RUN("compare bumpy.obj smooth.obj", 0);
-    CHECK(strstr(out_text, "quasi-conformal Q") != NULL);
+    CHECK(strstr(cft_out, "quasi-conformal Q") != NULL);
     CHECK_RUN("compare bumpy.obj bumpy.obj --json --ply same.ply", 0);
     json_error_t jerr;
-    json_t *root = json_loads(out_text, 0, &jerr);
+    json_t *root = json_loads(cft_out, 0, &jerr);
     CHECK(root != NULL);
     if (root) {
         /* a mesh against itself: Q = 1 and no area distortion, to rounding */
@@ -404,7 +352,7 @@ static void test_compare(void)
     /* the PLY carries the per-face fields */
     cf_context *ctx = cft_context();
     cf_mesh_data *data = NULL;
-    CHECK_OK(ctx, cf_read_mesh_file(ctx, in_dir("same.ply"), &data));
+    CHECK_OK(ctx, cf_read_mesh_file(ctx, cft_in_dir("same.ply"), &data));
     if (data) {
         const cf_mesh_property *q = cf_mesh_data_face_property(data, "Q");
         CHECK(q != NULL && cf_mesh_data_face_property(data, "log_area_distortion") != NULL);
@@ -413,7 +361,7 @@ static void test_compare(void)
     cf_mesh_data_destroy(&data);
     cf_context_destroy(&ctx);
     CHECK_RUN("compare bumpy.obj ico.obj", 2);
-    CHECK(strstr(err_text, "connectivity") != NULL);
+    CHECK(strstr(cft_err, "connectivity") != NULL);
     CHECK_RUN("compare bumpy.obj missing.obj", 2);
     CHECK_RUN("compare bumpy.obj", 1);
 }
@@ -421,36 +369,36 @@ static void test_compare(void)
 static void test_demo(void)
 {
     CHECK_RUN("demo --output-dir demo --steps 3 --quiet", 0);
-    CHECK(strstr(out_text, "W/4pi") != NULL && strstr(out_text, "quasi-conformal Q") != NULL);
-    CHECK(strstr(out_text, "demo/output.obj") != NULL);
+    CHECK(strstr(cft_out, "W/4pi") != NULL && strstr(cft_out, "quasi-conformal Q") != NULL);
+    CHECK(strstr(cft_out, "demo/output.obj") != NULL);
     const char *files[] = {"demo/input.obj", "demo/output.obj", "demo/output.ply", "demo/log.jsonl",
                            "demo/before.png", "demo/after.png", "demo/q.png"};
-    for (int i = 0; i < 7; ++i) CHECK(exists(files[i]));
+    for (int i = 0; i < 7; ++i) CHECK(cft_exists(files[i]));
     cf_context *ctx = cft_context();
     cf_mesh *mesh = NULL;
-    CHECK_OK(ctx, cf_load_mesh(ctx, in_dir("demo/output.obj"), &mesh));
+    CHECK_OK(ctx, cf_load_mesh(ctx, cft_in_dir("demo/output.obj"), &mesh));
     if (mesh) CHECK(cf_mesh_uv_count(mesh) > 0 && cf_mesh_uv_triangles(mesh) != NULL);
     cf_mesh_destroy(&mesh);
     cf_context_destroy(&ctx);
     static char log[1 << 16];
-    read_file(in_dir("demo/log.jsonl"), log, sizeof log);
+    cft_read_small(cft_in_dir("demo/log.jsonl"), log, sizeof log);
     CHECK(count_lines(log) == 4);
     CHECK_RUN("demo --output-dir ico.obj", 2); /* a file, not a folder */
     /* the demo's outputs pass the common output check before any work: a
      * read-only file of an earlier demo is kept unless --force */
-    CHECK(chmod(in_dir("demo/q.png"), 0444) == 0);
+    CHECK(chmod(cft_in_dir("demo/q.png"), 0444) == 0);
     CHECK_RUN("demo --output-dir demo --steps 1 --quiet", 2);
-    CHECK(strstr(err_text, "curvflow: demo/q.png: the existing file is read-only; --force replaces it") != NULL);
-    read_file(in_dir("demo/log.jsonl"), log, sizeof log);
+    CHECK(strstr(cft_err, "curvflow: demo/q.png: the existing file is read-only; --force replaces it") != NULL);
+    cft_read_small(cft_in_dir("demo/log.jsonl"), log, sizeof log);
     CHECK(count_lines(log) == 4); /* not rerun: still the log of the first run */
-    CHECK(chmod(in_dir("demo/q.png"), 0644) == 0);
+    CHECK(chmod(cft_in_dir("demo/q.png"), 0644) == 0);
     CHECK_RUN("demo extra", 1);
 }
 
 static int png_size(const char *name, int *w, int *h)
 {
     unsigned char b[24];
-    FILE *f = fopen(in_dir(name), "rb");
+    FILE *f = fopen(cft_in_dir(name), "rb");
     if (!f) return 0;
     size_t n = fread(b, 1, sizeof b, f);
     fclose(f);
@@ -468,18 +416,18 @@ static void test_render(void)
     CHECK_RUN("render same.ply -o q.png --field face:Q --range 1,2", 0);
     CHECK(png_size("q.png", &w, &h) && w == 800 && h == 800);
     CHECK_RUN("render same.ply -o x.png --field face:nothing", 2);
-    CHECK(strstr(err_text, "nothing") != NULL);
+    CHECK(strstr(cft_err, "nothing") != NULL);
     CHECK_RUN("render ico.obj -o x.png --uv-checker", 2); /* no uv */
     CHECK_RUN("render ico.obj -o x.png --view 1,2", 1);
     CHECK_RUN("render ico.obj -o x.png --size 0x10", 1);
     CHECK_RUN("render ico.obj", 1);
-    CHECK(!exists("x.png"));
+    CHECK(!cft_exists("x.png"));
 }
 
 /* Atomic writes: only the files the commands named exist in the folder. */
 static void test_no_temp_files(void)
 {
-    DIR *d = opendir(dir);
+    DIR *d = opendir(cft_dir);
     CHECK(d != NULL);
     if (!d) return;
     const char *expected[] = {".", "..", "stdout.txt", "stderr.txt", "ico.obj", "bumpy.obj", "torus.ply", "grid.off",
@@ -490,32 +438,17 @@ static void test_no_temp_files(void)
     while ((e = readdir(d)) != NULL) {
         int known = 0;
         for (size_t i = 0; i < sizeof expected / sizeof expected[0]; ++i) known |= strcmp(e->d_name, expected[i]) == 0;
-        if (!known) cft_fail(__FILE__, __LINE__, "unexpected file left in %s: %s", dir, e->d_name);
+        if (!known) cft_fail(__FILE__, __LINE__, "unexpected file left in %s: %s", cft_dir, e->d_name);
         ++cft_checks;
     }
     closedir(d);
-}
-
-static void remove_dir(const char *path)
-{
-    DIR *d = opendir(path);
-    if (!d) return;
-    struct dirent *e;
-    while ((e = readdir(d)) != NULL) {
-        if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0) continue;
-        char sub[4096];
-        snprintf(sub, sizeof sub, "%s/%s", path, e->d_name);
-        if (unlink(sub) != 0) remove_dir(sub);
-    }
-    closedir(d);
-    rmdir(path);
 }
 
 /* curve: a run, a diverging run (exit 3, last good state written), and an
  * output that cannot be written (exit 2, nothing run). */
 static void test_curve(void)
 {
-    FILE *f = fopen(in_dir("wobbly.csv"), "w");
+    FILE *f = fopen(cft_in_dir("wobbly.csv"), "w");
     CHECK(f != NULL);
     if (!f) return;
     for (int i = 0; i < 48; ++i) {
@@ -525,13 +458,13 @@ static void test_curve(void)
     }
     fclose(f);
     CHECK_RUN("curve wobbly.csv -o round.csv --steps 5 --quiet", 0);
-    CHECK(exists("round.csv"));
+    CHECK(cft_exists("round.csv"));
     CHECK_RUN("curve wobbly.csv -o blown.csv --steps 5 --time-step 1.5", 3);
-    CHECK(strstr(err_text, "iteration 1: ") != NULL);
-    CHECK(strstr(err_text, "writing the last good state (iteration 0)") != NULL);
-    CHECK(exists("blown.csv"));
+    CHECK(strstr(cft_err, "iteration 1: ") != NULL);
+    CHECK(strstr(cft_err, "writing the last good state (iteration 0)") != NULL);
+    CHECK(cft_exists("blown.csv"));
     CHECK_RUN("curve wobbly.csv -o no_such_dir/c.csv", 2);
-    CHECK(strstr(err_text, "does not exist") != NULL);
+    CHECK(strstr(cft_err, "does not exist") != NULL);
 }
 
 /* ---- issue 15: hostile use of the command line --------------------------- */
@@ -539,26 +472,26 @@ static void test_curve(void)
 #define CHECK_ERR(part)                                                                                   \
     do {                                                                                                  \
         ++cft_checks;                                                                                     \
-        if (!strstr(err_text, (part)))                                                                    \
-            cft_fail(__FILE__, __LINE__, "stderr lacks \"%s\":\n%s", (part), err_text);                   \
+        if (!strstr(cft_err, (part)))                                                                    \
+            cft_fail(__FILE__, __LINE__, "stderr lacks \"%s\":\n%s", (part), cft_err);                   \
     } while (0)
 
 static void write_text(const char *name, const char *text)
 {
-    FILE *f = fopen(in_dir(name), "w");
+    FILE *f = fopen(cft_in_dir(name), "w");
     CHECK(f != NULL);
     if (!f) return;
     fputs(text, f);
     fclose(f);
 }
 
-static void read_named(const char *name, char *buf, size_t size) { read_file(in_dir(name), buf, size); }
+static void read_named(const char *name, char *buf, size_t size) { cft_read_small(cft_in_dir(name), buf, size); }
 
 /* The misuse reproducers of issue 15, each with its exit code and message. */
 static void test_misuse_reproducers(void)
 {
     static char before[1 << 16], after[1 << 16];
-    CHECK(mkdir(in_dir("g"), 0777) == 0);
+    CHECK(mkdir(cft_in_dir("g"), 0777) == 0);
     CHECK_RUN("generate icosphere --subdivisions 1 -o g/in.obj", 0);
 
     /* S4: an overflowing size is a usage error naming the option (sscanf
@@ -570,7 +503,7 @@ static void test_misuse_reproducers(void)
         CHECK_RUN(args, 1);
         CHECK_ERR("--size: expected WxH with W and H integers in [1, 16384], got '");
     }
-    CHECK(!exists("g/s.png"));
+    CHECK(!cft_exists("g/s.png"));
     CHECK_RUN("render g/in.obj -o g/s.png --size 16x8", 0);
     int w = 0, h = 0;
     CHECK(png_size("g/s.png", &w, &h) && w == 16 && h == 8);
@@ -580,10 +513,10 @@ static void test_misuse_reproducers(void)
     write_text("g/c.csv", "0,0\n1,0\n1,1\n0,1\n0.5,0.6\n");
     CHECK_RUN("curve g/c.csv -o g/x.obj", 2);
     CHECK_ERR("curvflow: g/x.obj: unknown curve format '.obj' for -o (use .csv, .txt or .svg)");
-    CHECK(!exists("g/x.obj"));
+    CHECK(!cft_exists("g/x.obj"));
     CHECK_RUN("render g/in.obj -o g/r.jpg", 2);
     CHECK_ERR("curvflow: g/r.jpg: unknown image format '.jpg' for -o (use .png)");
-    CHECK(!exists("g/r.jpg"));
+    CHECK(!cft_exists("g/r.jpg"));
     CHECK_RUN("generate icosphere -o g/x.png", 2);
     CHECK_ERR("unknown mesh format '.png' for -o (use .obj, .off or .ply)");
     CHECK_RUN("generate icosphere -o g/noext", 2);
@@ -594,12 +527,12 @@ static void test_misuse_reproducers(void)
     CHECK_ERR("g/q.off: unknown mesh format '.off' for --ply (use .ply, or .obj with the fields in <stem>.face.csv");
     CHECK_RUN("flow g/in.obj -o g/o.obj -m implicit-mcf -n 1 --log g/l.txt", 2);
     CHECK_ERR("curvflow: g/l.txt: unknown log format '.txt' for --log (use .jsonl)");
-    CHECK(!exists("g/o.obj"));
+    CHECK(!cft_exists("g/o.obj"));
     CHECK_RUN("edit g/in.obj --handles h.json -o g/o.obj --log g/o.log", 2);
     CHECK_ERR("unknown log format '.log' for --log");
     /* extensions are case-insensitive, as the writers read them */
     CHECK_RUN("curve g/c.csv -o g/C.SVG --steps 1 -q", 0);
-    CHECK(exists("g/C.SVG"));
+    CHECK(cft_exists("g/C.SVG"));
 
     /* --log IN.obj never overwrites the input; neither does -o through a
      * symbolic or hard link to it */
@@ -608,12 +541,12 @@ static void test_misuse_reproducers(void)
     CHECK_ERR("g/in.obj: unknown log format '.obj' for --log");
     CHECK_RUN("flow g/in.obj -o g/in.obj -m implicit-mcf -n 1", 2);
     CHECK_ERR("curvflow: g/in.obj: -o names the same file as the input g/in.obj (IN); refusing to overwrite an input");
-    CHECK(symlink("in.obj", in_dir("g/sym.obj")) == 0);
+    CHECK(symlink("in.obj", cft_in_dir("g/sym.obj")) == 0);
     CHECK_RUN("flow g/in.obj -o g/sym.obj -m implicit-mcf -n 1", 2);
     CHECK_ERR("g/sym.obj: -o names the same file as the input g/in.obj (IN)");
     char in_path[2048];
-    snprintf(in_path, sizeof in_path, "%s", in_dir("g/in.obj")); /* in_dir's buffer is static */
-    CHECK(link(in_path, in_dir("g/hard.obj")) == 0);
+    snprintf(in_path, sizeof in_path, "%s", cft_in_dir("g/in.obj")); /* in_dir's buffer is static */
+    CHECK(link(in_path, cft_in_dir("g/hard.obj")) == 0);
     CHECK_RUN("spin g/in.obj --rho g/r.txt -o g/hard.obj", 2);
     CHECK_ERR("g/hard.obj: -o names the same file as the input g/in.obj (IN)");
     CHECK_RUN("compare g/in.obj g/hard.obj --ply g/./in.obj", 2);
@@ -624,12 +557,12 @@ static void test_misuse_reproducers(void)
     CHECK_RUN("edit g/in.obj --handles h.json --start g/o2.obj -o g/o2.obj", 2);
     read_named("g/in.obj", after, sizeof after);
     CHECK(strcmp(before, after) == 0);
-    CHECK(!exists("g/o.obj"));
+    CHECK(!cft_exists("g/o.obj"));
 
     /* M2: stretch-bend-edit through `flow` says what it needs */
     CHECK_RUN("flow g/in.obj -o g/o.obj --method stretch-bend-edit", 1);
     CHECK_ERR("curvflow: --method stretch-bend-edit needs handles: use --handles FILE or `curvflow edit`");
-    CHECK(strstr(err_text, "options.handles") == NULL);
+    CHECK(strstr(cft_err, "options.handles") == NULL);
     CHECK_RUN("flow g/in.obj -o g/o.obj --method implicit-mcf --handles h.json", 1);
     CHECK_ERR("--handles is an option of --method stretch-bend-edit");
     CHECK_RUN("generate bar --nx 6 --ny 2 --nz 2 --width 3 -o g/bar.obj", 0);
@@ -637,7 +570,7 @@ static void test_misuse_reproducers(void)
                            " \"fixed\": true}, {\"name\": \"right\", \"relative_box\": {\"min\": [1, 0, 0], \"max\": [1, 1, 1]},"
                            " \"transform\": {\"translate\": [0, 0, 0.5]}}]}\n");
     CHECK_RUN("flow g/bar.obj -o g/bent.obj --method stretch-bend-edit --handles g/h.json -n 5 -q", 0);
-    CHECK(exists("g/bent.obj"));
+    CHECK(cft_exists("g/bent.obj"));
 
     /* M3: generate names the real limits of its counts */
     CHECK_RUN("generate cylinder --n-around 1048576 -o g/cyl.obj", 1);
@@ -648,7 +581,7 @@ static void test_misuse_reproducers(void)
     CHECK_ERR("--nx: '46001' is not an integer in [1, 46000]");
     CHECK_RUN("generate bar --nx 2001 -o g/cyl.obj", 1);
     CHECK_ERR("--nx: '2001' is not an integer in [1, 2000]");
-    CHECK(!exists("g/cyl.obj"));
+    CHECK(!cft_exists("g/cyl.obj"));
     {
         /* the generator's own limits are those: one above is refused by it too */
         cf_context *ctx = cft_context();
@@ -672,7 +605,7 @@ static void test_misuse_reproducers(void)
               "(above the largest accepted value)");
     CHECK_RUN("flow g/in.obj -o g/o.obj -m spin-willmore -n 0 -q -p boundary_tangent_angle=1.5707963267948966", 0);
     CHECK_RUN("flow --method spin-willmore --list-params", 0);
-    CHECK(strstr(out_text, "boundary_tangent_angle [0] in [-1.5707963267948966, 1.5707963267948966]") != NULL);
+    CHECK(strstr(cft_out, "boundary_tangent_angle [0] in [-1.5707963267948966, 1.5707963267948966]") != NULL);
     CHECK_RUN("edit g/bar.obj --handles g/h.json -o g/o.obj --lambda 1.0000001", 1);
     CHECK_ERR("--lambda: '1.0000001' is outside [0, 1]");
 
@@ -694,7 +627,7 @@ static void test_misuse_reproducers(void)
               "--radius, --height)");
     CHECK_RUN("generate icosphere --seed 3 -o g/cyl.obj", 1);
     CHECK_ERR("--seed is not an option of icosphere");
-    CHECK(!exists("g/cyl.obj"));
+    CHECK(!cft_exists("g/cyl.obj"));
     CHECK_RUN("render g/in.obj -o g/s.png --range 0,1", 1);
     CHECK_ERR("--range is the colour range of --field; give --field too");
     CHECK_RUN("render g/in.obj -o g/s.png --checker-count 4", 1);
@@ -709,7 +642,7 @@ static void test_misuse_reproducers(void)
     /* the log is written atomically: complete logs only; after a numerical
      * failure it holds the steps up to the last good one */
     CHECK_RUN("flow g/in.obj -o g/blown.obj -m explicit-mcf --time-step 10 --steps 20 --log g/blown.jsonl -q", 3);
-    CHECK(exists("g/blown.jsonl"));
+    CHECK(cft_exists("g/blown.jsonl"));
     static char log[1 << 16];
     read_named("g/blown.jsonl", log, sizeof log);
     CHECK(count_lines(log) >= 1 && strncmp(log, "{\"iteration\":0,", 14) == 0);
@@ -720,7 +653,7 @@ static void test_existing_targets(void)
 {
     static char before[1 << 16], after[1 << 16];
     CHECK_RUN("generate icosphere --subdivisions 1 -o g/ro.obj", 0);
-    CHECK(chmod(in_dir("g/ro.obj"), 0444) == 0);
+    CHECK(chmod(cft_in_dir("g/ro.obj"), 0444) == 0);
     read_named("g/ro.obj", before, sizeof before);
     CHECK_RUN("flow g/in.obj -o g/ro.obj -m implicit-mcf -n 1 -q", 2);
     CHECK_ERR("curvflow: g/ro.obj: the existing file is read-only; --force replaces it");
@@ -732,36 +665,36 @@ static void test_existing_targets(void)
     read_named("g/ro.obj", after, sizeof after);
     CHECK(strcmp(before, after) != 0);
     struct stat sb;
-    CHECK(stat(in_dir("g/ro.obj"), &sb) == 0 && (sb.st_mode & 0777) == 0444); /* it stays read-only */
+    CHECK(stat(cft_in_dir("g/ro.obj"), &sb) == 0 && (sb.st_mode & 0777) == 0444); /* it stays read-only */
 
     /* a FIFO (or a device) is never replaced by a regular file */
-    CHECK(mkfifo(in_dir("g/fifo.obj"), 0666) == 0);
+    CHECK(mkfifo(cft_in_dir("g/fifo.obj"), 0666) == 0);
     CHECK_RUN("generate icosphere -o g/fifo.obj --force", 2);
     CHECK_ERR("g/fifo.obj: exists and is not a regular file; refusing to replace it");
-    CHECK(lstat(in_dir("g/fifo.obj"), &sb) == 0 && S_ISFIFO(sb.st_mode));
+    CHECK(lstat(cft_in_dir("g/fifo.obj"), &sb) == 0 && S_ISFIFO(sb.st_mode));
     CHECK_RUN("render g/in.obj -o g", 2);
     CHECK_ERR("curvflow: g: is a directory");
 
     /* a symbolic link is written through: the link stays, its target changes */
-    CHECK(mkdir(in_dir("g/real"), 0777) == 0);
+    CHECK(mkdir(cft_in_dir("g/real"), 0777) == 0);
     CHECK_RUN("generate icosphere --subdivisions 1 -o g/real/t.obj", 0);
-    CHECK(symlink("real/t.obj", in_dir("g/link.obj")) == 0);
+    CHECK(symlink("real/t.obj", cft_in_dir("g/link.obj")) == 0);
     CHECK_RUN("flow g/in.obj -o g/link.obj -m implicit-mcf -n 2 -q", 0);
-    CHECK(lstat(in_dir("g/link.obj"), &sb) == 0 && S_ISLNK(sb.st_mode));
+    CHECK(lstat(cft_in_dir("g/link.obj"), &sb) == 0 && S_ISLNK(sb.st_mode));
     cf_context *ctx = cft_context();
     cf_mesh *m = NULL;
-    CHECK_OK(ctx, cf_load_mesh(ctx, in_dir("g/real/t.obj"), &m));
+    CHECK_OK(ctx, cf_load_mesh(ctx, cft_in_dir("g/real/t.obj"), &m));
     cf_mesh *in = NULL;
-    CHECK_OK(ctx, cf_load_mesh(ctx, in_dir("g/in.obj"), &in));
+    CHECK_OK(ctx, cf_load_mesh(ctx, cft_in_dir("g/in.obj"), &in));
     if (m && in) /* the flow's result, not the icosphere written before */
         CHECK(memcmp(cf_mesh_positions(m), cf_mesh_positions(in), 3 * sizeof(double)) != 0);
     cf_mesh_destroy(&m);
     cf_mesh_destroy(&in);
     cf_context_destroy(&ctx);
-    CHECK(symlink("real/new.png", in_dir("g/dangling.png")) == 0); /* creates what the link names */
+    CHECK(symlink("real/new.png", cft_in_dir("g/dangling.png")) == 0); /* creates what the link names */
     CHECK_RUN("render g/in.obj -o g/dangling.png --size 8x8", 0);
-    CHECK(lstat(in_dir("g/dangling.png"), &sb) == 0 && S_ISLNK(sb.st_mode));
-    CHECK(exists("g/real/new.png"));
+    CHECK(lstat(cft_in_dir("g/dangling.png"), &sb) == 0 && S_ISLNK(sb.st_mode));
+    CHECK(cft_exists("g/real/new.png"));
 }
 
 /* Temporary files of a run killed without a chance to clean up (SIGKILL)
@@ -779,14 +712,14 @@ static void test_stale_temp_files(void)
     write_text(live, "partial");
     CHECK_RUN("generate icosphere --subdivisions 1 -o g/st.obj", 0);
     CHECK_ERR("curvflow: removed 1 temporary file of an ended run next to g/st.obj");
-    CHECK(!exists(stale) && exists(live));
-    unlink(in_dir(live));
+    CHECK(!cft_exists(stale) && cft_exists(live));
+    unlink(cft_in_dir(live));
 }
 
 /* Files whose names start with ".<name>.tmp" in folder `sub` of the test folder. */
 static int temp_files_in(const char *sub)
 {
-    DIR *d = opendir(in_dir(sub));
+    DIR *d = opendir(cft_in_dir(sub));
     if (!d) return -1;
     int n = 0;
     struct dirent *e;
@@ -814,7 +747,7 @@ static void test_signals_remove_temp_files(void)
             sigprocmask(SIG_SETMASK, &none, NULL);
             for (int i = 0; i < 3; ++i) signal(sigs[i], SIG_DFL);
             int null = open("/dev/null", O_WRONLY);
-            if (chdir(dir) != 0 || null < 0) _exit(127);
+            if (chdir(cft_dir) != 0 || null < 0) _exit(127);
             dup2(null, 1);
             dup2(null, 2);
             execl(CF_TEST_CLI, CF_TEST_CLI, "flow", "g/sig_in.obj", "-o", "g/sig.obj", "-m", "explicit-mcf", "-t",
@@ -839,17 +772,13 @@ static void test_signals_remove_temp_files(void)
         static char log[64];
         read_named("g/sig.jsonl", log, sizeof log);
         CHECK(strcmp(log, "old log\n") == 0);
-        CHECK(!exists("g/sig.obj"));
+        CHECK(!cft_exists("g/sig.obj"));
     }
 }
 
 int main(void)
 {
-    snprintf(dir, sizeof dir, "%s/cli_%ld", CF_TEST_BINARY_DIR, (long)getpid());
-    if (mkdir(dir, 0777) != 0) {
-        fprintf(stderr, "cannot create %s\n", dir);
-        return 1;
-    }
+    if (cft_cli_setup("cli")) return 1;
     CFT_RUN(test_help_and_usage);
     CFT_RUN(test_generate);
     CFT_RUN(test_info);
@@ -863,7 +792,5 @@ int main(void)
     CFT_RUN(test_stale_temp_files);
     CFT_RUN(test_signals_remove_temp_files);
     CFT_RUN(test_no_temp_files);
-    int rc = cft_finish();
-    if (rc == 0) remove_dir(dir);
-    return rc;
+    return cft_cli_finish();
 }

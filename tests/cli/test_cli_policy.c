@@ -12,7 +12,7 @@
  * reproducer.
  */
 #define _POSIX_C_SOURCE 200809L
-#include "test.h"
+#include "cli_test.h"
 
 #include <dirent.h>
 #include <jansson.h>
@@ -23,60 +23,11 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-static char dir[1024];
-static char err_text[1 << 16];
-static char out_text[1 << 16];
-
-static void slurp(const char *name, char *buf, size_t size)
-{
-    char path[1200];
-    snprintf(path, sizeof path, "%s/%s", dir, name);
-    buf[0] = '\0';
-    FILE *f = fopen(path, "rb");
-    if (!f) return;
-    size_t n = fread(buf, 1, size - 1, f);
-    buf[n] = '\0';
-    fclose(f);
-}
-
-/* Runs "curvflow ARGS" in the test folder; returns the exit status, stdout
- * in out_text and stderr in err_text. */
-static int run(const char *args)
-{
-    char cmd[4096];
-    snprintf(cmd, sizeof cmd, "cd '%s' && OMP_THREAD_LIMIT=1 '%s' %s > stdout.txt 2> stderr.txt", dir, CF_TEST_CLI,
-             args);
-    int st = system(cmd);
-    slurp("stderr.txt", err_text, sizeof err_text);
-    slurp("stdout.txt", out_text, sizeof out_text);
-    return st != -1 && WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-}
-
-static bool exists(const char *name)
-{
-    char path[1200];
-    snprintf(path, sizeof path, "%s/%s", dir, name);
-    struct stat sb;
-    return stat(path, &sb) == 0;
-}
-
-static bool has(const char *part) { return !part || strstr(err_text, part) != NULL; }
-
-#define EXPECT(args, code, part)                                                                                  \
-    do {                                                                                                          \
-        int rc_ = run(args);                                                                                      \
-        const char *part_ = (part);                                                                               \
-        ++cft_checks;                                                                                             \
-        if (rc_ != (code) || !has(part_))                                                                         \
-            cft_fail(__FILE__, __LINE__, "curvflow %s: exit %d (expected %d), stderr '%s' (expected '%s')", args, \
-                     rc_, (code), err_text, part_ ? part_ : "");                                                 \
-    } while (0)
-
 /* Energies of a JSONL log (iteration 0 first); returns the count. */
 static int log_energies(const char *name, double *e, int max)
 {
     char path[1200];
-    snprintf(path, sizeof path, "%s/%s", dir, name);
+    snprintf(path, sizeof path, "%s/%s", cft_dir, name);
     FILE *f = fopen(path, "r");
     if (!f) return 0;
     char line[1 << 14];
@@ -122,12 +73,12 @@ static void test_s3(void)
     EXPECT("generate bumpy-plane -o plane.obj", 0, NULL);
     EXPECT("flow plane.obj -o plane_out.obj --method implicit-bilaplacian -n 15 -l plane.jsonl", 0,
            "iteration 1: implicit-bilaplacian: stopped: the energy rises (130.830321 -> ");
-    CHECK(has("the last state that lowered it is kept"));
-    CHECK(exists("plane_out.obj"));
+    CHECK(cft_err_has("the last state that lowered it is kept"));
+    CHECK(cft_exists("plane_out.obj"));
     int n = log_energies("plane.jsonl", e, 64);
     CHECK(n == 1);
     EXPECT("info plane_out.obj", 0, NULL);
-    CHECK(strstr(out_text, "validation:    ok") != NULL);
+    CHECK(strstr(cft_out, "validation:    ok") != NULL);
     /* the former behaviour on request */
     EXPECT("flow plane.obj -o plane_raw.obj --method implicit-bilaplacian -n 2 -p energy_check=false -l raw.jsonl", 0,
            NULL);
@@ -146,7 +97,7 @@ static void test_s3(void)
         CHECK(never_rises(e, n));
         CHECK(e[n - 1] < 0.5 * e[0]);
         EXPECT("info spool_out.obj", 0, NULL);
-        CHECK(strstr(out_text, "validation:    ok") != NULL);
+        CHECK(strstr(cft_out, "validation:    ok") != NULL);
     }
     const char *hand = shared("hand_1k.obj");
     if (hand) {
@@ -160,7 +111,7 @@ static void test_s3(void)
             fprintf(stderr, "   hand -t %s: %d states, energy %.6g -> %.6g\n", steps[i], n, e[0], e[n - 1]);
             CHECK(never_rises(e, n));
             CHECK(e[n - 1] < 0.5 * e[0]);
-            CHECK(i == 0 ? n == 16 : has("stopped: the energy rises"));
+            CHECK(i == 0 ? n == 16 : cft_err_has("stopped: the energy rises"));
         }
     }
 }
@@ -170,9 +121,9 @@ static void test_m1(void)
 {
     EXPECT("generate sheet -o sheet.obj", 0, NULL);
     EXPECT("flow sheet.obj -o sheet_out.obj --method spin-willmore -n 5 -p adaptive=0", 0, NULL);
-    CHECK(!has("diverges"));
+    CHECK(!cft_err_has("diverges"));
     EXPECT("flow sheet.obj -o sheet_out.obj --method spin-willmore -n 5", 0, NULL);
-    CHECK(!has("diverges"));
+    CHECK(!cft_err_has("diverges"));
     const char *spot = shared("spot_3k.obj");
     if (spot) {
         const char *taus[] = {"1e-9", "1e-8"};
@@ -181,10 +132,10 @@ static void test_m1(void)
             snprintf(args, sizeof args, "flow '%s' -o spot_out.obj --method spin-willmore -t %s -n 3 -p adaptive=0",
                      spot, taus[i]);
             EXPECT(args, 0, NULL);
-            CHECK(!has("diverges"));
+            CHECK(!cft_err_has("diverges"));
             snprintf(args, sizeof args, "flow '%s' -o spot_out.obj --method spin-willmore -t %s -n 3", spot, taus[i]);
             EXPECT(args, 0, NULL);
-            CHECK(!has("diverges"));
+            CHECK(!cft_err_has("diverges"));
         }
     }
 }
@@ -196,23 +147,23 @@ static void test_e3(void)
     EXPECT("generate limb-sphere --subdivisions 4 -o star.obj", 0, NULL);
     EXPECT("flow star.obj -o star_out.obj --method spin-willmore -p sigma=1e12 -n 1", 3,
            "spin-willmore: parameter 'sigma': the spectral filter M + sigma R^4 L (M^-1 L)^1 cannot be factorised");
-    CHECK(has("vertices, "));
-    CHECK(has("factorises on this mesh"));
-    CHECK(!has("column"));
+    CHECK(cft_err_has("vertices, "));
+    CHECK(cft_err_has("factorises on this mesh"));
+    CHECK(!cft_err_has("column"));
     /* the flow never started: nothing is written (docs/flowcli.md, --help) */
-    CHECK(!exists("star_out.obj"));
+    CHECK(!cft_exists("star_out.obj"));
     const char *spot = shared("spot_3k.obj");
     if (spot) {
         char args[2048];
         snprintf(args, sizeof args, "flow '%s' -o spot_sigma.obj --method spin-willmore -p sigma=1e12 -n 1", spot);
         EXPECT(args, 3, "with sigma = 1e+12 on this mesh (2930 vertices, 5856 faces,");
-        CHECK(has("sigma = 1e+11 factorises on this mesh"));
-        CHECK(!exists("spot_sigma.obj"));
+        CHECK(cft_err_has("sigma = 1e+11 factorises on this mesh"));
+        CHECK(!cft_exists("spot_sigma.obj"));
     }
     /* two coincident opposite triangles: invalid for info and for every flow */
     FILE *f = NULL;
     char path[1200];
-    snprintf(path, sizeof path, "%s/opposite.obj", dir);
+    snprintf(path, sizeof path, "%s/opposite.obj", cft_dir);
     f = fopen(path, "w");
     CHECK(f != NULL);
     if (!f) return;
@@ -220,53 +171,33 @@ static void test_e3(void)
     fclose(f);
     const char *msg = "faces 0 and 1 are the same triangle (vertices 0, 1, 2; opposite orientation)";
     EXPECT("info opposite.obj", 2, NULL);
-    CHECK(strstr(out_text, msg) != NULL || has(msg));
+    CHECK(strstr(cft_out, msg) != NULL || cft_err_has(msg));
     EXPECT("flow opposite.obj -o opp_out.obj --method spin-willmore", 2, msg);
     EXPECT("flow opposite.obj -o opp_out.obj --method implicit-mcf", 2, msg);
-    CHECK(!exists("opp_out.obj"));
+    CHECK(!cft_exists("opp_out.obj"));
 }
 
 /* The common options are listed for every method and set with -p. */
 static void test_options(void)
 {
     EXPECT("flow --method implicit-mcf --list-params", 0, NULL);
-    CHECK(strstr(out_text, "backtrack") != NULL);
-    CHECK(strstr(out_text, "energy_floor") != NULL);
+    CHECK(strstr(cft_out, "backtrack") != NULL);
+    CHECK(strstr(cft_out, "energy_floor") != NULL);
     EXPECT("flow --method spin-willmore --list-params", 0, NULL);
-    CHECK(strstr(out_text, "divergence_tolerance") != NULL);
+    CHECK(strstr(cft_out, "divergence_tolerance") != NULL);
     EXPECT("generate icosphere --subdivisions 2 -o ico.obj", 0, NULL);
     EXPECT("flow ico.obj -o ico_out.obj --method implicit-mcf -n 1 -p max_halvings=61", 1, "'max_halvings'");
     EXPECT("flow ico.obj -o ico_out.obj --method implicit-mcf -n 1 -p backtrack=false -p rise_tolerance=1e-6", 0,
            NULL);
 }
 
-static void remove_dir(const char *path)
-{
-    DIR *d = opendir(path);
-    if (!d) return;
-    struct dirent *e;
-    char p[2048];
-    while ((e = readdir(d))) {
-        if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0) continue;
-        snprintf(p, sizeof p, "%s/%s", path, e->d_name);
-        remove(p);
-    }
-    closedir(d);
-    rmdir(path);
-}
-
 int main(void)
 {
-    snprintf(dir, sizeof dir, "%s/cli_policy_%ld", CF_TEST_BINARY_DIR, (long)getpid());
-    if (mkdir(dir, 0777) != 0) {
-        fprintf(stderr, "cannot create %s\n", dir);
-        return 1;
-    }
+    cft_cli_env = "OMP_THREAD_LIMIT=1";
+    if (cft_cli_setup("cli_policy")) return 1;
     CFT_RUN(test_s3);
     CFT_RUN(test_m1);
     CFT_RUN(test_e3);
     CFT_RUN(test_options);
-    int rc = cft_finish();
-    if (rc == 0) remove_dir(dir);
-    return rc;
+    return cft_cli_finish();
 }

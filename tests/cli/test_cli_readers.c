@@ -10,7 +10,7 @@
 #include "curvflow/generate.h"
 #include "curvflow/io.h"
 #include "curvflow/mesh.h"
-#include "test.h"
+#include "cli_test.h"
 
 #include <dirent.h>
 #include <stdbool.h>
@@ -20,39 +20,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-static char dir[1024];
-static char err_text[1 << 16];
-
-/* Runs "curvflow ARGS" in the test folder; returns the exit status and
- * leaves stderr in err_text. */
-static int run(const char *args)
-{
-    char cmd[4096];
-    snprintf(cmd, sizeof cmd, "cd '%s' && OMP_THREAD_LIMIT=1 '%s' %s > stdout.txt 2> stderr.txt", dir, CF_TEST_CLI,
-             args);
-    int st = system(cmd);
-    char path[1200];
-    snprintf(path, sizeof path, "%s/stderr.txt", dir);
-    err_text[0] = '\0';
-    FILE *f = fopen(path, "rb");
-    if (f) {
-        size_t n = fread(err_text, 1, sizeof err_text - 1, f);
-        err_text[n] = '\0';
-        fclose(f);
-    }
-    return st != -1 && WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-}
-
-static const char *in_dir(const char *name)
-{
-    static char path[2048];
-    snprintf(path, sizeof path, "%s/%s", dir, name);
-    return path;
-}
-
 static void put(const char *name, const void *bytes, size_t n)
 {
-    FILE *f = fopen(in_dir(name), "wb");
+    FILE *f = fopen(cft_in_dir(name), "wb");
     if (!f || fwrite(bytes, 1, n, f) != n) {
         fprintf(stderr, "cannot write %s\n", name);
         exit(1);
@@ -61,19 +31,6 @@ static void put(const char *name, const void *bytes, size_t n)
 }
 
 static void put_text(const char *name, const char *text) { put(name, text, strlen(text)); }
-
-static bool has(const char *part) { return !part || strstr(err_text, part) != NULL; }
-
-/* Runs and checks the exit status and a part of stderr (NULL: any). */
-#define EXPECT(args, code, part)                                                                                  \
-    do {                                                                                                          \
-        int rc_ = run(args);                                                                                      \
-        const char *part_ = (part);                                                                               \
-        ++cft_checks;                                                                                             \
-        if (rc_ != (code) || !has(part_))                                                                         \
-            cft_fail(__FILE__, __LINE__, "curvflow %s: exit %d (expected %d), stderr '%s' (expected '%s')", args, \
-                     rc_, (code), err_text, part_ ? part_ : "");                                                 \
-    } while (0)
 
 #define TET_V "0 0 0\n1 0 0\n0 1 0\n0 0 1\n"
 #define TET_F "3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n"
@@ -90,7 +47,7 @@ static void test_header_counts(void)
     EXPECT("flow face2.off -o out.obj --method implicit-mcf -n 1 -q", 2, "header declares 2 faces, file holds 4");
     /* binary PLY with trailing bytes, and with a face count too small */
     EXPECT("generate icosphere --subdivisions 1 -o ico.ply", 0, NULL);
-    FILE *f = fopen(in_dir("ico.ply"), "ab");
+    FILE *f = fopen(cft_in_dir("ico.ply"), "ab");
     CHECK(f && fwrite("junk", 1, 4, f) == 4);
     if (f) fclose(f);
     EXPECT("info ico.ply", 2, "curvflow: ico.ply: 4 bytes after the last element");
@@ -106,7 +63,7 @@ static void test_bom_nul_huge(void)
     /* M6: "unknown keyword '\ufeffv' ignored", then an index error */
     put_text("bom.obj", "\xEF\xBB\xBFv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
     EXPECT("info bom.obj", 0, NULL);
-    CHECK(strstr(err_text, "unknown keyword") == NULL);
+    CHECK(strstr(cft_err, "unknown keyword") == NULL);
     put_text("bom.off", "\xEF\xBB\xBFOFF\n4 4 0\n" TET_V TET_F);
     EXPECT("info bom.off", 0, NULL);
     static const char nul[] = "v 0 0 0\nv 1 0\0 0\n";
@@ -130,7 +87,7 @@ static void test_rho_file(void)
     CHECK_OK(ctx, cf_context_create(&ctx));
     cf_mesh *mesh = NULL;
     CHECK_OK(ctx, cf_generate_bumpy_sphere(ctx, 4, 0.2, 2u, &mesh)); /* 2562 vertices */
-    CHECK_OK(ctx, cf_write_mesh_file(ctx, in_dir("bumpy.obj"), mesh, NULL, NULL, 0));
+    CHECK_OK(ctx, cf_write_mesh_file(ctx, cft_in_dir("bumpy.obj"), mesh, NULL, NULL, 0));
     int32_t nv = cf_mesh_vertex_count(mesh);
     cf_mesh_destroy(&mesh);
     cf_context_destroy(&ctx);
@@ -175,7 +132,7 @@ static void test_boundary_targets_file(void)
     CHECK_OK(ctx, cf_context_create(&ctx));
     cf_mesh *mesh = NULL;
     CHECK_OK(ctx, cf_generate_cylinder(ctx, 16, 6, 1.0, 2.0, &mesh));
-    CHECK_OK(ctx, cf_write_mesh_file(ctx, in_dir("cyl.obj"), mesh, NULL, NULL, 0));
+    CHECK_OK(ctx, cf_write_mesh_file(ctx, cft_in_dir("cyl.obj"), mesh, NULL, NULL, 0));
     const int32_t *off = cf_mesh_boundary_loop_offsets(mesh), *lv = cf_mesh_boundary_loop_vertices(mesh);
     const double *x = cf_mesh_positions(mesh);
     int32_t nb = off[cf_mesh_boundary_loop_count(mesh)];
@@ -202,7 +159,7 @@ static void test_boundary_targets_file(void)
         snprintf(msg, sizeof msg, "curvflow: targets.txt: line 4: vertex %d: direction", lv[2]);
         EXPECT("flow cyl.obj -o out.obj --method spin-willmore -n 1 -q --boundary-targets targets.txt", b ? 2 : 0,
                b ? msg : NULL);
-        if (b) CHECK(strstr(err_text, expect[b]) != NULL);
+        if (b) CHECK(strstr(cft_err, expect[b]) != NULL);
     }
     put_text("targets.txt", "99999999999999999999999999 1 0 0\n");
     EXPECT("flow cyl.obj -o out.obj --method spin-willmore -q --boundary-targets targets.txt", 2,
@@ -211,33 +168,13 @@ static void test_boundary_targets_file(void)
     cf_context_destroy(&ctx);
 }
 
-static void remove_dir(const char *path)
-{
-    DIR *d = opendir(path);
-    if (!d) return;
-    struct dirent *e;
-    char p[2048];
-    while ((e = readdir(d))) {
-        if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0) continue;
-        snprintf(p, sizeof p, "%s/%s", path, e->d_name);
-        remove(p);
-    }
-    closedir(d);
-    rmdir(path);
-}
-
 int main(void)
 {
-    snprintf(dir, sizeof dir, "%s/cli_readers_%ld", CF_TEST_BINARY_DIR, (long)getpid());
-    if (mkdir(dir, 0777) != 0) {
-        fprintf(stderr, "cannot create %s\n", dir);
-        return 1;
-    }
+    cft_cli_env = "OMP_THREAD_LIMIT=1";
+    if (cft_cli_setup("cli_readers")) return 1;
     CFT_RUN(test_header_counts);
     CFT_RUN(test_bom_nul_huge);
     CFT_RUN(test_rho_file);
     CFT_RUN(test_boundary_targets_file);
-    int rc = cft_finish();
-    if (rc == 0) remove_dir(dir);
-    return rc;
+    return cft_cli_finish();
 }

@@ -16,7 +16,7 @@
 #include "curvflow/io.h"
 #include "curvflow/metrics.h"
 #include "curvflow/ops.h"
-#include "test.h"
+#include "cli_test.h"
 
 #include <dirent.h>
 #include <jansson.h>
@@ -49,10 +49,6 @@
 #pragma GCC diagnostic ignored "-Wunused-function"
 #endif
 
-static char dir[1024];
-static char out_text[1 << 16];
-static char err_text[1 << 16];
-
 /* Whole file (malloc'd, NUL-terminated) or NULL. */
 static char *slurp(const char *path)
 {
@@ -75,58 +71,6 @@ static char *slurp(const char *path)
     fclose(f);
     if (buf) buf[n] = '\0';
     return buf;
-}
-
-static const char *in_dir(const char *name)
-{
-    static char path[2048];
-    snprintf(path, sizeof path, "%s/%s", dir, name);
-    return path;
-}
-
-static void read_small(const char *path, char *buf, size_t size)
-{
-    buf[0] = '\0';
-    FILE *f = fopen(path, "rb");
-    if (!f) return;
-    size_t n = fread(buf, 1, size - 1, f);
-    buf[n] = '\0';
-    fclose(f);
-}
-
-/* Runs a shell command in the test folder; returns the exit status and
- * leaves stdout / stderr in out_text / err_text. */
-static int run_shell(const char *command)
-{
-    char cmd[8192];
-    snprintf(cmd, sizeof cmd, "cd '%s' && %s > stdout.txt 2> stderr.txt", dir, command);
-    int st = system(cmd);
-    read_small(in_dir("stdout.txt"), out_text, sizeof out_text);
-    read_small(in_dir("stderr.txt"), err_text, sizeof err_text);
-    if (st == -1 || !WIFEXITED(st)) return -1;
-    return WEXITSTATUS(st);
-}
-
-static int run(const char *args)
-{
-    char cmd[4096];
-    snprintf(cmd, sizeof cmd, "'%s' %s", CF_TEST_CLI, args);
-    return run_shell(cmd);
-}
-
-#define CHECK_RUN(args, expected)                                                                          \
-    do {                                                                                                   \
-        int rc_ = run(args);                                                                               \
-        ++cft_checks;                                                                                      \
-        if (rc_ != (expected))                                                                             \
-            cft_fail(__FILE__, __LINE__, "curvflow %s: exit %d, expected %d\nstdout: %s\nstderr: %s", args, \
-                     rc_, (expected), out_text, err_text);                                                 \
-    } while (0)
-
-static int exists(const char *name)
-{
-    struct stat sb;
-    return stat(in_dir(name), &sb) == 0;
 }
 
 static bool under_ci(void)
@@ -166,7 +110,7 @@ static json_t *report_data(const char *html)
 /* The log file's lines as parsed objects. */
 static json_t *read_log(const char *name)
 {
-    char *text = slurp(in_dir(name));
+    char *text = slurp(cft_in_dir(name));
     json_t *arr = json_array();
     for (char *line = text ? strtok(text, "\n") : NULL; line; line = strtok(NULL, "\n"))
         json_array_append_new(arr, json_loads(line, 0, NULL));
@@ -184,18 +128,18 @@ static int count_substr(const char *s, const char *sub)
 static void test_usage_and_errors(void)
 {
     CHECK_RUN("report --help", 0);
-    CHECK(strstr(out_text, "Usage: curvflow report") != NULL);
+    CHECK(strstr(cft_out, "Usage: curvflow report") != NULL);
     CHECK_RUN("report", 1);
-    CHECK(strstr(err_text, "expected IN OUT") != NULL);
+    CHECK(strstr(cft_err, "expected IN OUT") != NULL);
     CHECK_RUN("report a.obj b.obj", 1);
-    CHECK(strstr(err_text, "missing -o REPORT.html") != NULL);
+    CHECK(strstr(cft_err, "missing -o REPORT.html") != NULL);
     CHECK_RUN("report a.obj b.obj c.obj -o r.html", 1);
     CHECK_RUN("report nosuchdir", 1);
-    CHECK(strstr(err_text, "not a directory") != NULL);
+    CHECK(strstr(cft_err, "not a directory") != NULL);
     CHECK_RUN("report --frob a b", 1);
-    CHECK(strstr(err_text, "unrecognized option '--frob'") != NULL);
+    CHECK(strstr(cft_err, "unrecognized option '--frob'") != NULL);
     CHECK_RUN("--help", 0);
-    CHECK(strstr(out_text, "report") != NULL);
+    CHECK(strstr(cft_out, "report") != NULL);
 }
 
 /* The viewer is in the tool when `report` gets past its availability check:
@@ -203,16 +147,16 @@ static void test_usage_and_errors(void)
  * the message says why. */
 static bool viewer_built(void)
 {
-    int rc = run("report missing_a.obj missing_b.obj -o r.html");
-    if (strstr(err_text, "the report viewer is not built into this curvflow") != NULL) {
+    int rc = cft_run("report missing_a.obj missing_b.obj -o r.html");
+    if (strstr(cft_err, "the report viewer is not built into this curvflow") != NULL) {
         ++cft_checks;
         if (rc != 2) cft_fail(__FILE__, __LINE__, "no viewer: exit %d, expected 2", rc);
-        fprintf(stderr, "%s", err_text);
+        fprintf(stderr, "%s", cft_err);
         return false;
     }
     ++cft_checks;
-    if (rc != 2 || strstr(err_text, "missing_a.obj") == NULL)
-        cft_fail(__FILE__, __LINE__, "missing input: exit %d (expected 2), stderr %s", rc, err_text);
+    if (rc != 2 || strstr(cft_err, "missing_a.obj") == NULL)
+        cft_fail(__FILE__, __LINE__, "missing input: exit %d (expected 2), stderr %s", rc, cft_err);
     return true;
 }
 
@@ -225,8 +169,8 @@ static void test_flow_report_data(void)
     CHECK_RUN("generate limb-sphere --subdivisions 3 -o star.obj", 0);
     CHECK_RUN("flow star.obj -o star_out.obj --method spin-willmore --steps 6 --log star.jsonl --report star.html -q",
               0);
-    CHECK(exists("star.html"));
-    char *html = slurp(in_dir("star.html"));
+    CHECK(cft_exists("star.html"));
+    char *html = slurp(cft_in_dir("star.html"));
     CHECK(html != NULL);
     if (!html) return;
     CHECK(strncmp(html, "<!DOCTYPE html>", 15) == 0);
@@ -264,8 +208,8 @@ static void test_flow_report_data(void)
     /* the mesh and the figures are those of the files */
     cf_context *ctx = cft_context();
     cf_mesh *a = NULL, *b = NULL;
-    CHECK_OK(ctx, cf_load_mesh(ctx, in_dir("star.obj"), &a));
-    CHECK_OK(ctx, cf_load_mesh(ctx, in_dir("star_out.obj"), &b));
+    CHECK_OK(ctx, cf_load_mesh(ctx, cft_in_dir("star.obj"), &a));
+    CHECK_OK(ctx, cf_load_mesh(ctx, cft_in_dir("star_out.obj"), &b));
     if (a && b) {
         json_t *m = json_object_get(data, "mesh");
         CHECK(json_integer_value(json_object_get(m, "vertices")) == cf_mesh_vertex_count(a));
@@ -299,23 +243,23 @@ static void test_flow_report_data(void)
 
     /* no --log: the steps are still in the report */
     CHECK_RUN("flow star.obj -o star_out2.obj --method implicit-mcf --steps 3 --report nolog.html -q", 0);
-    html = slurp(in_dir("nolog.html"));
+    html = slurp(cft_in_dir("nolog.html"));
     data = html ? report_data(html) : NULL;
     free(html);
     CHECK(json_array_size(json_object_get(data, "log")) == 4);
     json_decref(data);
     /* report targets are checked before the run like every output */
     CHECK_RUN("flow star.obj -o star_out3.obj --method implicit-mcf --steps 3 --report r.txt -q", 2);
-    CHECK(strstr(err_text, "unknown report format '.txt'") != NULL);
-    CHECK(!exists("star_out3.obj"));
+    CHECK(strstr(cft_err, "unknown report format '.txt'") != NULL);
+    CHECK(!cft_exists("star_out3.obj"));
 }
 
 /* curvflow report IN OUT and RUN_DIR; edit --report; input errors. */
 static void test_report_command(void)
 {
     CHECK_RUN("report star.obj star_out.obj --log star.jsonl -o again.html", 0);
-    CHECK(strstr(out_text, "wrote again.html") != NULL);
-    char *html = slurp(in_dir("again.html"));
+    CHECK(strstr(cft_out, "wrote again.html") != NULL);
+    char *html = slurp(cft_in_dir("again.html"));
     json_t *data = html ? report_data(html) : NULL;
     free(html);
     CHECK(json_array_size(json_object_get(data, "log")) == 7);
@@ -323,12 +267,12 @@ static void test_report_command(void)
 
     /* a run directory: the demo's, which also writes run.json */
     CHECK_RUN("demo --output-dir demo --steps 2 --quiet", 0);
-    CHECK(strstr(out_text, "report:              demo/report.html") != NULL);
-    CHECK(exists("demo/report.html") && exists("demo/run.json"));
-    unlink(in_dir("demo/report.html"));
+    CHECK(strstr(cft_out, "report:              demo/report.html") != NULL);
+    CHECK(cft_exists("demo/report.html") && cft_exists("demo/run.json"));
+    unlink(cft_in_dir("demo/report.html"));
     CHECK_RUN("report demo", 0);
-    CHECK(exists("demo/report.html"));
-    html = slurp(in_dir("demo/report.html"));
+    CHECK(cft_exists("demo/report.html"));
+    html = slurp(cft_in_dir("demo/report.html"));
     data = html ? report_data(html) : NULL;
     free(html);
     json_t *run_info = json_object_get(data, "run");
@@ -340,22 +284,22 @@ static void test_report_command(void)
 
     /* errors name the file and the place */
     CHECK_RUN("report star.obj demo/output.obj -o x.html", 2);
-    CHECK(strstr(err_text, "connectivity differs") != NULL);
-    FILE *f = fopen(in_dir("bad.jsonl"), "w");
+    CHECK(strstr(cft_err, "connectivity differs") != NULL);
+    FILE *f = fopen(cft_in_dir("bad.jsonl"), "w");
     if (f) {
         fputs("{\"iteration\": 0, \"energy\": 1}\nnot json\n", f);
         fclose(f);
     }
     CHECK_RUN("report star.obj star_out.obj --log bad.jsonl -o x.html", 2);
-    CHECK(strstr(err_text, "bad.jsonl:2:") != NULL);
-    CHECK(!exists("x.html"));
+    CHECK(strstr(cft_err, "bad.jsonl:2:") != NULL);
+    CHECK(!cft_exists("x.html"));
     CHECK_RUN("report star.obj star_out.obj -o star.obj", 2); /* not an HTML name */
     CHECK_RUN("report star.obj star_out.obj -o nodir/x.html", 2);
-    CHECK(strstr(err_text, "does not exist") != NULL);
+    CHECK(strstr(cft_err, "does not exist") != NULL);
 
     /* edit --report: the energy terms come along */
     CHECK_RUN("generate bar --nx 8 -o bar.obj", 0);
-    f = fopen(in_dir("bar.json"), "w");
+    f = fopen(cft_in_dir("bar.json"), "w");
     if (f) {
         fputs("{\"sets\": [{\"relative_box\": {\"min\": [0, 0, 0], \"max\": [0, 1, 1]}, \"fixed\": true},\n"
               "  {\"relative_box\": {\"min\": [1, 0, 0], \"max\": [1, 1, 1]},\n"
@@ -364,7 +308,7 @@ static void test_report_command(void)
         fclose(f);
     }
     CHECK_RUN("edit bar.obj --handles bar.json --iterations 5 -o bar_out.obj --report bar.html -q", 0);
-    html = slurp(in_dir("bar.html"));
+    html = slurp(cft_in_dir("bar.html"));
     data = html ? report_data(html) : NULL;
     free(html);
     run_info = json_object_get(data, "run");
@@ -388,7 +332,7 @@ static int chromium(const char *page, const char *what, const char *out_name, co
     static int profile = 0;
     char profile_dir[64], cmd[4096];
     snprintf(profile_dir, sizeof profile_dir, "chromium-profile-%d", profile++);
-    mkdir(in_dir(profile_dir), 0700);
+    mkdir(cft_in_dir(profile_dir), 0700);
     /* --enable-unsafe-swiftshader: WebGL on the CPU (there is no GPU here),
      * opted into explicitly, as Chromium asks for trusted content */
     snprintf(cmd, sizeof cmd,
@@ -397,7 +341,7 @@ static int chromium(const char *page, const char *what, const char *out_name, co
              "--user-data-dir='%s/%s' --enable-unsafe-swiftshader --window-size=1280,900 "
              "--force-device-scale-factor=1 --hide-scrollbars --virtual-time-budget=10000 "
              "--enable-logging=stderr --v=0 %s 'file://%s/%s' > %s 2> %s",
-             dir, dir, profile_dir, what, dir, page, out_name, err_name);
+             cft_dir, cft_dir, profile_dir, what, cft_dir, page, out_name, err_name);
     int st = system(cmd);
     return st == -1 || !WIFEXITED(st) ? -1 : WEXITSTATUS(st);
 }
@@ -538,7 +482,7 @@ static void test_browser_page(void)
 {
     int rc = chromium("star.html", "--dump-dom", "dom.html", "dom.log");
     CHECK(rc == 0);
-    char *dom = slurp(in_dir("dom.html")), *blog = slurp(in_dir("dom.log"));
+    char *dom = slurp(cft_in_dir("dom.html")), *blog = slurp(cft_in_dir("dom.log"));
     CHECK(dom != NULL && blog != NULL);
     if (!dom || !blog) {
         free(dom);
@@ -563,7 +507,7 @@ static void test_browser_page(void)
  * at device scale factor 1). */
 static bool canvas_rect(int r[4])
 {
-    char *dom = slurp(in_dir("dom.html"));
+    char *dom = slurp(cft_in_dir("dom.html"));
     char *rect = dom ? attribute(strstr(dom, "<html"), "data-curvflow-canvas") : NULL;
     double v[4];
     bool ok = rect && parse_numbers(rect, v, 4);
@@ -579,11 +523,11 @@ static void test_browser_screenshot(void)
     CHECK(canvas_rect(r));
     int rc = chromium("star.html", "--screenshot=shot.png", "shot.out", "shot.log");
     CHECK(rc == 0);
-    char *blog = slurp(in_dir("shot.log"));
+    char *blog = slurp(cft_in_dir("shot.log"));
     CHECK(blog && console_problems(blog, true) == 0);
     free(blog);
     int w = 0, h = 0, ch = 0;
-    unsigned char *img = stbi_load(in_dir("shot.png"), &w, &h, &ch, 3);
+    unsigned char *img = stbi_load(cft_in_dir("shot.png"), &w, &h, &ch, 3);
     CHECK(img != NULL);
     if (!img || !canvas_rect(r)) {
         stbi_image_free(img);
@@ -628,12 +572,12 @@ static void test_browser_screenshot(void)
  * error, and the page policy blocks (and reports) any network access. */
 static void test_browser_catches_problems(void)
 {
-    char *html = slurp(in_dir("star.html"));
+    char *html = slurp(cft_in_dir("star.html"));
     CHECK(html != NULL);
     if (!html) return;
     char *fmt = strstr(html, "curvflow-report-1");
     CHECK(fmt != NULL);
-    FILE *f = fopen(in_dir("broken.html"), "w");
+    FILE *f = fopen(cft_in_dir("broken.html"), "w");
     if (f && fmt) {
         fwrite(html, 1, (size_t)(fmt - html), f);
         fputs("curvflow-report-0", f);
@@ -643,7 +587,7 @@ static void test_browser_catches_problems(void)
     /* a page that tries to fetch: an image from the loopback address (nothing
      * listens there, and the policy stops the request before it is made) */
     char *body = strstr(html, "<body>");
-    f = fopen(in_dir("fetching.html"), "w");
+    f = fopen(cft_in_dir("fetching.html"), "w");
     if (f && body) {
         fwrite(html, 1, (size_t)(body - html) + 6, f);
         fputs("<img src=\"http://127.0.0.1:9/x.png\" alt=\"\">", f);
@@ -652,39 +596,20 @@ static void test_browser_catches_problems(void)
     }
     free(html);
     chromium("broken.html", "--dump-dom", "broken.dom", "broken.log");
-    char *dom = slurp(in_dir("broken.dom")), *blog = slurp(in_dir("broken.log"));
+    char *dom = slurp(cft_in_dir("broken.dom")), *blog = slurp(cft_in_dir("broken.log"));
     CHECK(dom && strstr(dom, "data-curvflow-errors=\"0\"") == NULL && strstr(dom, "could not be shown") != NULL);
     CHECK(blog && console_problems(blog, false) >= 1);
     free(dom);
     free(blog);
     chromium("fetching.html", "--dump-dom", "fetching.dom", "fetching.log");
-    dom = slurp(in_dir("fetching.dom"));
+    dom = slurp(cft_in_dir("fetching.dom"));
     CHECK(dom && strstr(dom, "data-curvflow-ready=\"1\"") != NULL && strstr(dom, "data-curvflow-errors=\"0\"") == NULL);
     free(dom);
 }
 
-static void remove_dir(const char *path)
-{
-    DIR *d = opendir(path);
-    if (!d) return;
-    struct dirent *e;
-    while ((e = readdir(d)) != NULL) {
-        if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0) continue;
-        char sub[4096];
-        snprintf(sub, sizeof sub, "%s/%s", path, e->d_name);
-        if (unlink(sub) != 0) remove_dir(sub);
-    }
-    closedir(d);
-    rmdir(path);
-}
-
 int main(void)
 {
-    snprintf(dir, sizeof dir, "%s/report_%ld", CF_TEST_BINARY_DIR, (long)getpid());
-    if (mkdir(dir, 0777) != 0) {
-        fprintf(stderr, "cannot create %s\n", dir);
-        return 1;
-    }
+    if (cft_cli_setup("report")) return 1;
     CFT_RUN(test_usage_and_errors);
     if (!viewer_built()) return skip_rest("the report viewer is not built into this curvflow (node and npm at build time)");
     CFT_RUN(test_flow_report_data);
@@ -693,7 +618,5 @@ int main(void)
     CFT_RUN(test_browser_page);
     CFT_RUN(test_browser_screenshot);
     CFT_RUN(test_browser_catches_problems);
-    int rc = cft_finish();
-    if (rc == 0) remove_dir(dir);
-    return rc;
+    return cft_cli_finish();
 }

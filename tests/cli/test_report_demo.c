@@ -7,7 +7,7 @@
  * written, and the figures printed.
  */
 #define _POSIX_C_SOURCE 200809L
-#include "test.h"
+#include "cli_test.h"
 
 #include <jansson.h>
 #include <stdlib.h>
@@ -16,62 +16,25 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-static char dir[1024];
-static char out_text[1 << 16];
-static char err_text[1 << 16];
-
-static void read_small(const char *path, char *buf, size_t size)
-{
-    buf[0] = '\0';
-    FILE *f = fopen(path, "rb");
-    if (!f) return;
-    size_t n = fread(buf, 1, size - 1, f);
-    buf[n] = '\0';
-    fclose(f);
-}
-
-static const char *in_dir(const char *name)
-{
-    static char path[2048];
-    snprintf(path, sizeof path, "%s/%s", dir, name);
-    return path;
-}
-
-static int run(const char *args)
-{
-    char cmd[4096];
-    snprintf(cmd, sizeof cmd, "cd '%s' && '%s' %s > stdout.txt 2> stderr.txt", dir, CF_TEST_CLI, args);
-    int st = system(cmd);
-    read_small(in_dir("stdout.txt"), out_text, sizeof out_text);
-    read_small(in_dir("stderr.txt"), err_text, sizeof err_text);
-    return st == -1 || !WIFEXITED(st) ? -1 : WEXITSTATUS(st);
-}
-
-static int exists(const char *name)
-{
-    struct stat sb;
-    return stat(in_dir(name), &sb) == 0;
-}
-
 /* The number after `label` in the demo's output, or NaN. */
 static double figure(const char *label)
 {
-    const char *p = strstr(out_text, label);
+    const char *p = strstr(cft_out, label);
     return p ? strtod(p + strlen(label), NULL) : NAN;
 }
 
 static void test_demo_flows_the_star_to_a_sphere(void)
 {
-    int rc = run("demo --output-dir d --quiet");
+    int rc = cft_run("demo --output-dir d --quiet");
     ++cft_checks;
-    if (rc != 0) cft_fail(__FILE__, __LINE__, "demo: exit %d\n%s%s", rc, out_text, err_text);
-    fprintf(stderr, "%s", out_text);
-    CHECK(strstr(out_text, "eight-armed star (limb-sphere, 10242 vertices, 20480 faces") != NULL);
-    CHECK(strstr(out_text, "spin-willmore at its defaults") != NULL);
+    if (rc != 0) cft_fail(__FILE__, __LINE__, "demo: exit %d\n%s%s", rc, cft_out, cft_err);
+    fprintf(stderr, "%s", cft_out);
+    CHECK(strstr(cft_out, "eight-armed star (limb-sphere, 10242 vertices, 20480 faces") != NULL);
+    CHECK(strstr(cft_out, "spin-willmore at its defaults") != NULL);
 
     /* the step log: W at every step, from 5.78 x 4 pi down to a sphere's */
     static char log[1 << 20];
-    read_small(in_dir("d/log.jsonl"), log, sizeof log);
+    cft_read_small(cft_in_dir("d/log.jsonl"), log, sizeof log);
     double prev = INFINITY, first = NAN, last = NAN;
     int steps = -1;
     for (char *line = strtok(log, "\n"); line; line = strtok(NULL, "\n")) {
@@ -101,27 +64,23 @@ static void test_demo_flows_the_star_to_a_sphere(void)
     CHECK(figure(" steps (converged) in ") > 0.0 || figure(" steps in ") > 0.0); /* seconds */
     const char *outputs[] = {"d/input.obj", "d/output.obj", "d/output.ply", "d/log.jsonl", "d/run.json",
                              "d/before.png", "d/after.png", "d/q.png"};
-    for (int i = 0; i < 8; ++i) CHECK(exists(outputs[i]));
+    for (int i = 0; i < 8; ++i) CHECK(cft_exists(outputs[i]));
     /* the report, or the reason there is none */
-    if (strstr(out_text, "report:              d/report.html") != NULL)
-        CHECK(exists("d/report.html"));
+    if (strstr(cft_out, "report:              d/report.html") != NULL)
+        CHECK(cft_exists("d/report.html"));
     else
-        CHECK(strstr(err_text, "the report viewer is not built into this curvflow") != NULL);
+        CHECK(strstr(cft_err, "the report viewer is not built into this curvflow") != NULL);
 }
 
 int main(void)
 {
-    snprintf(dir, sizeof dir, "%s/report_demo_%ld", CF_TEST_BINARY_DIR, (long)getpid());
-    if (mkdir(dir, 0777) != 0) {
-        fprintf(stderr, "cannot create %s\n", dir);
-        return 1;
-    }
+    if (cft_cli_setup("report_demo")) return 1;
     CFT_RUN(test_demo_flows_the_star_to_a_sphere);
     int rc = cft_finish();
     if (rc == 0) {
         char cmd[1200];
-        snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
-        if (system(cmd) != 0) fprintf(stderr, "could not remove %s\n", dir);
+        snprintf(cmd, sizeof cmd, "rm -rf '%s'", cft_dir);
+        if (system(cmd) != 0) fprintf(stderr, "could not remove %s\n", cft_dir);
     }
     return rc;
 }

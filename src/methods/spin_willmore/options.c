@@ -80,7 +80,7 @@ static const cf_param_desc spin_params[] = {
     {"input_metric", CF_PARAM_BOOL, OPT(input_metric), 0, 1, NULL,
      "recover positions in the cotan metric of the starting surface (0: the current surface's, per step)"},
     {"adaptive", CF_PARAM_BOOL, OPT(adaptive), 0, 1, NULL,
-     "retry a step with a smaller tau while it would raise W or exceed max_scale_change (up to 10 times; then "
+     "retry a step with a smaller tau while it would raise W or exceed max_scale_change (up to max_halvings times; then "
      "stop as converged), grow tau back after; 0: the paper's fixed step"},
     {"max_scale_change", CF_PARAM_DOUBLE, OPT(max_scale_change), 0.0, 100.0, NULL,
      "adaptive: largest change of the log conformal scale across an edge in one step (0: no bound)"},

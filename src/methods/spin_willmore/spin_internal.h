@@ -62,8 +62,6 @@ void cfi_spin_transform_edges(const cf_mesh *mesh, const double *positions, cons
  * the results agree with 1e-6 to 1e-5 relative in W (spot, bunny, bob).
  * The flow's default; its option `regularization` changes it. */
 #define CFI_SPIN_SHIFT 1e-3
-/* adaptive time steps: at most this many retries (tau halved or cut) within a step */
-#define CFI_SPIN_MAX_HALVINGS 10
 
 /* Inverse power iteration (Crane 2013, Sec. 6.4.2) on a factorisation of
  * X + eps M and its Rayleigh quotient: cf_inverse_iteration_blocks /

@@ -3,8 +3,9 @@
  * accepted. With `adaptive` an attempt that raises W, fails numerically or
  * changes the log conformal scale across an edge by more than
  * max_scale_change is redone from the same rhodot with a smaller tau (up to
- * CFI_SPIN_MAX_HALVINGS times; then the state is kept and the flow reports
- * convergence), and tau grows back after an accepted step. Every accepted
+ * the common option max_halvings times, 10 by default; then the state is
+ * kept and the flow reports convergence), and tau grows back after an
+ * accepted step. Every accepted
  * step is then checked for blow-up (energy jump > blowup_factor) and
  * divergence (W above divergence_factor times its start), and convergence is
  * a relative decrease below `tolerance` (docs/spin.md).

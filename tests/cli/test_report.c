@@ -27,27 +27,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#if defined(__GNUC__)
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wsign-compare"
-#pragma GCC diagnostic ignored "-Wunused-parameter"
-#pragma GCC diagnostic ignored "-Wunused-function"
-#pragma GCC diagnostic ignored "-Wshadow"
-#pragma GCC diagnostic ignored "-Wpedantic"
-#pragma GCC diagnostic ignored "-Wmissing-prototypes"
-#pragma GCC diagnostic ignored "-Wimplicit-fallthrough"
-#pragma GCC diagnostic ignored "-Wmissing-field-initializers"
-#pragma GCC diagnostic ignored "-Wstrict-prototypes"
-#pragma GCC diagnostic ignored "-Wtype-limits"
-#endif
-#define STB_IMAGE_IMPLEMENTATION
-#define STB_IMAGE_STATIC
-#define STBI_ONLY_PNG
-#include <stb/stb_image.h>
-#if defined(__GNUC__)
-#pragma GCC diagnostic pop
-#pragma GCC diagnostic ignored "-Wunused-function"
-#endif
+#include "png_read.h"
 
 /* Whole file (malloc'd, NUL-terminated) or NULL. */
 static char *slurp(const char *path)
@@ -526,11 +506,11 @@ static void test_browser_screenshot(void)
     char *blog = slurp(cft_in_dir("shot.log"));
     CHECK(blog && console_problems(blog, true) == 0);
     free(blog);
-    int w = 0, h = 0, ch = 0;
-    unsigned char *img = stbi_load(cft_in_dir("shot.png"), &w, &h, &ch, 3);
+    int w = 0, h = 0;
+    unsigned char *img = cft_png_load_rgb(cft_in_dir("shot.png"), &w, &h);
     CHECK(img != NULL);
     if (!img || !canvas_rect(r)) {
-        stbi_image_free(img);
+        cft_png_free(img);
         return;
     }
     CHECK(w == 1280 && h == 900);
@@ -565,7 +545,7 @@ static void test_browser_screenshot(void)
         CHECK(shape > total / 20);
         CHECK(colours > 50);
     }
-    stbi_image_free(img);
+    cft_png_free(img);
 }
 
 /* The checks above can fail: a page whose data are broken reports its

@@ -13,27 +13,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#if defined(__GNUC__)
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wsign-compare"
-#pragma GCC diagnostic ignored "-Wunused-parameter"
-#pragma GCC diagnostic ignored "-Wunused-function"
-#pragma GCC diagnostic ignored "-Wshadow"
-#pragma GCC diagnostic ignored "-Wpedantic"
-#pragma GCC diagnostic ignored "-Wmissing-prototypes"
-#pragma GCC diagnostic ignored "-Wimplicit-fallthrough"
-#pragma GCC diagnostic ignored "-Wmissing-field-initializers"
-#pragma GCC diagnostic ignored "-Wstrict-prototypes"
-#pragma GCC diagnostic ignored "-Wtype-limits"
-#endif
-#define STB_IMAGE_IMPLEMENTATION
-#define STB_IMAGE_STATIC
-#define STBI_ONLY_PNG
-#include <stb/stb_image.h>
-#if defined(__GNUC__)
-#pragma GCC diagnostic pop
-#pragma GCC diagnostic ignored "-Wunused-function"
-#endif
+#include "png_read.h"
 
 enum { W = 101, H = 101 };
 
@@ -183,13 +163,13 @@ static void test_png_round_trip(void)
     char path[4096];
     snprintf(path, sizeof path, "%s", cft_temp_path(".png"));
     CHECK_OK(ctx, cf_render_png(ctx, path, mesh, NULL, &o));
-    int w = 0, h = 0, n = 0;
-    unsigned char *img = stbi_load(path, &w, &h, &n, 3);
+    int w = 0, h = 0;
+    unsigned char *img = cft_png_load_rgb(path, &w, &h);
     CHECK(img != NULL);
     if (img) {
         CHECK(w == 64 && h == 48);
         CHECK(memcmp(img, rgb, 3 * 64 * 48) == 0);
-        stbi_image_free(img);
+        cft_png_free(img);
     }
     unlink(path);
     free(rgb);

@@ -29,7 +29,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o);
             cf_spin_willmore_options *so = cf_flow_options_method(&o);
             so->boundary_mode = CF_SPIN_BOUNDARY_PRESCRIBED;
-            so->boundary_targets = targets;
+            so->boundary_targets = (cf_param_values){.values = targets, .count = nv};
             cf_flow *flow = NULL;
             cf_status st = cf_flow_create(ctx, mesh, NULL, &o, &flow);
             cf_flow_destroy(&flow);

@@ -537,8 +537,13 @@ static cf_status policy_init(cf_flow *flow, const cfi_flow_method *m)
         p->opt = *given;
     cf_status st = cfi_step_policy_validate(flow->ctx, &p->opt);
     if (st != CF_OK) return st;
-    p->step_scale = 1.0;
+    p->full_step = 1.0; /* until the method gives its own (cfi_flow_set_time_step) */
+    p->step = 1.0;
     p->halvings = 0;
+    /* energy_check=false accepts every step as the method gives it: no
+     * rise test and nothing to redo */
+    p->rise_check = m->policy.rise_check && p->opt.energy_check;
+    p->backtrack = m->policy.backtrack && p->opt.backtrack && p->opt.energy_check;
     switch (m->policy.unit) {
     case CFI_ENERGY_UNIT_4PI: p->unit = 4.0 * 3.14159265358979323846; break;
     case CFI_ENERGY_UNIT_INITIAL_AREA: p->unit = flow->initial_area > 0.0 ? flow->initial_area : 1.0; break;
@@ -555,6 +560,19 @@ static cf_status policy_init(cf_flow *flow, const cfi_flow_method *m)
                              tol->max_value, p->tolerance);
     }
     return CF_OK;
+}
+
+void cfi_flow_set_time_step(cf_flow *flow, double full_step)
+{
+    if (CF_NEVER(!(full_step >= 0.0) || !isfinite(full_step))) return;
+    flow->policy.full_step = full_step;
+    flow->policy.step = full_step;
+}
+
+void cfi_flow_policy_restrict(cf_flow *flow, int keep_rise_check, int keep_backtrack)
+{
+    flow->policy.rise_check = flow->policy.rise_check && keep_rise_check;
+    flow->policy.backtrack = flow->policy.backtrack && keep_backtrack;
 }
 
 void cf_flow_destroy(cf_flow **pflow)
@@ -639,9 +657,6 @@ cf_status cf_flow_create(cf_context *ctx, const cf_mesh *mesh, const double *pos
     return CF_OK;
 }
 
-/* After a failed step: put the last good state back, let the method
- * resynchronise, and keep the step's status and message (prefixed with the
- * iteration). */
 /* A successful step leaves a surface that passes the mesh check's geometric
  * tests (the connectivity cannot change): no zero-area face (the check's
  * scale-free test) and no face shrunk below the range of lengths. Otherwise
@@ -665,13 +680,18 @@ static cf_status check_faces(cf_flow *flow)
     return CF_OK;
 }
 
-static cf_status fail_step(cf_flow *flow, cf_status status, int64_t iteration)
+/* After a failed step: put the last good state back (the positions, and
+ * the policy's step as it was at the start of the step), let the method
+ * resynchronise, and keep the step's status and message (prefixed with the
+ * iteration). */
+static cf_status fail_step(cf_flow *flow, cf_status status, int64_t iteration, double start_step)
 {
     cf_context *ctx = flow->ctx;
     int32_t nv = flow->mesh->nv;
     char message[CF_MESSAGE_CAPACITY];
     memcpy(message, ctx->message, sizeof message);
     memcpy(flow->positions, flow->saved_positions, 3 * (size_t)nv * sizeof(double));
+    flow->policy.step = start_step;
     if (flow->method->reset) (void)flow->method->reset(flow);
     memcpy(ctx->message, message, sizeof message);
     ctx->last_status = status;
@@ -679,9 +699,21 @@ static cf_status fail_step(cf_flow *flow, cf_status status, int64_t iteration)
     return status;
 }
 
+/* A method's hook failed: a failure that records no message gets one, and
+ * a face that degenerates during a step is a numerical failure of the flow
+ * (the input passed the mesh check at creation), not bad input. */
+static cf_status fail_method(cf_flow *flow, cf_status st, int64_t iteration, double start_step)
+{
+    if (flow->ctx->last_status == CF_OK)
+        cfi_error(flow->ctx, st, "%s step failed (%s)", flow->method->name, cf_status_name(st));
+    if (st == CF_ERR_DEGENERATE_FACE || st == CF_ERR_BAD_MESH) st = CF_ERR_NUMERICAL;
+    return fail_step(flow, st, iteration, start_step);
+}
+
 /* The policy rejected a rising step and may not retry it (no backtracking):
  * the failure names the energies, the step and what may help. */
-static cf_status fail_rise(cf_flow *flow, double before, const cf_flow_info *step, int64_t iteration)
+static cf_status fail_rise(cf_flow *flow, double before, const cf_flow_info *step, int64_t iteration,
+                           double start_step)
 {
     const cfi_flow_method *m = flow->method;
     cfi_error(flow->ctx, CF_ERR_NUMERICAL, "%s: energy rose from %.9g to %.9g (time step %g): %s", m->name, before,
@@ -689,22 +721,18 @@ static cf_status fail_rise(cf_flow *flow, double before, const cf_flow_info *ste
               m->policy.rise_hint ? m->policy.rise_hint
                                   : "a smaller time_step or backtrack=true may help; energy_check=false accepts rising "
                                     "steps");
-    return fail_step(flow, CF_ERR_NUMERICAL, iteration);
+    return fail_step(flow, CF_ERR_NUMERICAL, iteration, start_step);
 }
 
-/* No time step down to the smallest the policy allows lowers the energy:
- * the state before the step is kept, the flow reports convergence, and a
- * warning says why the run ends early. */
-static cf_status stall(cf_flow *flow, double before, const cf_flow_info *step, int64_t iteration, cf_flow_info *info)
+/* The run stops at the state before the step (already restored), which
+ * does not count as a step: the flow reports convergence and a warning
+ * says why the run ends early. `tried` is the step of the last attempt. */
+static cf_status stop_at_start(cf_flow *flow, double before, const cf_flow_info *step, int64_t iteration,
+                               double tried, cf_flow_info *info)
 {
     cf_context *ctx = flow->ctx;
-    memcpy(flow->positions, flow->saved_positions, 3 * (size_t)flow->mesh->nv * sizeof(double));
-    if (flow->method->reset) {
-        cf_status st = flow->method->reset(flow);
-        if (st != CF_OK) return fail_step(flow, st, iteration);
-    }
     flow->converged = 1;
-    if (!flow->method->policy.backtrack)
+    if (!flow->policy.backtrack)
         cfi_log(ctx, CF_LOG_WARNING,
                 "iteration %lld: %s: stopped: the step raised the energy (%.9g -> %.9g); the state before it is kept "
                 "(energy_check=false accepts rising steps)",
@@ -714,97 +742,174 @@ static cf_status stall(cf_flow *flow, double before, const cf_flow_info *step, i
                 "iteration %lld: %s: stopped: the energy rises (%.9g -> %.9g) at every time step down to %g "
                 "(time_step / %.0f); the last state that lowered it is kept (energy_check=false accepts rising steps)",
                 (long long)iteration, flow->method->name, before, step->energy, step->time_step,
-                1.0 / flow->policy.step_scale);
+                flow->policy.full_step / tried);
     if (info) *info = flow->info;
     return CF_OK;
 }
 
-/* One step under the shared safety net and step policy: the method's step,
- * then finite positions, faces that pass the mesh check, finite energy;
- * then the policy (methods/step_policy.h): a step that raises the energy
- * beyond rise_tolerance and energy_floor is rejected when the method asks
- * for the check; with backtracking it is redone from the saved state with
- * half the step, down to time_step / 2^max_halvings, below which the run
- * stops as converged at the state before the step (stall); without
- * backtracking the step fails (or, with rise_stops, stops the run). After
- * an accepted step without halving a reduced step grows back by
- * step_growth, and the convergence tolerance is tested. */
+/* Why the policy rejected an attempt. */
+enum { ACCEPTED, REJECT_RISE, REJECT_METHOD, REJECT_FAILURE };
+
+/* The policy's rise test of a step from `before` to `after`. */
+static int rose(const cf_flow *flow, double before, double after)
+{
+    if (flow->method->policy.rise_exact) return cfi_step_policy_exceeds(after, before, 0.0, 0.0);
+    return cfi_step_policy_rose(&flow->policy, before, after);
+}
+
+/* After a rejected attempt: the positions of the step's start, the method
+ * resynchronised (its energy is the one before the step again). */
+static cf_status back_to_start(cf_flow *flow)
+{
+    const cfi_flow_method *m = flow->method;
+    memcpy(flow->positions, flow->saved_positions, 3 * (size_t)flow->mesh->nv * sizeof(double));
+    if (m->revert) return m->revert(flow);
+    return m->reset ? m->reset(flow) : CF_OK;
+}
+
+/* One step under the shared safety net and step policy. The method's
+ * begin_step (if any), then attempts (its attempt, or its whole step) at
+ * the policy's current step. An attempt is rejected when the method says
+ * so (its verdict), when the step fails to factorise or degenerates a face
+ * (CF_ERR_NOT_POSDEF, CF_ERR_DEGENERATE_FACE) while backtracking, or when
+ * it raises the energy beyond rise_tolerance and energy_floor (rise_exact:
+ * at all) and the rise check applies. An accepted attempt must also leave
+ * finite positions, faces that pass the mesh check and a finite energy, or
+ * the step fails. With backtracking a rejected attempt is redone from the
+ * saved state with half the step (or less, as the method's verdict asks),
+ * up to the limit max_halvings sets; at the limit a failure fails and a
+ * rise or the method's rejection is a stall: the run stops as converged at
+ * the state before the step. Without backtracking a rise fails (or, with
+ * rise_stops, stops the run). After an accepted step without retries a
+ * reduced step grows back by step_growth; the convergence tolerance is
+ * tested. */
 cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info)
 {
     if (!flow) return CF_ERR_INVALID_ARG;
     cf_context *ctx = flow->ctx;
+    const cfi_flow_method *m = flow->method;
     int32_t nv = flow->mesh->nv;
     int64_t iteration = flow->info.iteration + 1;
     double t0 = cfi_now_seconds();
-    const cfi_step_policy_desc *desc = &flow->method->policy;
+    const cfi_step_policy_desc *desc = &m->policy;
     cfi_step_policy_state *pol = &flow->policy;
-    int rise_check = desc->rise_check && pol->opt.energy_check;
-    int backtrack = rise_check && desc->backtrack && pol->opt.backtrack;
     double before = flow->info.energy;
+    double start_step = pol->step;
     int32_t halvings = 0;
+    int stalled = 0;
+    cf_status st = CF_OK;
 
     memcpy(flow->saved_positions, flow->positions, 3 * (size_t)nv * sizeof(double));
     cf_flow_info step;
+    memset(&step, 0, sizeof step);
+    step.iteration = iteration;
+    if (m->begin_step) {
+        cf_context_clear_error(ctx);
+        st = m->begin_step(flow, &step);
+        if (st != CF_OK) return fail_method(flow, st, iteration, start_step);
+    }
     for (;;) {
-        memset(&step, 0, sizeof step);
-        step.iteration = iteration;
+        if (!m->begin_step) {
+            memset(&step, 0, sizeof step);
+            step.iteration = iteration;
+        }
+        cfi_step_verdict verdict = {0, 0.5};
         /* so that a failing method that records no message is noticed */
         cf_context_clear_error(ctx);
-        cf_status st = flow->method->step(flow, &step);
+        st = m->attempt ? m->attempt(flow, pol->step, &step, &verdict) : m->step(flow, &step);
+        int reason = ACCEPTED;
         if (st != CF_OK) {
+            /* a matrix that does not factorise, or a face that degenerates,
+             * at this step may not at a smaller one */
+            if (!pol->backtrack || (st != CF_ERR_NOT_POSDEF && st != CF_ERR_DEGENERATE_FACE))
+                return fail_method(flow, st, iteration, start_step);
             if (ctx->last_status == CF_OK)
-                cfi_error(ctx, st, "%s step failed (%s)", flow->method->name, cf_status_name(st));
-            /* the input passed the mesh check at creation: a face that degenerates
-             * during a step is a numerical failure of the flow, not bad input */
-            if (st == CF_ERR_DEGENERATE_FACE || st == CF_ERR_BAD_MESH) st = CF_ERR_NUMERICAL;
-            return fail_step(flow, st, iteration);
+                cfi_error(ctx, st, "%s step failed (%s)", m->name, cf_status_name(st));
+            reason = REJECT_FAILURE;
+        } else if (verdict.rejected) {
+            reason = REJECT_METHOD;
+        } else {
+            if (check_positions(ctx, flow->positions, nv, CF_ERR_NUMERICAL, "position") != CF_OK)
+                return fail_step(flow, CF_ERR_NUMERICAL, iteration, start_step);
+            if (check_faces(flow) != CF_OK) return fail_step(flow, CF_ERR_NUMERICAL, iteration, start_step);
+            if (!isfinite(step.energy)) {
+                cfi_error(ctx, CF_ERR_NUMERICAL, "energy is %s", isnan(step.energy) ? "NaN" : "infinite");
+                return fail_step(flow, CF_ERR_NUMERICAL, iteration, start_step);
+            }
+            if (!pol->rise_check || !rose(flow, before, step.energy)) break;
+            reason = REJECT_RISE;
         }
-        if (check_positions(ctx, flow->positions, nv, CF_ERR_NUMERICAL, "position") != CF_OK)
-            return fail_step(flow, CF_ERR_NUMERICAL, iteration);
-        if (check_faces(flow) != CF_OK) return fail_step(flow, CF_ERR_NUMERICAL, iteration);
-        if (!isfinite(step.energy)) {
-            cfi_error(ctx, CF_ERR_NUMERICAL, "energy is %s", isnan(step.energy) ? "NaN" : "infinite");
-            return fail_step(flow, CF_ERR_NUMERICAL, iteration);
+        if (!pol->backtrack) {
+            if (CF_NEVER(reason != REJECT_RISE)) {
+                cfi_error(ctx, CF_ERR_NUMERICAL, "%s: step rejected without backtracking", m->name);
+                return fail_step(flow, CF_ERR_NUMERICAL, iteration, start_step);
+            }
+            if (!desc->rise_stops) return fail_rise(flow, before, &step, iteration, start_step);
+            st = back_to_start(flow);
+            if (st != CF_OK) return fail_method(flow, st, iteration, start_step);
+            return stop_at_start(flow, before, &step, iteration, pol->step, info);
         }
-        if (!rise_check || !cfi_step_policy_rose(pol, before, step.energy)) break;
-        if (!backtrack) {
-            if (desc->rise_stops) return stall(flow, before, &step, iteration, info);
-            return fail_rise(flow, before, &step, iteration);
+        /* max_halvings bounds the step against the full step, not per step
+         * (or a run near its minimum would creep on with ever smaller
+         * steps): when no step down to time_step / 2^max_halvings lowers the
+         * energy, the run stops at the last state that did, as converged
+         * (the flow has reached the state its step can lower no further: the
+         * round sphere of the bi-Laplacian flow, a state from which the
+         * frozen-operator step is no descent direction). A method with
+         * halvings_per_step counts the retries of each step instead. */
+        int at_limit = desc->halvings_per_step ? halvings >= pol->opt.max_halvings
+                                               : pol->step <= pol->full_step * ldexp(1.0, -pol->opt.max_halvings);
+        if (at_limit && reason == REJECT_FAILURE) {
+            if (halvings > 0)
+                cfi_error_prefix(ctx, "at every time step down to %g (time_step / %.0f)", pol->step,
+                                 pol->full_step / pol->step);
+            return fail_method(flow, st, iteration, start_step);
         }
-        /* max_halvings bounds the step against time_step, not per step (or
-         * a run near its minimum would creep on with ever smaller steps):
-         * when no step down to time_step / 2^max_halvings lowers the energy,
-         * the run stops at the last state that did, as converged (the flow
-         * has reached the state its step can lower no further: the round
-         * sphere of the bi-Laplacian flow, a state from which the
-         * frozen-operator step is no descent direction) */
-        if (pol->step_scale <= ldexp(1.0, -pol->opt.max_halvings)) return stall(flow, before, &step, iteration, info);
-        /* backtrack: the state before the step, the method resynchronised
-         * (its energy is `before` again), half the step */
-        memcpy(flow->positions, flow->saved_positions, 3 * (size_t)nv * sizeof(double));
-        if (flow->method->reset) {
-            st = flow->method->reset(flow);
-            if (st != CF_OK) return fail_step(flow, st, iteration);
+        st = back_to_start(flow);
+        if (st != CF_OK) return fail_method(flow, st, iteration, start_step);
+        if (at_limit) {
+            stalled = 1;
+            break;
         }
-        pol->step_scale *= 0.5;
+        pol->step *= reason == REJECT_METHOD ? fmin(0.5, verdict.shrink) : 0.5;
         ++halvings;
     }
-    cf_status st = measure(flow, &step);
-    if (st != CF_OK) return fail_step(flow, st, iteration);
+    if (stalled) {
+        double tried = pol->step;
+        /* the next step (after new positions, or a caller stepping on) starts where this one did */
+        pol->step = start_step;
+        if (!desc->stall_as_step) return stop_at_start(flow, before, &step, iteration, tried, info);
+        const char *term = flow->info.term_names[0];
+        cfi_log(ctx, CF_LOG_INFO, "%s: %s does not decrease for any time step down to %g; stopping at %s = %.6g",
+                m->name, desc->energy_name ? desc->energy_name : "the energy", tried, term ? term : "energy",
+                term ? flow->info.energy_terms[0] : flow->info.energy);
+    }
+    if (m->end_step) {
+        cf_context_clear_error(ctx);
+        st = m->end_step(flow, &step);
+        if (st != CF_OK) return fail_method(flow, st, iteration, start_step);
+    }
+    if (stalled) {
+        /* an accepted step of time step 0 at the state before it */
+        step.time_step = 0.0;
+        flow->converged = 1;
+    }
+    st = measure(flow, &step);
+    if (st != CF_OK) return fail_step(flow, st, iteration, start_step);
     if (!isfinite(step.area) || !isfinite(step.volume)) {
         cfi_error(ctx, CF_ERR_NUMERICAL, "area or volume is not finite");
-        return fail_step(flow, CF_ERR_NUMERICAL, iteration);
+        return fail_step(flow, CF_ERR_NUMERICAL, iteration, start_step);
     }
     pol->halvings = halvings;
-    if (backtrack) {
-        /* in the log like spin-willmore's own: the first free residual slot */
+    if (pol->backtrack) {
+        /* in the log: the first free residual slot */
         for (int r = 0; r < CF_FLOW_MAX_RESIDUALS; ++r) {
             if (step.residual_names[r]) continue;
             step.residuals[r] = halvings;
             step.residual_names[r] = "time_step_halvings";
             break;
         }
-        if (halvings == 0) pol->step_scale = fmin(1.0, pol->step_scale * pol->opt.step_growth);
+        if (halvings == 0 && !stalled) pol->step = fmin(pol->full_step, pol->step * pol->opt.step_growth);
     }
     if (desc->convergence && cfi_step_policy_converged(before, step.energy, pol->tolerance)) flow->converged = 1;
     step.iteration = iteration;
@@ -862,7 +967,7 @@ cf_status cf_flow_set_positions(cf_flow *flow, const double *positions)
         return st;
     }
     flow->converged = 0;
-    flow->policy.step_scale = 1.0; /* a new state: the step policy starts from time_step again */
+    flow->policy.step = flow->policy.full_step; /* a new state: the step policy starts from time_step again */
     return CF_OK;
 }
 

@@ -35,12 +35,36 @@ typedef struct cfi_flow_method {
      * factorize/solve seconds). The common layer has saved the previous
      * positions and restores them if this returns an error. Must not
      * allocate. The common layer fills iteration, time, area, volume,
-     * drifts and total_seconds. */
+     * drifts and total_seconds. A method with policy.backtrack takes its
+     * time step from cfi_flow_time_step(flow); when the policy rejects the
+     * step, the layer restores the positions, calls reset and calls step
+     * again with a smaller one. NULL when the method has begin_step and
+     * attempt instead. */
     cf_status (*step)(cf_flow *flow, cf_flow_info *info);
+    /* Optional, instead of step, for a method that redoes only a part of a
+     * step when the policy rejects it (spin-willmore redoes IV-VI from the
+     * same rhodot). begin_step: the part every attempt shares, from the
+     * state at the start of the step (the layer has saved the positions).
+     * attempt: the rest for `time_step` (the policy's current step, at most
+     * the full step), updating flow->positions and filling info->energy;
+     * it may reject its own result through *verdict (rejected, with the
+     * factor the next step is cut by at least). end_step (optional): the
+     * method's own checks and report of the accepted attempt, or at a stall
+     * of the state before the step (info->time_step is then the last step
+     * tried; the layer reports 0). The three share one info, which the
+     * layer clears before begin_step only: timings add up over attempts.
+     * None may allocate. */
+    cf_status (*begin_step)(cf_flow *flow, cf_flow_info *info);
+    cf_status (*attempt)(cf_flow *flow, double time_step, cf_flow_info *info, cfi_step_verdict *verdict);
+    cf_status (*end_step)(cf_flow *flow, cf_flow_info *info);
     /* Called after cf_flow_set_positions or a failed step restored the
      * positions, so the method can resynchronise cached state and
      * recompute flow->info.energy for the current positions (may be NULL). */
     cf_status (*reset)(cf_flow *flow);
+    /* Optional: after a rejected attempt the layer has put back the
+     * positions of the step's start; resynchronise what the attempt changed
+     * (NULL: reset). Unlike reset, the flow goes on with the same step. */
+    cf_status (*revert)(cf_flow *flow);
     void (*destroy)(cf_flow *flow);
     /* Which checks of the shared step policy apply (methods/step_policy.h);
      * left out (all zero): none, the method accepts its own steps. */
@@ -64,11 +88,24 @@ struct cf_flow {
     cfi_step_policy_state policy; /* the shared step policy (cf_flow_step) */
 };
 
-/* Factor (0, 1] on the method's time step chosen by the step policy
- * (backtracking); methods with policy.backtrack multiply their step by it. */
-static inline double cfi_flow_step_scale(const cf_flow *flow) { return flow->policy.step_scale; }
+/* The step policy's time step for the current attempt: the full step
+ * given to cfi_flow_set_time_step, or a smaller one after rejected steps
+ * (methods with policy.backtrack take their step from here). */
+static inline double cfi_flow_time_step(const cf_flow *flow) { return flow->policy.step; }
 
+/* 1 when this flow's rejected steps are redone with a smaller step. */
+static inline int cfi_flow_backtracks(const cf_flow *flow) { return flow->policy.backtrack; }
 
+/* Called by a backtracking method's create: its full time step (>= 0, in
+ * its own units, e.g. the scale-free time_step times the area); the policy
+ * starts from it and never grows the step above it. */
+void cfi_flow_set_time_step(cf_flow *flow, double full_step);
+
+/* Called by a method's create to turn the policy's rise check or its
+ * backtracking off for this flow (1 keeps what the options and the
+ * method's descriptor give, 0 turns it off; nothing is turned on), e.g.
+ * spin-willmore without `adaptive`, or with boundaries that may raise W. */
+void cfi_flow_policy_restrict(cf_flow *flow, int keep_rise_check, int keep_backtrack);
 
 /* The registry entry of a kind, NULL if out of range. */
 const cfi_flow_method *cfi_flow_method_of(cf_flow_kind kind);

@@ -35,10 +35,11 @@ typedef struct cfi_step_policy_desc {
     /* 1: the energy should not rise in a step (a gradient flow): a step
      * that raises it beyond the tolerance and floor is rejected. */
     int32_t rise_check;
-    /* 1: the method multiplies its time step by cfi_flow_step_scale(flow),
-     * so a rejected step can be retried with half the step and the step
-     * grown back afterwards. 0 (e.g. explicit flows, whose stability the
-     * user chose with time_step): a rejected step fails. */
+    /* 1: the method takes its time step from cfi_flow_time_step(flow)
+     * (having given its full step to cfi_flow_set_time_step in create), so
+     * a rejected step can be redone with a smaller step and the step grown
+     * back afterwards. 0 (e.g. explicit flows, whose stability the user
+     * chose with time_step): a rejected step fails. */
     int32_t backtrack;
     /* 1 (without backtrack): a rejected rise ends the run as converged,
      * keeping the state before it, instead of failing (a method without a
@@ -55,14 +56,42 @@ typedef struct cfi_step_policy_desc {
     /* What the message of a failed rise adds, e.g. "the time step is above
      * the stability limit; a smaller time_step helps" (NULL: a generic hint). */
     const char *rise_hint;
+    /* 1: any rise of the energy, however small, is rejected (no
+     * rise_tolerance or energy_floor): a method whose claim is that its
+     * energy never rises under backtracking (spin-willmore's W). */
+    int32_t rise_exact;
+    /* 1: max_halvings counts the retries of one step, so the step may go
+     * lower over several steps (spin-willmore); 0: the step never goes
+     * below the full step / 2^max_halvings (a run near its minimum does not
+     * creep on with ever smaller steps). */
+    int32_t halvings_per_step;
+    /* What a stall (no step down to the smallest allowed is accepted) looks
+     * like. 1: an accepted step of time step 0 at the state before it (the
+     * iteration advances, an INFO notice "<method>: <energy_name> does not
+     * decrease for any time step down to ..."): spin-willmore. 0: the
+     * iteration does not advance and a WARNING says why the run stops. */
+    int32_t stall_as_step;
+    const char *energy_name; /* in the stall notice (NULL: "the energy") */
 } cfi_step_policy_desc;
+
+/* How an attempt (cfi_flow_method.attempt) judges its own result, besides
+ * the policy's tests: rejected 1 redoes the step from its start with a step
+ * of at most min(0.5, shrink) times this one (shrink NaN or >= 0.5: half),
+ * e.g. spin-willmore's cut for a scale change above max_scale_change. */
+typedef struct cfi_step_verdict {
+    int32_t rejected;
+    double shrink;
+} cfi_step_verdict;
 
 /* The policy's state inside a flow (cf_flow.policy). */
 typedef struct cfi_step_policy_state {
     cf_step_policy opt;     /* copy of the common options */
-    double step_scale;      /* (0, 1]: factor on the method's time step */
+    double full_step;       /* the method's time step (cfi_flow_set_time_step; 1 if not given) */
+    double step;            /* (0, full_step]: the time step of the next attempt */
     double unit;            /* value of the floor's unit for this flow (> 0) */
     double tolerance;       /* convergence tolerance (desc.convergence), 0: never */
+    int32_t rise_check;     /* this flow's: desc.rise_check and energy_check (cfi_flow_policy_restrict) */
+    int32_t backtrack;      /* this flow's: desc.backtrack, backtrack and energy_check (ditto) */
     int32_t halvings;       /* of the last accepted step */
 } cfi_step_policy_state;
 

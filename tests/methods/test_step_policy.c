@@ -5,9 +5,10 @@
  * halving of a rising step and growth of the step back, rejection that
  * restores the state, the user's and the methods' opt-outs, and issue 15's
  * cases built on it: S3 (implicit-bilaplacian raising its energy) and M1
- * (divergence false alarms of spin-willmore at tiny steps and at W = 0;
- * spin-willmore keeps its own adaptive step and uses the policy's test for
- * divergence).
+ * (divergence false alarms of spin-willmore at tiny steps and at W = 0);
+ * a step whose matrix does not factorise is redone with a smaller step like
+ * a rise; spin-willmore's adaptive step is the same loop (its attempts of
+ * IV-VI, its scale-change cut, W never rising, max_halvings per step).
  */
 #include "test.h"
 
@@ -137,22 +138,70 @@ static void test_options(void)
 
 /* Which methods take which checks: the baselines and the edit descend
  * their energy (rise check; the flow layer's convergence tolerance); only
- * the implicit baselines scale their step (the explicit step is the user's
- * choice of stability); the edit has no step to reduce, so a rise ends its
- * run; spin-willmore keeps its own adaptive step and convergence (its W
- * may rise by design with prescribed and cmc boundaries) and uses the
- * policy's divergence test. */
+ * the implicit baselines and spin-willmore redo a rejected step with a
+ * smaller one (the explicit step is the user's choice of stability); the
+ * edit has no step to reduce, so a rise ends its run; spin-willmore keeps
+ * its own convergence test, rejects any rise of W (no slack), counts
+ * max_halvings per step and reports a stall as a step of time step 0. */
 static void test_method_opt_outs(void)
 {
     for (int k = 0; k < CF_FLOW_KIND_COUNT; ++k) {
-        const cfi_step_policy_desc *d = &cfi_flow_method_of((cf_flow_kind)k)->policy;
-        int descends = k != CF_FLOW_SPIN_WILLMORE;
+        const cfi_flow_method *m = cfi_flow_method_of((cf_flow_kind)k);
+        const cfi_step_policy_desc *d = &m->policy;
+        int spin = k == CF_FLOW_SPIN_WILLMORE;
         int implicit = k == CF_FLOW_IMPLICIT_MCF || k == CF_FLOW_CONFORMAL_MCF || k == CF_FLOW_IMPLICIT_BILAPLACIAN;
-        CHECK(d->rise_check == descends);
-        CHECK(d->backtrack == implicit);
+        CHECK(d->rise_check == 1);
+        CHECK(d->backtrack == (implicit || spin));
         CHECK(d->rise_stops == (k == CF_FLOW_STRETCH_BEND_EDIT));
-        CHECK(d->convergence == descends);
+        CHECK(d->convergence == !spin);
+        CHECK(d->rise_exact == spin && d->halvings_per_step == spin && d->stall_as_step == spin);
+        /* a whole step, or the step in parts (spin-willmore) */
+        CHECK((m->step != NULL) == !spin);
+        CHECK((m->begin_step != NULL) == spin && (m->attempt != NULL) == spin && (m->end_step != NULL) == spin);
     }
+}
+
+/* spin-willmore's part of the policy per flow: the rise check and the
+ * retries follow `adaptive` and the common backtrack / energy_check (each
+ * of them off: the paper's fixed step), and prescribed and cmc boundaries,
+ * which may raise W by design, keep the retries (the scale bound) without
+ * the rise check. */
+static void test_spin_policy_per_flow(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *sphere = NULL, *tube = NULL;
+    CHECK_OK(ctx, cf_generate_bumpy_sphere(ctx, 2, 0.25, 1u, &sphere));
+    CHECK_OK(ctx, cf_generate_cylinder(ctx, 16, 4, 1.0, 2.0, &tube));
+    if (!sphere || !tube) {
+        cf_mesh_destroy(&sphere);
+        cf_mesh_destroy(&tube);
+        cf_context_destroy(&ctx);
+        return;
+    }
+    static const struct {
+        const char *name, *value;
+        int tube;
+        int32_t rise_check, backtrack;
+    } cases[] = {
+        {"adaptive", "true", 0, 1, 1},     {"adaptive", "false", 0, 0, 0}, {"backtrack", "false", 0, 0, 0},
+        {"energy_check", "false", 0, 0, 0}, {"boundary", "cmc", 1, 0, 1},   {"boundary", "fixed", 1, 1, 1},
+    };
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; ++c) {
+        cf_flow_options o;
+        CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o));
+        CHECK_OK(ctx, cf_flow_options_set(ctx, &o, cases[c].name, cases[c].value));
+        cf_flow *flow = NULL;
+        CHECK_OK(ctx, cf_flow_create(ctx, cases[c].tube ? tube : sphere, NULL, &o, &flow));
+        if (!flow) continue;
+        CHECK(flow->policy.rise_check == cases[c].rise_check);
+        CHECK(flow->policy.backtrack == cases[c].backtrack);
+        CHECK(flow->policy.full_step == 0.5 && cfi_flow_time_step(flow) == 0.5); /* spin's default tau */
+        cf_flow_destroy(&flow);
+    }
+    cf_mesh_destroy(&sphere);
+    cf_mesh_destroy(&tube);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
 }
 
 /* The eight-armed star (limb sphere, subdivision 3) under the implicit
@@ -542,11 +591,90 @@ static void test_spin_uses_policy(void)
     cf_context_destroy(&ctx);
 }
 
+/* A step whose matrix does not factorise is redone with a smaller step
+ * like a rising one. The bumpy sphere (subdivision 2) with one vertex moved
+ * to 1e-6 from the midpoint of the opposite edge of face 0 (an angle of
+ * 180 - 4e-4 deg, cotan weight about -1e6): under the implicit bi-Laplacian
+ * flow with rescaling, M + tau L M^-1 L does not factorise (CHOLMOD:
+ * not positive definite) at time_step 1e4, where its condition is beyond
+ * double precision; far smaller steps factorise. Before, a
+ * CF_ERR_NOT_POSDEF ended the run at once even with backtracking. */
+static void test_not_posdef_backtracks(void)
+{
+    cf_context *ctx = policy_context();
+    cf_mesh *mesh = NULL;
+    CHECK_OK(ctx, cf_generate_bumpy_sphere(ctx, 2, 0.25, 1u, &mesh));
+    if (!mesh) { cf_context_destroy(&ctx); return; }
+    int32_t nv = cf_mesh_vertex_count(mesh);
+    double *x = malloc(3 * (size_t)nv * sizeof *x);
+    memcpy(x, cf_mesh_positions(mesh), 3 * (size_t)nv * sizeof *x);
+    const int32_t *t = cf_mesh_triangles(mesh);
+    double mid[3], away[3], len = 0.0;
+    for (int c = 0; c < 3; ++c) {
+        mid[c] = 0.5 * (x[3 * t[0] + c] + x[3 * t[1] + c]);
+        away[c] = x[3 * t[2] + c] - mid[c];
+        len += away[c] * away[c];
+    }
+    for (int c = 0; c < 3; ++c) x[3 * t[2] + c] = mid[c] + 1e-6 * away[c] / sqrt(len);
+
+    /* without backtracking: the failure, the start kept */
+    const char *runs[][2] = {{"backtrack", "false"}, {"max_halvings", "40"}, {"max_halvings", "2"}};
+    const char *steps[] = {"1e4", "1e4", "1e6"};
+    for (int r = 0; r < 3; ++r) {
+        cf_flow_options o;
+        CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_IMPLICIT_BILAPLACIAN, &o));
+        CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "rescale", "true"));
+        CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "time_step", steps[r]));
+        CHECK_OK(ctx, cf_flow_options_set(ctx, &o, runs[r][0], runs[r][1]));
+        cf_flow *flow = NULL;
+        CHECK_OK(ctx, cf_flow_create(ctx, mesh, x, &o, &flow));
+        if (!flow) continue;
+        double e0 = cf_flow_energy(flow), full = flow->policy.full_step;
+        cf_flow_info info;
+        cf_status st = cf_flow_step(flow, &info);
+        fprintf(stderr, "   %s=%s -t %s: %s %s\n", runs[r][0], runs[r][1], steps[r], cf_status_name(st),
+                st != CF_OK ? cf_context_message(ctx) : "");
+        if (r == 1) {
+            /* redone with ever smaller steps until one factorises and lowers the energy */
+            CHECK_OK(ctx, st);
+            double logged = -1.0;
+            for (int k = 0; k < CF_FLOW_MAX_RESIDUALS; ++k)
+                if (info.residual_names[k] && strcmp(info.residual_names[k], "time_step_halvings") == 0)
+                    logged = info.residuals[k];
+            fprintf(stderr, "   accepted after %g halvings: time_step %g (time_step / %.0f), energy %.9g -> %.9g\n",
+                    logged, info.time_step, full / info.time_step, e0, info.energy);
+            CHECK(logged >= 2.0);
+            CHECK(info.time_step == ldexp(full, -(int)logged));
+            CHECK(info.energy < e0);
+            CHECK(!cf_flow_converged(flow));
+        } else {
+            CHECK_STATUS(st, CF_ERR_NOT_POSDEF);
+            const char *msg = cf_context_message(ctx);
+            CHECK(strstr(msg, "iteration 1: ") == msg);
+            CHECK(strstr(msg, "not numerically positive definite: the mesh has degenerated (face 0 ") != NULL);
+            /* max_halvings 2: every step down to time_step / 4 failed, and the message says so */
+            CHECK((strstr(msg, "at every time step down to ") != NULL) == (r == 2));
+            if (r == 2) CHECK(strstr(msg, "(time_step / 4)") != NULL);
+            CHECK(memcmp(cf_flow_positions(flow), x, 3 * (size_t)nv * sizeof *x) == 0);
+            CHECK(cf_flow_energy(flow) == e0);
+            CHECK(cf_flow_last_info(flow)->iteration == 0);
+            CHECK(cfi_flow_time_step(flow) == full); /* the step the failed step started with */
+        }
+        cf_flow_destroy(&flow);
+    }
+    free(x);
+    cf_mesh_destroy(&mesh);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 int main(void)
 {
     CFT_RUN(test_tolerance_and_floor);
     CFT_RUN(test_options);
     CFT_RUN(test_method_opt_outs);
+    CFT_RUN(test_spin_policy_per_flow);
+    CFT_RUN(test_not_posdef_backtracks);
     CFT_RUN(test_halving_and_growth);
     CFT_RUN(test_rejection_restores_and_user_opt_out);
     CFT_RUN(test_s3_generated);

@@ -36,8 +36,9 @@
  * are unconditionally stable for a frozen operator only: with L and M
  * following the surface a large step can raise the energy (issue 15 S3:
  * implicit-bilaplacian on spool_creases_650 at time_step 1e-7, 302.8 ->
- * 11 484 in 15 steps, crumpled); they scale tau by the policy's step
- * factor, so a rising step is redone with half the step. */
+ * 11 484 in 15 steps, crumpled); they take tau from the policy, so a
+ * rising step, or one whose matrix does not factorise, is redone with half
+ * the step. */
 
 /* Area, relative to the start, below which a flow without rescaling is
  * reported as collapsed (see finish_step). */
@@ -323,6 +324,8 @@ static cf_status baseline_create(cf_flow *flow, const void *options)
     case CF_FLOW_IMPLICIT_BILAPLACIAN: s->tau = opt->time_step * a0 * a0; break;
     default: return cfi_error(ctx, CF_ERR_INVALID_ARG, "not a baseline flow kind: %d", (int)kind);
     }
+    /* the implicit flows take their step from the step policy (backtracking) */
+    if (flow->method->policy.backtrack) cfi_flow_set_time_step(flow, s->tau);
 
     cf_cholesky_options copt;
     cf_cholesky_options_default(&copt);
@@ -514,8 +517,9 @@ static cf_status implicit_step(cf_flow *flow, cf_flow_info *info)
     baseline_state *s = flow->impl;
     int32_t nv = s->nv;
     cf_flow_kind kind = kind_of(flow);
-    /* the step policy halves the step of a rejected step and grows it back */
-    double tau = s->tau * cfi_flow_step_scale(flow);
+    /* s->tau, or less after the step policy rejected a step (it halves the
+     * step and grows it back) */
+    double tau = cfi_flow_time_step(flow);
     double t0 = cfi_now_seconds();
     cf_status st;
     if (kind == CF_FLOW_CONFORMAL_MCF) {

@@ -18,14 +18,17 @@
  *        boundary;
  *   VI.  transformed edges and the cotan Poisson problem (Eq. (6)), by
  *        default in the metric of the starting surface (input_metric).
- * With `adaptive`, IV-VI are redone with tau halved while W would rise.
+ * With `adaptive`, the flow layer's step policy redoes IV-VI with tau
+ * halved while W would rise (methods/flow.c, cf_flow_step).
  * The symbolic factorisations of X (block size 4, complex form by default)
  * and L are computed once at creation; each step only refills values and
  * refactorises (X; X(0) for exactness; L only with the current metric).
  *
  * This file holds create / destroy, the geometry of the current surface and
- * the step itself (I-II here, III in constraints.c, IV-VI in
- * cfi_spin_realise_step under the policy of step_policy.c); the other
+ * the step itself in the flow layer's three parts: cfi_spin_begin_step
+ * (I-II here, III in constraints.c), cfi_spin_attempt (IV-VI, redone by the
+ * layer's step policy) and cfi_spin_end_step (the checks of step_policy.c
+ * and the report); the other
  * concerns have a file each, listed in spin_flow.h.
  */
 #include "methods/spin_willmore/spin_flow.h"
@@ -115,7 +118,6 @@ static cf_status allocate_arrays(cfi_spin_state *s, int32_t dim)
     WS_ARRAY(s->basis, nv * s->max_cols);
     WS_ARRAY(s->edges, 3 * ne);
     WS_ARRAY(s->newpos, 3 * nv);
-    if (s->opt.adaptive) WS_ARRAY(s->xsave, 3 * nv);
     WS_ARRAY(s->vtmp, nv);
     WS_ARRAY(s->vtmp2, nv);
     if (s->restricted_boundary) {
@@ -188,13 +190,18 @@ cf_status cfi_spin_create(cf_flow *flow, const void *options)
     s->ws.ctx = ctx;
     s->opt = *o;
     s->opt.boundary_targets = (cf_param_values){NULL, 0}; /* the caller's array is read below, not kept */
-    s->tau = o->time_step;
+    /* the flow layer's step policy retries with a smaller tau under
+     * `adaptive` only; its rise check (W never rises) does not apply where
+     * prescribed and cmc boundaries may raise W by design */
+    cfi_flow_set_time_step(flow, o->time_step);
+    cfi_flow_policy_restrict(flow, 1, o->adaptive);
     s->nv = mesh->nv;
     s->ne = mesh->ne;
     s->nf = mesh->nf;
     s->has_boundary = mesh->boundary_loop_count > 0;
     s->fixed_boundary = o->boundary_mode == CF_SPIN_BOUNDARY_FIXED;
     s->restricted_boundary = o->boundary_mode == CF_SPIN_BOUNDARY_PRESCRIBED || o->boundary_mode == CF_SPIN_BOUNDARY_CMC;
+    cfi_flow_policy_restrict(flow, cfi_flow_backtracks(flow) && !s->restricted_boundary, 1);
 
     int32_t dim = 0;
     st = cfi_spin_exactness_dimension(flow, o, &dim);
@@ -321,7 +328,7 @@ cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, in
      * recovered. */
     s->diag.scale_change = cfi_spin_max_scale_change(mesh, s->lambda);
     /* (prescribed and cmc boundaries turn lambda by design: not bounded) */
-    *too_large = s->opt.adaptive && !s->restricted_boundary && s->opt.max_scale_change > 0.0 &&
+    *too_large = cfi_flow_backtracks(flow) && !s->restricted_boundary && s->opt.max_scale_change > 0.0 &&
                  !(s->diag.scale_change <= s->opt.max_scale_change);
     if (*too_large) return CF_OK;
 
@@ -371,30 +378,67 @@ cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, in
     return st;
 }
 
-cf_status cfi_spin_step(cf_flow *flow, cf_flow_info *info)
+/* I-III, shared by every attempt of the step: rhodot = -2 H (Sec. 6.1),
+ * the spectral filter (Sec. 4), the constraints (Sec. 6.2). */
+cf_status cfi_spin_begin_step(cf_flow *flow, cf_flow_info *info)
 {
     cfi_spin_state *s = flow->impl;
-    int32_t nv = s->nv;
-    double *x = flow->positions;
-    cfi_spin_timers t = {0.0, 0.0, 0.0};
-    double t0 = cfi_now_seconds();
-    double energy_before = s->energy;
+    s->energy_before = s->energy;
     memset(&s->diag, 0, sizeof s->diag);
-
-    /* I-II. rhodot = -2 H (Sec. 6.1), then the spectral filter (Sec. 4) */
-    for (int32_t i = 0; i < nv; ++i) s->rhodot[i] = -2.0 * s->h[i];
+    for (int32_t i = 0; i < s->nv; ++i) s->rhodot[i] = -2.0 * s->h[i];
     cf_solver_timings tm = {0.0, 0.0, 0.0};
     cf_status st = s->filter ? cf_spectral_filter_apply(s->filter, s->rhodot, &tm) : CF_OK;
-    t.solve += tm.solve_seconds;
-    /* III. constraints (Sec. 6.2) */
-    if (st == CF_OK) st = cfi_spin_apply_constraints(flow, s, x, &t.factorize, &t.solve);
-    /* IV-VI under the step policy, then its checks */
-    cfi_spin_attempt at = {0.0, 0, 0};
-    if (st == CF_OK) st = cfi_spin_advance(flow, s, energy_before, &at, &t);
-    if (st == CF_OK) st = cfi_spin_check_energy(flow, s, energy_before, at.tau);
-    if (st != CF_OK) return st;
+    info->solve_seconds += tm.solve_seconds;
+    if (st == CF_OK)
+        st = cfi_spin_apply_constraints(flow, s, flow->positions, &info->factorize_seconds, &info->solve_seconds);
+    return st;
+}
 
-    info->time_step = at.stalled ? 0.0 : at.tau;
+/* IV-VI for tau. While the flow layer backtracks (`adaptive`), an attempt
+ * whose lambda changes the log scale across an edge by more than
+ * max_scale_change is rejected with tau cut in proportion (the scale change
+ * grows about linearly with tau; at least halved), and one that fails
+ * numerically is rejected too (redone with half the step: the failures of
+ * a too large step, docs/spin.md). */
+cf_status cfi_spin_attempt(cf_flow *flow, double tau, cf_flow_info *info, cfi_step_verdict *verdict)
+{
+    cfi_spin_state *s = flow->impl;
+    cfi_spin_timers t = {0.0, 0.0, 0.0};
+    int too_large = 0;
+    info->time_step = tau;
+    cf_status st = cfi_spin_realise_step(flow, s, tau, &too_large, &t);
+    info->assemble_seconds += t.assemble;
+    info->factorize_seconds += t.factorize;
+    info->solve_seconds += t.solve;
+    info->energy = s->energy;
+    if (!cfi_flow_backtracks(flow)) return st;
+    if (st == CF_OK && too_large) {
+        verdict->rejected = 1;
+        verdict->shrink = 0.9 * s->opt.max_scale_change / s->diag.scale_change;
+    } else if (st == CF_ERR_NUMERICAL || st == CF_ERR_NOT_POSDEF || st == CF_ERR_DEGENERATE_FACE) {
+        verdict->rejected = 1;
+        verdict->shrink = 0.5;
+        cf_context_clear_error(flow->ctx);
+        st = CF_OK;
+    }
+    return st;
+}
+
+/* After the layer restored the positions of the step's start: the geometry
+ * (and W) of those positions again; rhodot and its constraints stay. */
+cf_status cfi_spin_revert(cf_flow *flow)
+{
+    cfi_spin_state *s = flow->impl;
+    return cfi_spin_update_geometry(flow, s, flow->positions);
+}
+
+/* The accepted attempt (or, at a stall, the state before the step): blow-up
+ * and divergence checks, the report, convergence. */
+cf_status cfi_spin_end_step(cf_flow *flow, cf_flow_info *info)
+{
+    cfi_spin_state *s = flow->impl;
+    cf_status st = cfi_spin_check_energy(flow, s, s->energy_before, info->time_step);
+    if (st != CF_OK) return st;
     info->energy = s->energy;
     info->energy_terms[0] = s->energy / (4.0 * CFI_PI);
     info->term_names[0] = "W/4pi";
@@ -404,17 +448,10 @@ cf_status cfi_spin_step(cf_flow *flow, cf_flow_info *info)
     info->residual_names[1] = "integrability";
     info->residuals[2] = s->diag.eigenvalue;
     info->residual_names[2] = "eigenvalue";
-    if (s->opt.adaptive) {
-        info->residuals[3] = at.halvings;
-        info->residual_names[3] = "time_step_halvings";
-    }
+    /* slot 3 is left to the flow layer: time_step_halvings under `adaptive` */
     info->residuals[4] = s->diag.scale_change;
     info->residual_names[4] = "scale_change";
-    info->assemble_seconds = t.assemble;
-    info->factorize_seconds = t.factorize;
-    info->solve_seconds = t.solve;
-    info->total_seconds = cfi_now_seconds() - t0;
-    flow->converged = cfi_spin_converged(s, energy_before, at.stalled);
+    flow->converged = cfi_spin_converged(s, s->energy_before);
     return CF_OK;
 }
 
@@ -422,10 +459,13 @@ cf_status cfi_spin_reset(cf_flow *flow)
 {
     cfi_spin_state *s = flow->impl;
     if (!s) return CF_OK;
-    s->tau = s->opt.time_step;
     flow->converged = 0;
     cf_status st = cfi_spin_update_geometry(flow, s, flow->positions);
     s->initial_energy = s->energy; /* new positions: a new start for the divergence check */
+    /* the flow layer compares the next step's W with this one */
+    flow->info.energy = s->energy;
+    flow->info.energy_terms[0] = s->energy / (4.0 * CFI_PI);
+    flow->info.term_names[0] = "W/4pi";
     return st;
 }
 

@@ -142,7 +142,18 @@ const cfi_flow_method cfi_spin_willmore_method = {
     .params = spin_params,
     .param_count = (int32_t)(sizeof spin_params / sizeof spin_params[0]),
     .create = cfi_spin_create,
-    .step = cfi_spin_step,
+    .begin_step = cfi_spin_begin_step,
+    .attempt = cfi_spin_attempt,
+    .end_step = cfi_spin_end_step,
     .reset = cfi_spin_reset,
+    .revert = cfi_spin_revert,
     .destroy = cfi_spin_destroy,
+    /* Under `adaptive` the flow layer redoes IV-VI (attempt) from the same
+     * rhodot (begin_step) with a smaller tau while W would rise at all or
+     * the attempt rejects its scale change, max_halvings times per step,
+     * and a stall is a step of time step 0 that ends the run. Prescribed
+     * and cmc boundaries may raise W by design: no rise check (create).
+     * Convergence, blow-up and divergence are the method's (end_step). */
+    .policy = {.rise_check = 1, .backtrack = 1, .unit = CFI_ENERGY_UNIT_4PI, .rise_exact = 1,
+               .halvings_per_step = 1, .stall_as_step = 1, .energy_name = "W"},
 };

@@ -8,7 +8,9 @@
  *   exactness.c        harmonic 1-forms and the exactness columns (App. C; genus > 0, holes)
  *   mobius.c           Moebius balancing (App. E.1)
  *   constraints.c      assembling and projecting the constraints (Sec. 6.2)
- *   step_policy.c      adaptive retries, blow-up and divergence checks, convergence
+ *   step_policy.c      the scale-change measure of the adaptive step, blow-up and
+ *                      divergence checks, convergence (the retries themselves are the
+ *                      flow layer's step policy: cf_flow_step)
  *   workspace.c        the flow's arrays, recorded and freed in one call
  * and the shared machinery one layer down: the spectral filter and the
  * position recovery from edges (curvflow/ops.h: cf_spectral_filter,
@@ -73,10 +75,9 @@ typedef struct cfi_spin_state {
     int32_t max_cols;
     double *edges;           /* 3 ne */
     double *newpos;          /* 3 nv */
-    double *xsave;           /* 3 nv: positions before the step (adaptive only) */
-    double tau;              /* time step of the next step (adaptive: may be below opt.time_step) */
     double *vtmp, *vtmp2;    /* nv */
     double energy;
+    double energy_before;    /* W at the start of the current step */
     double initial_energy;   /* W of the starting surface (divergence check) */
     cfi_spin_diagnostics diag;
 } cfi_spin_state;
@@ -89,7 +90,14 @@ cf_status cfi_spin_validate_options(cf_context *ctx, const cf_mesh *mesh, const 
 
 /* ---- flow_method.c: the vtable's functions (cfi_spin_willmore_method, options.c) ---- */
 cf_status cfi_spin_create(cf_flow *flow, const void *options);
-cf_status cfi_spin_step(cf_flow *flow, cf_flow_info *info);
+/* The step in the flow layer's parts (flow_internal.h): I-III, IV-VI for
+ * one tau (rejecting a too large scale change or a numerical failure while
+ * the layer backtracks), the geometry of the restored start after a
+ * rejected attempt, and the checks and report of the accepted one. */
+cf_status cfi_spin_begin_step(cf_flow *flow, cf_flow_info *info);
+cf_status cfi_spin_attempt(cf_flow *flow, double tau, cf_flow_info *info, cfi_step_verdict *verdict);
+cf_status cfi_spin_revert(cf_flow *flow);
+cf_status cfi_spin_end_step(cf_flow *flow, cf_flow_info *info);
 cf_status cfi_spin_reset(cf_flow *flow);
 void cfi_spin_destroy(cf_flow *flow);
 /* ---- geometry (flow_method.c) ---- */
@@ -129,23 +137,15 @@ typedef struct cfi_spin_timers {
  * constraints computed): rho, lambda, edges, positions (flow->positions in
  * place) and the geometry of the new surface (s->energy). *too_large: the
  * attempt was stopped before the positions because lambda's scale jumps
- * more than max_scale_change (adaptive only). */
+ * more than max_scale_change (only while the flow layer backtracks). */
 cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, int *too_large, cfi_spin_timers *t);
 
 /* ---- step_policy.c ---- */
 /* Largest change of the log conformal scale across an edge, |log(|l_i|^2 / |l_j|^2)|. */
 double cfi_spin_max_scale_change(const cf_mesh *mesh, const double *lambda);
-typedef struct cfi_spin_attempt {
-    double tau;          /* time step of the accepted attempt */
-    int32_t halvings;    /* retries before it */
-    int stalled;         /* no attempt lowered W: state kept, flow converged */
-} cfi_spin_attempt;
-/* Steps IV-VI under the adaptive policy (retries with a smaller tau). */
-cf_status cfi_spin_advance(cf_flow *flow, cfi_spin_state *s, double energy_before, cfi_spin_attempt *out,
-                           cfi_spin_timers *t);
 /* Blow-up and divergence checks of an accepted step (CF_ERR_NUMERICAL with a message). */
 cf_status cfi_spin_check_energy(cf_flow *flow, const cfi_spin_state *s, double energy_before, double tau);
-/* Relative energy decrease below tolerance, or stalled. */
-int32_t cfi_spin_converged(const cfi_spin_state *s, double energy_before, int stalled);
+/* Relative energy decrease below tolerance (a stall also converges: the flow layer). */
+int32_t cfi_spin_converged(const cfi_spin_state *s, double energy_before);
 
 #endif /* CF_METHODS_SPIN_WILLMORE_SPIN_FLOW_H */

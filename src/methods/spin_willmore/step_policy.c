@@ -1,14 +1,15 @@
 /*
- * Step policy of the spin-willmore flow: which attempt of steps IV-VI is
- * accepted. With `adaptive` an attempt that raises W, fails numerically or
- * changes the log conformal scale across an edge by more than
- * max_scale_change is redone from the same rhodot with a smaller tau (up to
- * the common option max_halvings times, 10 by default; then the state is
- * kept and the flow reports convergence), and tau grows back after an
- * accepted step. Every accepted
- * step is then checked for blow-up (energy jump > blowup_factor) and
- * divergence (W above divergence_factor times its start), and convergence is
- * a relative decrease below `tolerance` (docs/spin.md).
+ * Step policy of the spin-willmore flow, the method's part of it: the
+ * largest change of the log conformal scale across an edge (an attempt of
+ * IV-VI above max_scale_change is rejected under `adaptive`), the blow-up
+ * (energy jump > blowup_factor) and divergence (W above divergence_factor
+ * times its start) checks of an accepted step, and convergence: a relative
+ * decrease below `tolerance` (docs/spin.md). The retries themselves (tau
+ * halved, or cut for the scale change, while W would rise; up to
+ * max_halvings per step, then the state is kept and the flow reports
+ * convergence; tau grown back by step_growth) are the flow layer's step
+ * policy (cf_flow_step, methods/step_policy.h), through the vtable's
+ * begin_step / attempt / revert / end_step.
  */
 #include "methods/spin_willmore/spin_flow.h"
 
@@ -28,61 +29,6 @@ double cfi_spin_max_scale_change(const cf_mesh *mesh, const double *lambda)
         if (!(r <= worst)) worst = r;
     }
     return worst;
-}
-
-cf_status cfi_spin_advance(cf_flow *flow, cfi_spin_state *s, double energy_before, cfi_spin_attempt *out,
-                           cfi_spin_timers *t)
-{
-    cf_context *ctx = flow->ctx;
-    int32_t nv = s->nv;
-    double *x = flow->positions;
-    cf_status st = CF_OK;
-    /* IV-VI, and with adaptive time steps the step is redone from the same
-     * rhodot with tau halved while W would rise (or the step fails
-     * numerically); when no halving helps, the state is kept and the flow
-     * reports convergence (W stopped decreasing). The number of halvings
-     * per step and the growth factor are the shared step policy's
-     * (max_halvings, step_growth; docs/flowcli.md), the rise test its
-     * comparison with no slack: the flow's claim is that W never rises.
-     * The retry stays here since it redoes only IV-VI from the same rhodot,
-     * which a flow-layer retry of the whole step could not. */
-    const cfi_step_policy_state *policy = &flow->policy;
-    double tau = s->tau; /* opt.time_step unless adaptive steps changed it */
-    int32_t halvings = 0;
-    int stalled = 0;
-    /* a failed attempt restores x from xsave, so one copy serves every retry */
-    if (s->opt.adaptive) memcpy(s->xsave, x, 3 * (size_t)nv * sizeof(double));
-    for (;;) {
-        int too_large = 0;
-        st = cfi_spin_realise_step(flow, s, tau, &too_large, t);
-        if (!s->opt.adaptive) break;
-        /* prescribed and cmc boundaries may raise W by design: only the scale bound applies */
-        if (st == CF_OK && !too_large &&
-            (!cfi_step_policy_exceeds(s->energy, energy_before, 0.0, 0.0) || s->restricted_boundary))
-            break;
-        if (st != CF_OK && st != CF_ERR_NUMERICAL && st != CF_ERR_NOT_POSDEF && st != CF_ERR_DEGENERATE_FACE)
-            return st;
-        memcpy(x, s->xsave, 3 * (size_t)nv * sizeof(double));
-        cf_status sg = cfi_spin_update_geometry(flow, s, x);
-        if (sg != CF_OK) return sg;
-        if (halvings >= policy->opt.max_halvings) {
-            stalled = 1;
-            st = CF_OK;
-            cfi_log(ctx, CF_LOG_INFO,
-                    "spin-willmore: W does not decrease for any time step down to %g; stopping at W/4pi = %.6g", tau,
-                    s->energy / (4.0 * CFI_PI));
-            break;
-        }
-        ++halvings;
-        /* the scale change grows about linearly with tau: cut it in proportion (at least halve) */
-        tau *= too_large ? fmin(0.5, 0.9 * s->opt.max_scale_change / s->diag.scale_change) : 0.5;
-    }
-    if (st != CF_OK) return st;
-    if (s->opt.adaptive && !stalled) s->tau = halvings ? tau : fmin(s->opt.time_step, policy->opt.step_growth * tau);
-    out->tau = tau;
-    out->halvings = halvings;
-    out->stalled = stalled;
-    return CF_OK;
 }
 
 cf_status cfi_spin_check_energy(cf_flow *flow, const cfi_spin_state *s, double energy_before, double tau)
@@ -106,9 +52,8 @@ cf_status cfi_spin_check_energy(cf_flow *flow, const cfi_spin_state *s, double e
      * creeping up by 7e-8 of itself per step at tau 1e-9 on spot_3k, or a
      * flat sheet's W going from 0 to 6.7e-29, is no divergence (issue 15
      * M1; the former slack 1e-9 called both one). */
-    if (s->opt.divergence_factor > 0.0 && !s->restricted_boundary &&
-        cfi_step_policy_exceeds(s->energy, s->opt.divergence_factor * s->initial_energy,
-                                flow->policy.opt.divergence_tolerance, flow->policy.opt.energy_floor * 4.0 * CFI_PI))
+    if (!s->restricted_boundary &&
+        cfi_step_policy_diverged(&flow->policy, s->energy, s->initial_energy, s->opt.divergence_factor))
         return cfi_error(ctx, CF_ERR_NUMERICAL,
                          "spin-willmore: W/4pi rose to %.6g, above %g times its starting value %.6g: the flow "
                          "diverges (time_step %g is above this mesh's stability limit); try a smaller time_step, "
@@ -117,8 +62,8 @@ cf_status cfi_spin_check_energy(cf_flow *flow, const cfi_spin_state *s, double e
     return CF_OK;
 }
 
-int32_t cfi_spin_converged(const cfi_spin_state *s, double energy_before, int stalled)
+int32_t cfi_spin_converged(const cfi_spin_state *s, double energy_before)
 {
     double decrease = energy_before - s->energy;
-    return stalled || (decrease >= 0.0 && decrease <= s->opt.tolerance * energy_before);
+    return decrease >= 0.0 && decrease <= s->opt.tolerance * energy_before;
 }

@@ -325,6 +325,13 @@ typedef struct cf_min_quad_options {
     cf_ordering ordering; /* fill-reducing ordering of A_uu (default CF_ORDERING_AUTO) */
     int32_t max_rhs;      /* columns solved at once (default 1, at most 4096): solves of up to this many
                              columns allocate nothing (the Cholesky path); wider ones go in chunks */
+    /* Nonzero: A is a Hermitian quaternionic matrix (4 x 4 left-multiplication
+     * blocks, as cf_cholesky_options.quaternion_blocks; block_size must be 4,
+     * no equalities). The known variables must then be whole blocks (all four
+     * components of a quaternion, e.g. every boundary vertex of a Dirac
+     * matrix), so that A_uu is again made of whole quaternion blocks and is
+     * factorised in the complex form of half the size. Default 0. */
+    int32_t quaternion_blocks;
 } cf_min_quad_options;
 
 CF_API void cf_min_quad_options_default(cf_min_quad_options *options);
@@ -335,7 +342,9 @@ CF_API void cf_min_quad_options_default(cf_min_quad_options *options);
  * Statuses: CF_ERR_INVALID_ARG (shapes, upper_only input, A not
  * structurally symmetric or not symmetric in value, a known index out of
  * range or repeated, equalities with every variable known, block size not
- * dividing the free count), CF_ERR_NONFINITE (a value of A or Aeq, named),
+ * dividing the free count; with quaternion_blocks: block size not 4,
+ * equalities, a block partly known (named), a block that is not a
+ * quaternion's matrix), CF_ERR_NONFINITE (a value of A or Aeq, named),
  * CF_ERR_NOT_POSDEF (A_uu, no equalities; the message names the column of
  * the free block), CF_ERR_NUMERICAL (singular saddle system, e.g. dependent
  * rows of Aeq), CF_ERR_NOMEM. */

@@ -81,6 +81,9 @@ void cfi_dirac_destroy(cf_context *ctx, cfi_dirac **d)
     if (!d || !*d) return;
     cfi_dirac *p = *d;
     cf_sparse_destroy(&p->x);
+    cf_min_quad_destroy(&p->fixed);
+    CFI_FREE(ctx, p->known, p->nknown);
+    CFI_FREE(ctx, p->known_values, p->nknown);
     CFI_FREE(ctx, p->block_slot, (int64_t)p->nf * 36);
     CFI_FREE(ctx, p->diag_slot, (int64_t)p->nv * 4);
     CFI_FREE(ctx, p, 1);
@@ -135,30 +138,64 @@ cf_status cfi_dirac_fill(cfi_dirac *d, const cf_mesh *mesh, const double *positi
     return CF_OK;
 }
 
-void cfi_dirac_fix_boundary(cfi_dirac *d, const cf_mesh *mesh, double *rhs)
+cf_status cfi_dirac_fixed_create(cf_context *ctx, cfi_dirac *d, const cf_mesh *mesh, int32_t complex_form)
 {
-    cf_sparse *x = d->x;
+    int32_t nb = 0;
+    for (int32_t i = 0; i < d->nv; ++i) nb += mesh->vertex_on_boundary[i] != 0;
+    d->nknown = 4 * nb;
+    d->known = CFI_ALLOC(ctx, int32_t, d->nknown);
+    d->known_values = CFI_ALLOC(ctx, double, d->nknown);
+    if (!d->known || !d->known_values) return CF_ERR_NOMEM;
+    int32_t k = 0;
+    for (int32_t i = 0; i < d->nv; ++i) {
+        if (!mesh->vertex_on_boundary[i]) continue;
+        for (int c = 0; c < 4; ++c) {
+            d->known[k + c] = 4 * i + c;
+            d->known_values[k + c] = c == 0 ? 1.0 : 0.0;
+        }
+        k += 4;
+    }
+    cf_min_quad_options o;
+    cf_min_quad_options_default(&o);
+    o.block_size = 4;
+    o.quaternion_blocks = complex_form != 0;
+    return cf_min_quad_create(ctx, d->x, d->nknown, d->known, NULL, &o, &d->fixed);
+}
+
+cf_status cfi_dirac_fixed_factorize(cfi_dirac *d) { return cf_min_quad_factorize(d->fixed, d->x, NULL); }
+
+cf_status cfi_dirac_fixed_solve(cfi_dirac *d, const cf_mesh *mesh, const double *area, double eps, double *b,
+                                double *lambda)
+{
+    /* minimise 1/2 l^T X l + b^T l with b = -eps M 1 on the interior: the
+     * eps M 1 keeps the shift from biasing lambda toward 0 (flow_method.c) */
+    memset(b, 0, 4 * (size_t)d->nv * sizeof *b);
+    for (int32_t i = 0; i < d->nv; ++i)
+        if (!mesh->vertex_on_boundary[i]) b[4 * i] = -eps * area[i];
+    return cf_min_quad_solve(d->fixed, 1, b, d->known_values, NULL, lambda);
+}
+
+double cfi_dirac_fixed_quotient(const cfi_dirac *d, const cf_mesh *mesh, const double *area, const double *lambda,
+                                double *work)
+{
+    const cf_sparse *x = d->x;
     const uint8_t *onb = mesh->vertex_on_boundary;
     int32_t n = x->ncols;
-    for (int32_t i = 0; i < n; ++i) rhs[i] = 0.0;
-    /* -X_IB lambda_B with lambda_B = 1 = (1, 0, 0, 0): column 4 j of boundary j */
-    for (int32_t j = 0; j < d->nv; ++j) {
-        if (!onb[j]) continue;
-        int32_t col = 4 * j;
-        for (int32_t p = x->colptr[col]; p < x->colptr[col + 1]; ++p) rhs[x->rowind[p]] -= x->values[p];
-    }
+    memset(work, 0, (size_t)n * sizeof *work);
     for (int32_t col = 0; col < n; ++col) {
         int cb = onb[col / 4];
         for (int32_t p = x->colptr[col]; p < x->colptr[col + 1]; ++p) {
             int32_t row = x->rowind[p];
-            if (cb || onb[row / 4]) x->values[p] = row == col ? 1.0 : 0.0;
+            double v = (cb || onb[row / 4]) ? (row == col ? 1.0 : 0.0) : x->values[p];
+            work[row] += v * lambda[col];
         }
     }
-    for (int32_t j = 0; j < d->nv; ++j) {
-        if (!onb[j]) continue;
-        rhs[4 * j] = 1.0;
-        rhs[4 * j + 1] = rhs[4 * j + 2] = rhs[4 * j + 3] = 0.0;
+    double num = 0.0, den = 0.0;
+    for (int32_t k = 0; k < n; ++k) {
+        num += lambda[k] * work[k];
+        den += area[k / 4] * lambda[k] * lambda[k];
     }
+    return den > 0.0 ? num / den : NAN;
 }
 
 /* Hamilton product of (w, x, y, z) arrays: cf_quat_mul's arithmetic in the

@@ -166,12 +166,15 @@ static cf_status create_dirac(cf_flow *flow, cfi_spin_state *s)
      * boundaries mix the quaternion components, so those keep the real form;
      * X(0) of the exactness constraint never has them. */
     co.quaternion_blocks = s->opt.complex_factorization && !s->restricted_boundary;
-    st = cf_cholesky_create(ctx, s->dirac->x, &co, &s->chol);
+    /* A fixed boundary eliminates the boundary quaternions (whole blocks,
+     * so the interior block keeps the complex form; dirac.c). */
+    if (s->fixed_boundary) st = cfi_dirac_fixed_create(ctx, s->dirac, mesh, s->opt.complex_factorization);
+    else st = cf_cholesky_create(ctx, s->dirac->x, &co, &s->chol);
     co.quaternion_blocks = s->opt.complex_factorization != 0;
     if (st == CF_OK && s->harmonic_dim) st = cf_cholesky_create(ctx, s->dirac->x, &co, &s->chol0);
     /* the solve workspaces now: steps allocate nothing (lambda: one column;
      * exactness: one per form, three per form when linearised) */
-    if (st == CF_OK) st = cf_cholesky_reserve_solve(s->chol, 1);
+    if (st == CF_OK && s->chol) st = cf_cholesky_reserve_solve(s->chol, 1);
     if (st == CF_OK && s->chol0) st = cf_cholesky_reserve_solve(s->chol0, s->linearized ? 3 * s->harmonic_dim : s->harmonic_dim);
     return st;
 }
@@ -271,11 +274,6 @@ cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, in
      * mushroom cap by 0.8 % and blade_slivers_8k by 47 % per step). */
     st = cfi_dirac_fill(s->dirac, mesh, x, s->rho, s->eps);
     if (st != CF_OK) return st;
-    if (s->fixed_boundary) {
-        cfi_dirac_fix_boundary(s->dirac, mesh, s->qrhs);
-        for (int32_t i = 0; i < nv; ++i)
-            if (!mesh->vertex_on_boundary[i]) s->qrhs[4 * i] += s->eps * s->area[i];
-    }
     if (s->restricted_boundary) {
         st = cfi_spin_boundary_binormals(flow, s, x, s->binormal);
         if (st != CF_OK) return st;
@@ -284,12 +282,12 @@ cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, in
     }
     double tb = cfi_now_seconds();
     t->assemble += tb - ta;
-    st = cf_cholesky_factorize(s->chol, s->dirac->x);
+    st = s->fixed_boundary ? cfi_dirac_fixed_factorize(s->dirac) : cf_cholesky_factorize(s->chol, s->dirac->x);
     double tc = cfi_now_seconds();
     t->factorize += tc - tb;
     if (st != CF_OK) return st;
     if (s->fixed_boundary) {
-        st = cf_cholesky_solve(s->chol, 1, s->qrhs, s->lambda);
+        st = cfi_dirac_fixed_solve(s->dirac, mesh, s->area, s->eps, s->qrhs, s->lambda);
     } else {
         for (int32_t i = 0; i < nv; ++i) {
             s->lambda[4 * i] = 1.0;
@@ -308,7 +306,8 @@ cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, in
     }
     t->solve += cfi_now_seconds() - tc;
     if (st != CF_OK) return cfi_error(ctx, st, "spin-willmore: eigenvector solve failed");
-    double quotient = cf_rayleigh_quotient_blocks(s->dirac->x, s->area, 4, s->lambda, s->qwork);
+    double quotient = s->fixed_boundary ? cfi_dirac_fixed_quotient(s->dirac, mesh, s->area, s->lambda, s->qwork)
+                                        : cf_rayleigh_quotient_blocks(s->dirac->x, s->area, 4, s->lambda, s->qwork);
     s->diag.eigenvalue = isnan(quotient) ? 0.0 : quotient - s->eps;
     if (s->restricted_boundary) {
         /* back to lambda = Q mu on the boundary */

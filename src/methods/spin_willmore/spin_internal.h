@@ -23,6 +23,12 @@ typedef struct cfi_dirac {
     int64_t *block_slot;   /* 36 nf: slot of entry (4 i, 4 j + c) for face k, pair (m, n), column c */
     int64_t *diag_slot;    /* 4 nv: slot of entry (4 i + c, 4 i + c) */
     int32_t nv, nf;
+    /* Fixed boundary (cfi_dirac_fixed_*): X with the boundary quaternions
+     * known, eliminated by linalg's cf_min_quad in whole 4 x 4 blocks. */
+    cf_min_quad *fixed;
+    int32_t nknown;        /* 4 per boundary vertex */
+    int32_t *known;        /* nknown: the components 4 i .. 4 i + 3 of each boundary vertex i */
+    double *known_values;  /* nknown: lambda_B = 1 = (1, 0, 0, 0) per boundary vertex */
 } cfi_dirac;
 
 cf_status cfi_dirac_create(cf_context *ctx, const cf_mesh *mesh, cfi_dirac **out);
@@ -34,11 +40,27 @@ void cfi_dirac_destroy(cf_context *ctx, cfi_dirac **d);
 cf_status cfi_dirac_fill(cfi_dirac *d, const cf_mesh *mesh, const double *positions, const double *rho,
                          double shift);
 
-/* Moves the columns of boundary vertices to the right-hand side for the
- * Dirichlet data lambda_B = 1 (Crane 2013, Sec. 6.3.2): rhs (4 nv) receives
- * -X_IB 1 on interior rows and 1 on boundary rows, and the boundary rows and
- * columns of X become identity. */
-void cfi_dirac_fix_boundary(cfi_dirac *d, const cf_mesh *mesh, double *rhs);
+/* Fixed boundary (Crane 2013, Sec. 6.3.2): lambda_B = 1 on the boundary
+ * vertices and, on the interior, the least-squares solve
+ * (X_II + eps M_I) lambda_I = -X_IB 1 + eps M_I 1 (X already holding the
+ * shift eps M from cfi_dirac_fill). The boundary quaternions are known
+ * variables of linalg's cf_min_quad (whole 4 x 4 blocks, so the interior
+ * block keeps the complex factorisation when complex_form is set).
+ * _create: analyses and factorises the current values of X (call after a
+ * fill); _factorize: after each refill; _solve: lambda (4 nv) from the
+ * areas (nv) and eps; b: 4 nv doubles of work. No allocation after create.
+ * Statuses: those of cf_min_quad_* (CF_ERR_NOT_POSDEF naming the column of
+ * the interior block), CF_ERR_NOMEM at create. */
+cf_status cfi_dirac_fixed_create(cf_context *ctx, cfi_dirac *d, const cf_mesh *mesh, int32_t complex_form);
+cf_status cfi_dirac_fixed_factorize(cfi_dirac *d);
+cf_status cfi_dirac_fixed_solve(cfi_dirac *d, const cf_mesh *mesh, const double *area, double eps, double *b,
+                                double *lambda);
+/* Rayleigh quotient lambda^T X_D lambda / sum_i area_i |lambda_i|^2 of the
+ * Dirichlet matrix X_D: X with the boundary rows and columns replaced by
+ * the identity (the matrix the fixed-boundary solve used to factorise; the
+ * flow's "eigenvalue" residual). work: 4 nv doubles. */
+double cfi_dirac_fixed_quotient(const cfi_dirac *d, const cf_mesh *mesh, const double *area, const double *lambda,
+                                double *work);
 
 /* Prescribed boundary vectors (Crane 2013, Sec. 6.3.1): at boundary vertex
  * i, lambda_i = Q_i mu_i with Q_i (frames + 16 i, row-major 4 x 4,

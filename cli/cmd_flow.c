@@ -1,6 +1,6 @@
 /*
  * curvflow flow IN -o OUT --method NAME [--steps N] [--time-step T]
- * [--param k=v]... [--log FILE.jsonl]: runs any method of the flow
+ * [--param k=v]... [--start S] [--log FILE.jsonl]: runs any method of the flow
  * interface (include/curvflow/flow.h) with a status line per step and an
  * optional JSONL log. Every method parameter goes through the method's
  * table (-p NAME=VALUE; array parameters NAME=FILE or NAME=@PROPERTY, see
@@ -37,6 +37,9 @@ static void usage(FILE *out)
             "                        written atomically when the run ends (also after a numerical failure)\n"
             "  -q, --quiet           no status lines\n"
             "  -f, --force           replace read-only output files\n"
+            "  -s, --start MESH      start from these positions (same vertices and faces as IN, e.g. the\n"
+            "                        output of an earlier run, to resume it); IN stays the reference: the\n"
+            "                        input metric, targets, rest areas and the drifts are IN's\n"
             "      --report FILE.html  also write the one-file HTML report of the run (docs/report.md):\n"
             "                        3D view of IN and OUT with per-face Q, energy and residual curves\n"
             "  -p NAME=FILE, -p NAME=@PROP\n"
@@ -192,20 +195,33 @@ static int check_implied(const cli_flow_job *job, const cf_flow_options *options
     return CLI_EXIT_OK;
 }
 
-/* Loads the start state (same connectivity as the input). */
+/* Loads the start state: the same vertex and face counts as IN and the same
+ * faces, vertex for vertex and in the same order (a start written by a
+ * previous run of curvflow from IN qualifies; a re-triangulated or
+ * re-indexed mesh does not). Else exit 2 naming the first difference. */
 static int load_start(cf_context *ctx, const cli_flow_job *job, const cf_mesh *mesh, cf_mesh **start_mesh)
 {
     int code = cli_load_mesh(ctx, job->start_path, start_mesh);
     if (code != CLI_EXIT_OK) return code;
     const cf_mesh *s = *start_mesh;
-    if (cf_mesh_vertex_count(s) != cf_mesh_vertex_count(mesh) || cf_mesh_face_count(s) != cf_mesh_face_count(mesh) ||
-        memcmp(cf_mesh_triangles(s), cf_mesh_triangles(mesh), 3 * (size_t)cf_mesh_face_count(mesh) * sizeof(int32_t)) !=
-            0) {
-        fprintf(stderr, "curvflow: %s: connectivity differs from %s (%d vertices, %d faces vs %d, %d)\n",
-                job->start_path, job->input, cf_mesh_vertex_count(s), cf_mesh_face_count(s), cf_mesh_vertex_count(mesh),
-                cf_mesh_face_count(mesh));
+    int32_t nv = cf_mesh_vertex_count(mesh), nf = cf_mesh_face_count(mesh);
+    if (cf_mesh_vertex_count(s) != nv || cf_mesh_face_count(s) != nf) {
+        fprintf(stderr,
+                "curvflow: --start %s: %d vertices and %d faces, but %s has %d and %d (the start must have the "
+                "connectivity of IN)\n",
+                job->start_path, cf_mesh_vertex_count(s), cf_mesh_face_count(s), job->input, nv, nf);
         return CLI_EXIT_INPUT;
     }
+    const int32_t *a = cf_mesh_triangles(s), *b = cf_mesh_triangles(mesh);
+    for (int32_t f = 0; f < nf; ++f)
+        if (a[3 * f] != b[3 * f] || a[3 * f + 1] != b[3 * f + 1] || a[3 * f + 2] != b[3 * f + 2]) {
+            fprintf(stderr,
+                    "curvflow: --start %s: face %d is (%d %d %d), in %s it is (%d %d %d) (the start must have the "
+                    "faces of IN, in the same order)\n",
+                    job->start_path, f, a[3 * f], a[3 * f + 1], a[3 * f + 2], job->input, b[3 * f], b[3 * f + 1],
+                    b[3 * f + 2]);
+            return CLI_EXIT_INPUT;
+        }
     return CLI_EXIT_OK;
 }
 
@@ -246,7 +262,9 @@ static int run_loaded(cf_context *ctx, const cli_flow_job *job, cf_flow_options 
     if (code == CLI_EXIT_OK) code = cli_flow_arrays_load(ctx, arrays, options, job->input, mesh, start);
     if (code != CLI_EXIT_OK) goto done;
     if (job->announce_point_sets && !job->quiet) announce_point_sets(job, arrays, mesh);
-    cf_status st = cf_flow_create(ctx, mesh, start, options, &flow);
+    /* IN is the reference (input metric, targets, drifts), the start only
+     * the initial state (cf_flow_create_at) */
+    cf_status st = cf_flow_create_at(ctx, mesh, start, options, &flow);
     if (st != CF_OK) {
         code = cli_fail(ctx, job->input, st);
         if (st == CF_ERR_INVALID_ARG) code = job->invalid_options_exit;
@@ -326,7 +344,7 @@ int cli_flow(int argc, char **argv)
         {"list-params", no_argument, NULL, OPT_LIST_PARAMS}, {"help", no_argument, NULL, 'h'},
         {"boundary-targets", required_argument, NULL, OPT_BOUNDARY_TARGETS},
         {"handles", required_argument, NULL, OPT_HANDLES}, {"force", no_argument, NULL, 'f'},
-        {"report", required_argument, NULL, OPT_REPORT},
+        {"report", required_argument, NULL, OPT_REPORT}, {"start", required_argument, NULL, 's'},
         {NULL, 0, NULL, 0}};
     static cli_flow_job job; /* large: not on the stack */
     memset(&job, 0, sizeof job);
@@ -339,7 +357,7 @@ int cli_flow(int argc, char **argv)
     bool want_methods = false, want_params = false;
     int c;
     opterr = 0;
-    while ((c = getopt_long(argc, argv, ":m:n:t:p:o:l:qfh", longopts, NULL)) != -1) {
+    while ((c = getopt_long(argc, argv, ":m:n:t:p:o:l:s:qfh", longopts, NULL)) != -1) {
         switch (c) {
         case 'm': method = optarg; break;
         case 'n':
@@ -353,6 +371,7 @@ int cli_flow(int argc, char **argv)
             break;
         case 'o': job.output = optarg; break;
         case 'l': job.log_path = optarg; break;
+        case 's': job.start_path = optarg; break;
         case 'q': job.quiet = true; break;
         case OPT_LIST_METHODS: want_methods = true; break;
         case OPT_LIST_PARAMS: want_params = true; break;
@@ -377,6 +396,11 @@ int cli_flow(int argc, char **argv)
     job.input = argv[optind];
     job.label = method;
     job.check = check_implied;
+    static const char *start_extra[3];
+    if (job.start_path) {
+        start_extra[0] = "start", start_extra[1] = job.start_path, start_extra[2] = NULL;
+        job.report_extra = start_extra;
+    }
     /* the order of the options' effects: an alias's implied value, then
      * --time-step, then -p in the order given (a later -p wins) */
     for (int a = 0; a < FLOW_ALIAS_COUNT; ++a) {

@@ -215,6 +215,25 @@ typedef struct cf_flow cf_flow;
 CF_API cf_status cf_flow_create(cf_context *ctx, const cf_mesh *mesh, const double *positions,
                                 const cf_flow_options *options, cf_flow **out);
 
+/* Creates a flow whose reference is the mesh and whose state starts at
+ * `start` (3 nv: same vertices as the mesh, e.g. a previous run's output or
+ * a perturbed copy): cf_flow_create(ctx, mesh, NULL, options, out) and then
+ * cf_flow_set_positions(*out, start). Everything a method derives from its
+ * input at create therefore comes from the mesh's positions, as in a run
+ * from the mesh itself: the metric of spin-willmore's input_metric, its
+ * spectral filter, harmonic basis, prescribed boundary targets and Moebius
+ * rest areas, cMCF's stiffness, the baselines' scale-free step and rescale
+ * reference, the edit's rest pose; area and volume drifts are relative to
+ * the mesh. (cf_flow_create with `positions` derives those from the
+ * positions instead.) So a run resumed from its own output continues with
+ * the same reference. start NULL: same as cf_flow_create(..., NULL, ...).
+ * Statuses: those of cf_flow_create, and of cf_flow_set_positions for the
+ * start (CF_ERR_NONFINITE naming the vertex; a method's error for a start
+ * it cannot measure, e.g. a zero-area face), the message prefixed "start: ";
+ * *out is NULL on failure. */
+CF_API cf_status cf_flow_create_at(cf_context *ctx, const cf_mesh *mesh, const double *start,
+                                   const cf_flow_options *options, cf_flow **out);
+
 /* One step. On failure the state is the one before the step and the
  * context message is prefixed "iteration N: ". The context's recorded error
  * is cleared when the step starts. info may be NULL. The step policy

@@ -643,11 +643,6 @@ int cli_flow_param_apply(cf_context *ctx, cf_flow_options *options, cli_flow_arr
             fprintf(stderr, "curvflow: %s: parameter '%s' needs a file or @property\n", option, name);
             return CLI_EXIT_USAGE;
         }
-        if (value[0] == '@' && p->type == CF_PARAM_POINT_SETS) {
-            fprintf(stderr, "curvflow: %s: parameter '%s' is a point set: give a JSON constraint file, not a "
-                            "property\n", option, name);
-            return CLI_EXIT_USAGE;
-        }
         arrays->items[arrays->count].param = p;
         arrays->items[arrays->count].option = option;
         arrays->items[arrays->count].value = value;
@@ -725,6 +720,63 @@ static int load_property(cf_context *ctx, const char *mesh_path, const char *opt
     return code;
 }
 
+/* Point sets from an integer vertex property (`-p handles=@PROP`): 0 = in
+ * no set, k > 0 = in set k; every vertex in a set is fixed where it is
+ * (target = its position in `positions`, the start). The sets are disjoint
+ * by construction; their numbers only name them in messages. To move a
+ * set, a JSON constraint file gives it a transform (docs/edit.md). */
+static int load_point_sets_property(cf_context *ctx, const char *mesh_path, const char *option, const cf_param_desc *p,
+                                    const char *spec, const cf_mesh *mesh, const double *positions,
+                                    cf_handle_set **out)
+{
+    int32_t nv = cf_mesh_vertex_count(mesh);
+    cf_param_desc scalar = *p;
+    scalar.type = CF_PARAM_VERTEX_SCALARS;
+    double *code_of = calloc((size_t)nv + 1, sizeof *code_of);
+    int32_t *members = calloc((size_t)nv + 1, sizeof *members);
+    if (!code_of || !members) {
+        free(code_of);
+        free(members);
+        fprintf(stderr, "curvflow: out of memory\n");
+        return CLI_EXIT_NUMERICAL;
+    }
+    int code = load_property(ctx, mesh_path, option, &scalar, spec, nv, code_of);
+    int32_t count = 0;
+    for (int32_t i = 0; i < nv && code == CLI_EXIT_OK; ++i) {
+        double k = code_of[i];
+        if (k < 0.0 || k != floor(k) || k > INT32_MAX) {
+            fprintf(stderr,
+                    "curvflow: %s: %s: property '%s' of vertex %d is %.17g, not a set number (0 = in no set, k > 0 = "
+                    "in set k)\n",
+                    option, mesh_path, spec + 1, (int)i, k);
+            code = CLI_EXIT_INPUT;
+        } else if (k > 0.0) {
+            members[count++] = i;
+        }
+    }
+    if (code == CLI_EXIT_OK && count == 0) {
+        fprintf(stderr, "curvflow: %s: %s: property '%s' puts no vertex in a set (every value is 0)\n", option,
+                mesh_path, spec + 1);
+        code = CLI_EXIT_INPUT;
+    }
+    if (code == CLI_EXIT_OK && count == nv) {
+        fprintf(stderr,
+                "curvflow: %s: %s: property '%s' puts all %d vertices in sets; nothing is left to deform\n", option,
+                mesh_path, spec + 1, (int)nv);
+        code = CLI_EXIT_INPUT;
+    }
+    cf_point_set *set = NULL;
+    if (code == CLI_EXIT_OK) {
+        cf_status st = cf_point_set_from_indices(ctx, nv, count, members, &set);
+        if (st == CF_OK) st = cf_handle_set_from_points(ctx, set, positions, NULL, out);
+        if (st != CF_OK) code = cli_fail(ctx, option, st);
+    }
+    cf_point_set_destroy(&set);
+    free(code_of);
+    free(members);
+    return code;
+}
+
 int cli_flow_arrays_load(cf_context *ctx, cli_flow_arrays *arrays, cf_flow_options *options, const char *mesh_path,
                          const cf_mesh *mesh, const double *start)
 {
@@ -734,6 +786,14 @@ int cli_flow_arrays_load(cf_context *ctx, cli_flow_arrays *arrays, cf_flow_optio
         const cf_param_desc *p = arrays->items[i].param;
         const char *option = arrays->items[i].option, *value = arrays->items[i].value;
         cf_status st = CF_OK;
+        if (p->type == CF_PARAM_POINT_SETS && value[0] == '@') {
+            int code = load_point_sets_property(ctx, mesh_path, option, p, value, mesh,
+                                                start ? start : cf_mesh_positions(mesh), &arrays->items[i].set);
+            if (code != CLI_EXIT_OK) return code;
+            const cf_handle_set *set = arrays->items[i].set;
+            memcpy(base + p->offset, &set, sizeof set);
+            continue;
+        }
         if (p->type == CF_PARAM_POINT_SETS) {
             st = cf_handle_set_read_json(ctx, mesh, start, value, &arrays->items[i].set);
             if (st != CF_OK) {

@@ -198,30 +198,44 @@ _TYPES = {0: "double", 1: "int", 2: "bool", 3: "choice", 4: "vertex-scalars", 5:
 
 def method_params(method):
     """Parameters of a method with their defaults, ranges and help (as
-    `curvflow flow --method NAME --list-params`): {name: dict}."""
+    `curvflow flow --method NAME --list-params`): {name: dict}, the method's
+    own first, then the step policy common to every method (energy_check,
+    backtrack, max_halvings, step_growth, rise_tolerance,
+    divergence_tolerance, energy_floor; docs/flowcli.md). Each dict: type,
+    default (text, as the CLI prints it), help, group ("method" or
+    "step-policy"), accepts (the accepted values as the CLI prints them,
+    e.g. "[0, 60]" or "true|false"), and range (min, max) for numbers or
+    choices for choices. All of them are set by name in curvflow.flow."""
     L = _lib.lib()
     kind = _kind(method)
     opts = _lib.FlowOptions()
     L.cf_flow_options_default(kind, byref(opts))
-    table = POINTER(_lib.ParamDesc)()
-    count = c_int32()
-    L.cf_flow_params(kind, byref(table), byref(count))
     out = {}
     buf = ctypes.create_string_buffer(128)
-    for i in range(count.value):
-        p = table[i]
-        L.cf_flow_options_format(byref(opts), ctypes.byref(p), buf, len(buf))
-        entry = {"type": _TYPES.get(p.type, "?"), "default": buf.value.decode(),
-                 "help": p.help.decode() if p.help else ""}
-        if p.type in (0, 1):
-            entry["range"] = (p.min_value, p.max_value)
-        if p.type == 3:
-            choices, j = [], 0
-            while p.choices[j]:
-                choices.append(p.choices[j].decode())
-                j += 1
-            entry["choices"] = choices
-        out[p.name.decode()] = entry
+    accepts = ctypes.create_string_buffer(256)
+    for group in ("method", "step-policy"):
+        table = POINTER(_lib.ParamDesc)()
+        count = c_int32()
+        if group == "method":
+            L.cf_flow_params(kind, byref(table), byref(count))
+        else:
+            L.cf_flow_common_params(byref(table), byref(count))
+        for i in range(count.value):
+            p = table[i]
+            L.cf_flow_options_format(byref(opts), ctypes.byref(p), buf, len(buf))
+            L.cf_flow_param_range_format(ctypes.byref(p), accepts, len(accepts))
+            entry = {"type": _TYPES.get(p.type, "?"), "default": buf.value.decode(),
+                     "help": p.help.decode() if p.help else "", "group": group,
+                     "accepts": accepts.value.decode()}
+            if p.type in (0, 1):
+                entry["range"] = (p.min_value, p.max_value)
+            if p.type == 3:
+                choices, j = [], 0
+                while p.choices[j]:
+                    choices.append(p.choices[j].decode())
+                    j += 1
+                entry["choices"] = choices
+            out[p.name.decode()] = entry
     return out
 
 

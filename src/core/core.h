@@ -84,4 +84,49 @@ double cfi_now_seconds(void);
  * coordinate that is NaN, infinite or beyond CF_MAX_COORDINATE; -1 if none. */
 int64_t cfi_first_unusable_point(const double *x, int64_t n, int dim);
 
+/* ---- workspace (src/core/workspace.c) ----
+ *
+ * A per-object workspace (issue 12 item 6): a record of the arrays one
+ * flow (or any object with a create / destroy pair) allocates, each through
+ * the context, so that allocation-failure injection reaches every one of
+ * them and cf_context_bytes_in_use counts them, and so that destroy frees
+ * them all in one call whatever subset a failed create got to. The record
+ * is a fixed table inside the owner's state: recording never allocates,
+ * and steps that only use the arrays allocate nothing.
+ *
+ *     cfi_workspace_init(&s->ws, ctx);
+ *     s->mass = CFI_WS_ALLOC(&s->ws, double, nv);          (NULL: CF_ERR_NOMEM recorded)
+ *     ...
+ *     cfi_workspace_free_all(&s->ws);                      (in destroy)
+ *
+ * Arrays that are replaced during the owner's life (reallocated) do not
+ * belong here: the workspace frees only at the end.
+ */
+
+/* Arrays one workspace can record (the largest user, spin-willmore, has up to 22). */
+#define CFI_WORKSPACE_SLOTS 48
+
+typedef struct cfi_workspace {
+    cf_context *ctx;
+    int32_t count;                      /* arrays recorded, oldest first */
+    void *ptr[CFI_WORKSPACE_SLOTS];
+    size_t bytes[CFI_WORKSPACE_SLOTS];  /* as allocated, for cfi_free */
+} cfi_workspace;
+
+/* An empty workspace allocating through ctx (a zero-filled struct with ctx
+ * set is the same). */
+void cfi_workspace_init(cfi_workspace *ws, cf_context *ctx);
+
+/* count elements of `size` bytes, zero-filled, overflow-checked, recorded.
+ * NULL with CF_ERR_NOMEM and a message in the context when the allocation
+ * fails (or the table is full); the arrays recorded before are kept. A
+ * count of 0 gives a recorded allocation of 0 bytes like cfi_alloc_array. */
+void *cfi_workspace_alloc(cfi_workspace *ws, size_t count, size_t size);
+#define CFI_WS_ALLOC(ws, type, count) ((type *)cfi_workspace_alloc((ws), (size_t)(count), sizeof(type)))
+
+/* Frees every recorded array, newest first (the reverse of the allocation
+ * order); the workspace is empty afterwards and may be used again. Accepts
+ * an empty workspace and NULL. */
+void cfi_workspace_free_all(cfi_workspace *ws);
+
 #endif /* CF_CORE_CORE_H */

@@ -25,12 +25,15 @@
 
 #define PI 3.14159265358979323846
 
-/* the last warning logged by the library (the policy's stop notice) */
+/* the last warning logged by the library (the policy's stop notice), and
+ * the last INFO line (spin-willmore's stall notice) */
 static char warning[1024];
+static char info_line[1024];
 static void keep_warning(void *user, cf_log_level level, const char *line)
 {
     (void)user;
     if (level == CF_LOG_WARNING) snprintf(warning, sizeof warning, "%s", line);
+    if (level == CF_LOG_INFO) snprintf(info_line, sizeof info_line, "%s", line);
 }
 
 static cf_context *policy_context(void)
@@ -578,7 +581,14 @@ static void test_spin_uses_policy(void)
     if (flow) {
         double e0 = cf_flow_energy(flow);
         cf_flow_info info;
+        cf_context_set_log(ctx, keep_warning, NULL, CF_LOG_INFO);
+        info_line[0] = '\0';
         CHECK_OK(ctx, cf_flow_step(flow, &info));
+        /* the stall is a step of time step 0 (the iteration advances), with spin's notice */
+        fprintf(stderr, "   max_halvings 1: %s\n", info_line);
+        CHECK(strstr(info_line, "spin-willmore: W does not decrease for any time step down to ") == info_line);
+        CHECK(strstr(info_line, "; stopping at W/4pi = ") != NULL);
+        CHECK(info.iteration == 1);
         CHECK(cf_flow_converged(flow));
         CHECK(info.time_step == 0.0);
         CHECK(info.energy == e0);

@@ -46,6 +46,7 @@
 
 typedef struct baseline_state {
     cf_baseline_options opt;
+    cfi_workspace ws;       /* the arrays below (slot_map ... y) */
     int32_t nv;
     double tau;             /* actual time step (scaled, see the header) */
     cf_sparse *l;           /* cotan Laplacian of the current positions (pattern fixed) */
@@ -235,21 +236,10 @@ static void baseline_destroy(cf_flow *flow)
     baseline_state *s = flow->impl;
     if (!s) return;
     cf_context *ctx = flow->ctx;
-    size_t nv = (size_t)s->nv;
-    int64_t nnz_l = s->l ? cf_sparse_nnz(s->l) : 0;
     cf_cholesky_destroy(&s->chol);
     if (s->a != s->l) cf_sparse_destroy(&s->a);
     cf_sparse_destroy(&s->l);
-    CFI_FREE(ctx, s->slot_map, s->slot_count);
-    CFI_FREE(ctx, s->l_diag, nv);
-    CFI_FREE(ctx, s->a_diag, nv);
-    CFI_FREE(ctx, s->l0_values, nnz_l);
-    CFI_FREE(ctx, s->pos, nv);
-    CFI_FREE(ctx, s->mass, nv);
-    CFI_FREE(ctx, s->x, 3 * nv);
-    CFI_FREE(ctx, s->b, 3 * nv);
-    CFI_FREE(ctx, s->r, 3 * nv);
-    CFI_FREE(ctx, s->y, 3 * nv);
+    cfi_workspace_free_all(&s->ws);
     CFI_FREE(ctx, s, 1);
     flow->impl = NULL;
 }
@@ -281,18 +271,19 @@ static cf_status baseline_create(cf_flow *flow, const void *options)
     baseline_state *s = CFI_ALLOC(ctx, baseline_state, 1);
     if (!s) return CF_ERR_NOMEM;
     flow->impl = s;
+    cfi_workspace_init(&s->ws, ctx);
     s->opt = *opt;
     s->nv = mesh->nv;
     size_t nv = (size_t)mesh->nv;
     s->slot_count = cf_cotan_laplacian_slot_count(mesh);
-    s->slot_map = CFI_ALLOC(ctx, int64_t, s->slot_count);
-    s->l_diag = CFI_ALLOC(ctx, int64_t, nv);
-    s->a_diag = CFI_ALLOC(ctx, int64_t, nv);
-    s->mass = CFI_ALLOC(ctx, double, nv);
-    s->x = CFI_ALLOC(ctx, double, 3 * nv);
-    s->b = CFI_ALLOC(ctx, double, 3 * nv);
-    s->r = CFI_ALLOC(ctx, double, 3 * nv);
-    s->y = CFI_ALLOC(ctx, double, 3 * nv);
+    s->slot_map = CFI_WS_ALLOC(&s->ws, int64_t, s->slot_count);
+    s->l_diag = CFI_WS_ALLOC(&s->ws, int64_t, nv);
+    s->a_diag = CFI_WS_ALLOC(&s->ws, int64_t, nv);
+    s->mass = CFI_WS_ALLOC(&s->ws, double, nv);
+    s->x = CFI_WS_ALLOC(&s->ws, double, 3 * nv);
+    s->b = CFI_WS_ALLOC(&s->ws, double, 3 * nv);
+    s->r = CFI_WS_ALLOC(&s->ws, double, 3 * nv);
+    s->y = CFI_WS_ALLOC(&s->ws, double, 3 * nv);
     if (!s->slot_map || !s->l_diag || !s->a_diag || !s->mass || !s->x || !s->b || !s->r || !s->y) return CF_ERR_NOMEM;
 
     /* rescale's reference centroid, with the barycentric masses it uses */
@@ -336,7 +327,7 @@ static cf_status baseline_create(cf_flow *flow, const void *options)
         memcpy(s->a_diag, s->l_diag, nv * sizeof(int64_t));
         if (kind == CF_FLOW_CONFORMAL_MCF) {
             int64_t nnz = cf_sparse_nnz(s->l);
-            s->l0_values = CFI_ALLOC(ctx, double, nnz);
+            s->l0_values = CFI_WS_ALLOC(&s->ws, double, nnz);
             if (!s->l0_values) return CF_ERR_NOMEM;
             memcpy(s->l0_values, s->l->values, (size_t)nnz * sizeof(double));
         }
@@ -347,7 +338,7 @@ static cf_status baseline_create(cf_flow *flow, const void *options)
         if (st != CF_OK) return st;
         s->a->symmetric = 1;
         s->a->upper_only = 0;
-        s->pos = CFI_ALLOC(ctx, int64_t, nv);
+        s->pos = CFI_WS_ALLOC(&s->ws, int64_t, nv);
         if (!s->pos) return CF_ERR_NOMEM;
         for (size_t i = 0; i < nv; ++i) s->pos[i] = -1;
         st = find_diagonal(ctx, s->a, s->a_diag, "the bi-Laplacian");

@@ -23,6 +23,7 @@
 
 struct cf_curve_flow {
     cf_context *ctx;
+    cfi_workspace ws;  /* the arrays below (points ... sol) */
     int32_t n;
     double tau;
     double *points;    /* 2 n */
@@ -53,18 +54,9 @@ void cf_curve_flow_destroy(cf_curve_flow **pf)
     if (!pf || !*pf) return;
     cf_curve_flow *f = *pf;
     cf_context *ctx = f->ctx;
-    int64_t n = f->n;
     cf_cholesky_destroy(&f->chol);
     cf_sparse_destroy(&f->l);
-    CFI_FREE(ctx, f->points, 2 * n);
-    CFI_FREE(ctx, f->len, n);
-    CFI_FREE(ctx, f->dual, n);
-    CFI_FREE(ctx, f->kappa, n);
-    CFI_FREE(ctx, f->kdot, n);
-    CFI_FREE(ctx, f->theta, n);
-    CFI_FREE(ctx, f->basis, 3 * n);
-    CFI_FREE(ctx, f->rhs, 2 * n);
-    CFI_FREE(ctx, f->sol, 2 * n);
+    cfi_workspace_free_all(&f->ws);
     CFI_FREE(ctx, f, 1);
     *pf = NULL;
 }
@@ -124,17 +116,19 @@ cf_status cf_curve_flow_create(cf_context *ctx, int32_t n, const double *points,
     cf_curve_flow *f = CFI_ALLOC(ctx, cf_curve_flow, 1);
     if (!f) return CF_ERR_NOMEM;
     f->ctx = ctx;
+    cfi_workspace_init(&f->ws, ctx);
     f->n = n;
     f->tau = options->time_step;
-    f->points = CFI_ALLOC(ctx, double, 2 * (int64_t)n);
-    f->len = CFI_ALLOC(ctx, double, n);
-    f->dual = CFI_ALLOC(ctx, double, n);
-    f->kappa = CFI_ALLOC(ctx, double, n);
-    f->kdot = CFI_ALLOC(ctx, double, n);
-    f->theta = CFI_ALLOC(ctx, double, n);
-    f->basis = CFI_ALLOC(ctx, double, 3 * (int64_t)n);
-    f->rhs = CFI_ALLOC(ctx, double, 2 * (int64_t)n);
-    f->sol = CFI_ALLOC(ctx, double, 2 * (int64_t)n);
+    f->points = CFI_WS_ALLOC(&f->ws, double, 2 * (int64_t)n);
+    f->len = CFI_WS_ALLOC(&f->ws, double, n);
+    f->dual = CFI_WS_ALLOC(&f->ws, double, n);
+    f->kappa = CFI_WS_ALLOC(&f->ws, double, n);
+    f->kdot = CFI_WS_ALLOC(&f->ws, double, n);
+    f->theta = CFI_WS_ALLOC(&f->ws, double, n);
+    f->basis = CFI_WS_ALLOC(&f->ws, double, 3 * (int64_t)n);
+    f->rhs = CFI_WS_ALLOC(&f->ws, double, 2 * (int64_t)n);
+    f->sol = CFI_WS_ALLOC(&f->ws, double, 2 * (int64_t)n);
+    /* the Laplacian's triplets, for create only */
     int32_t *ri = CFI_ALLOC(ctx, int32_t, 4 * (int64_t)n);
     int32_t *ci = CFI_ALLOC(ctx, int32_t, 4 * (int64_t)n);
     double *vv = CFI_ALLOC(ctx, double, 4 * (int64_t)n);

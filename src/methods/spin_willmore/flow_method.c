@@ -84,7 +84,7 @@ void cfi_spin_destroy(cf_flow *flow)
     cf_edge_poisson_destroy(&s->poisson);
     cf_edge_poisson_destroy(&s->poisson_input);
     cf_spectral_filter_destroy(&s->filter);
-    cfi_spin_ws_free_all(&s->ws);
+    cfi_workspace_free_all(&s->ws);
     CFI_FREE(ctx, s, 1);
     flow->impl = NULL;
 }
@@ -93,12 +93,12 @@ void cfi_spin_destroy(cf_flow *flow)
  * dim: harmonic dimension of the exactness constraint (0: off). */
 static cf_status allocate_arrays(cfi_spin_state *s, int32_t dim)
 {
-    cfi_spin_workspace *ws = &s->ws;
+    cfi_workspace *ws = &s->ws;
     int64_t nv = s->nv, ne = s->ne;
     int64_t zcols = s->linearized ? 3 * (int64_t)dim : dim;
     s->max_cols = 4 + 3 * dim + 1;
     int ok = 1;
-#define WS_ARRAY(field, count) ok = ok && ((field) = CFI_SPIN_WS_ALLOC(ws, double, (count))) != NULL
+#define WS_ARRAY(field, count) ok = ok && ((field) = CFI_WS_ALLOC(ws, double, (count))) != NULL
     if (s->linearized) WS_ARRAY(s->hweights, ne);
     if (dim) {
         WS_ARRAY(s->harmonic, ne * dim);
@@ -190,7 +190,7 @@ cf_status cfi_spin_create(cf_flow *flow, const void *options)
     cfi_spin_state *s = CFI_ALLOC(ctx, cfi_spin_state, 1);
     if (!s) return CF_ERR_NOMEM;
     flow->impl = s;
-    s->ws.ctx = ctx;
+    cfi_workspace_init(&s->ws, ctx);
     s->opt = *o;
     s->opt.boundary_targets = (cf_param_values){NULL, 0}; /* the caller's array is read below, not kept */
     /* the flow layer's step policy retries with a smaller tau under

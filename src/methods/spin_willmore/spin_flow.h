@@ -11,9 +11,9 @@
  *   step_policy.c      the scale-change measure of the adaptive step, blow-up and
  *                      divergence checks, convergence (the retries themselves are the
  *                      flow layer's step policy: cf_flow_step)
- *   workspace.c        the flow's arrays, recorded and freed in one call
- * and the shared machinery one layer down: the spectral filter and the
- * position recovery from edges (curvflow/ops.h: cf_spectral_filter,
+ * and the shared machinery one layer down: the flow's arrays in a core
+ * workspace (core/core.h, cfi_workspace: recorded, freed in one call), the spectral
+ * filter and the position recovery from edges (curvflow/ops.h: cf_spectral_filter,
  * cf_edge_poisson, cf_edge_closure_error), the block-aware inverse iteration
  * (curvflow/linalg.h: cf_inverse_iteration_blocks) and quaternions
  * (curvflow/quaternion.h).
@@ -26,25 +26,9 @@
 
 #define CFI_PI 3.14159265358979323846
 
-/* The arrays of one flow (workspace.c): each allocated through the context
- * and recorded; cfi_spin_ws_free_all frees every recorded array at once. */
-#define CFI_SPIN_WORKSPACE_SLOTS 32
-typedef struct cfi_spin_workspace {
-    cf_context *ctx;
-    int32_t count;
-    void *ptr[CFI_SPIN_WORKSPACE_SLOTS];
-    size_t bytes[CFI_SPIN_WORKSPACE_SLOTS];
-} cfi_spin_workspace;
-
-/* count elements of `size` bytes, zero-filled; NULL (CF_ERR_NOMEM recorded) on failure. */
-void *cfi_spin_ws_alloc(cfi_spin_workspace *ws, size_t count, size_t size);
-#define CFI_SPIN_WS_ALLOC(ws, type, count) ((type *)cfi_spin_ws_alloc((ws), (size_t)(count), sizeof(type)))
-/* Frees every recorded array (newest first); the workspace is empty after. */
-void cfi_spin_ws_free_all(cfi_spin_workspace *ws);
-
 typedef struct cfi_spin_state {
     cf_spin_willmore_options opt;
-    cfi_spin_workspace ws;   /* every array below */
+    cfi_workspace ws;        /* every array below */
     int32_t nv, ne, nf;
     cfi_dirac *dirac;
     cf_cholesky *chol;       /* X(rho) + eps M */

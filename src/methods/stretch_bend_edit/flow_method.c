@@ -25,6 +25,8 @@
 typedef struct stretch_bend_state {
     cfi_stretch_bend_model model;
     cf_stretch_bend_options options;
+    cfi_workspace ws;         /* the per-flow arrays: rest, rhs, hu, x_start, b_cols, x_cols, aa_g, aa_x
+                               * (the handle arrays follow the handles: free_system) */
     double *rest;             /* 3 nv, copy of the rest pose */
     int32_t handle_count;
     int32_t *handle_vertices; /* copy of the handle set */
@@ -119,19 +121,10 @@ static void free_system(stretch_bend_state *s, cf_context *ctx)
 static void state_free(stretch_bend_state *s, cf_context *ctx)
 {
     if (!s) return;
-    int32_t nv = s->model.nv;
     free_system(s, ctx);
     cf_sparse_destroy(&s->a_full);
-    CFI_FREE(ctx, s->rest, 3 * (size_t)nv);
-    CFI_FREE(ctx, s->rhs, 3 * (size_t)nv);
-    CFI_FREE(ctx, s->hu, 3 * (size_t)nv);
-    CFI_FREE(ctx, s->x_start, 3 * (size_t)nv);
-    CFI_FREE(ctx, s->b_cols, 3 * (size_t)nv);
-    CFI_FREE(ctx, s->x_cols, 3 * (size_t)nv);
-    size_t n3 = 3 * (size_t)nv;
     cf_anderson_destroy(&s->aa);
-    CFI_FREE(ctx, s->aa_g, n3);
-    CFI_FREE(ctx, s->aa_x, n3);
+    cfi_workspace_free_all(&s->ws);
     cfi_stretch_bend_model_free(&s->model);
     cfi_free(ctx, s, sizeof *s);
 }
@@ -406,12 +399,13 @@ static cf_status stretch_bend_create(cf_flow *flow, const void *options)
     s->model.nv = nv;
     flow->impl = s;
     s->options = *o;
-    s->rest = CFI_ALLOC(ctx, double, 3 * (size_t)nv);
-    s->rhs = CFI_ALLOC(ctx, double, 3 * (size_t)nv);
-    s->hu = CFI_ALLOC(ctx, double, 3 * (size_t)nv);
-    s->x_start = CFI_ALLOC(ctx, double, 3 * (size_t)nv);
-    s->b_cols = CFI_ALLOC(ctx, double, 3 * (size_t)nv);
-    s->x_cols = CFI_ALLOC(ctx, double, 3 * (size_t)nv);
+    cfi_workspace_init(&s->ws, ctx);
+    s->rest = CFI_WS_ALLOC(&s->ws, double, 3 * (size_t)nv);
+    s->rhs = CFI_WS_ALLOC(&s->ws, double, 3 * (size_t)nv);
+    s->hu = CFI_WS_ALLOC(&s->ws, double, 3 * (size_t)nv);
+    s->x_start = CFI_WS_ALLOC(&s->ws, double, 3 * (size_t)nv);
+    s->b_cols = CFI_WS_ALLOC(&s->ws, double, 3 * (size_t)nv);
+    s->x_cols = CFI_WS_ALLOC(&s->ws, double, 3 * (size_t)nv);
     if (!s->rest || !s->rhs || !s->hu || !s->x_start || !s->b_cols || !s->x_cols) return CF_ERR_NOMEM;
     /* every table parameter (ranges, handles given, rest pose count) was
      * checked by cf_flow_create */
@@ -427,8 +421,8 @@ static cf_status stretch_bend_create(cf_flow *flow, const void *options)
     if (depth_opt > 0) {
         size_t n3 = 3 * (size_t)nv;
         s->aa_depth = depth_opt;
-        s->aa_g = CFI_ALLOC(ctx, double, n3);
-        s->aa_x = CFI_ALLOC(ctx, double, n3);
+        s->aa_g = CFI_WS_ALLOC(&s->ws, double, n3);
+        s->aa_x = CFI_WS_ALLOC(&s->ws, double, n3);
         if (!s->aa_g || !s->aa_x) return CF_ERR_NOMEM;
         cf_status ast = cf_anderson_create(ctx, (int64_t)n3, depth_opt, &s->aa);
         if (ast != CF_OK) return ast;

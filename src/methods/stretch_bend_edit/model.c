@@ -19,24 +19,8 @@
 void cfi_stretch_bend_model_free(cfi_stretch_bend_model *m)
 {
     if (!m || !m->ctx) return;
-    cf_context *ctx = m->ctx;
-    int32_t nv = m->nv;
-    CFI_FREE(ctx, m->rot_offsets, (size_t)m->rot_count + 1);
-    CFI_FREE(ctx, m->term_ij, 2 * (size_t)m->term_count);
-    CFI_FREE(ctx, m->term_w, (size_t)m->term_count);
-    CFI_FREE(ctx, m->term_e, 3 * (size_t)m->term_count);
-    CFI_FREE(ctx, m->rest_sq, (size_t)m->rot_count);
-    CFI_FREE(ctx, m->rotations, 9 * (size_t)m->rot_count);
-    CFI_FREE(ctx, m->covariance, 9 * (size_t)m->rot_count);
-    CFI_FREE(ctx, m->quats, 4 * (size_t)m->rot_count);
-    CFI_FREE(ctx, m->frames, 9 * (size_t)m->mesh->nf);
-    CFI_FREE(ctx, m->term_a, 2 * (size_t)m->term_count);
     cf_sparse_destroy(&m->k);
-    CFI_FREE(ctx, m->mass, (size_t)nv);
-    CFI_FREE(ctx, m->hm, (size_t)nv);
-    CFI_FREE(ctx, m->u, 3 * (size_t)nv);
-    CFI_FREE(ctx, m->xcol, 3 * (size_t)nv);
-    CFI_FREE(ctx, m->kx, 3 * (size_t)nv);
+    cfi_workspace_free_all(&m->ws);
     m->ctx = NULL;
 }
 
@@ -183,6 +167,7 @@ cf_status cfi_stretch_bend_model_init(cfi_stretch_bend_model *m, cf_context *ctx
 {
     memset(m, 0, sizeof *m);
     m->ctx = ctx;
+    cfi_workspace_init(&m->ws, ctx);
     m->mesh = mesh;
     m->nv = mesh->nv;
     int32_t nv = mesh->nv, nf = mesh->nf, ne = mesh->ne;
@@ -225,24 +210,24 @@ cf_status cfi_stretch_bend_model_init(cfi_stretch_bend_model *m, cf_context *ctx
         m->term_count = 3 * nf;
         m->per_face = 1;
     }
-    m->rot_offsets = CFI_ALLOC(ctx, int32_t, (size_t)m->rot_count + 1);
-    m->term_ij = CFI_ALLOC(ctx, int32_t, 2 * (size_t)m->term_count);
-    m->term_w = CFI_ALLOC(ctx, double, (size_t)m->term_count);
-    m->term_e = CFI_ALLOC(ctx, double, 3 * (size_t)m->term_count);
-    m->rest_sq = CFI_ALLOC(ctx, double, (size_t)m->rot_count);
-    m->rotations = CFI_ALLOC(ctx, double, 9 * (size_t)m->rot_count);
-    m->covariance = CFI_ALLOC(ctx, double, 9 * (size_t)m->rot_count);
-    m->xcol = CFI_ALLOC(ctx, double, 3 * (size_t)nv);
-    m->kx = CFI_ALLOC(ctx, double, 3 * (size_t)nv);
+    m->rot_offsets = CFI_WS_ALLOC(&m->ws, int32_t, (size_t)m->rot_count + 1);
+    m->term_ij = CFI_WS_ALLOC(&m->ws, int32_t, 2 * (size_t)m->term_count);
+    m->term_w = CFI_WS_ALLOC(&m->ws, double, (size_t)m->term_count);
+    m->term_e = CFI_WS_ALLOC(&m->ws, double, 3 * (size_t)m->term_count);
+    m->rest_sq = CFI_WS_ALLOC(&m->ws, double, (size_t)m->rot_count);
+    m->rotations = CFI_WS_ALLOC(&m->ws, double, 9 * (size_t)m->rot_count);
+    m->covariance = CFI_WS_ALLOC(&m->ws, double, 9 * (size_t)m->rot_count);
+    m->xcol = CFI_WS_ALLOC(&m->ws, double, 3 * (size_t)nv);
+    m->kx = CFI_WS_ALLOC(&m->ws, double, 3 * (size_t)nv);
     if (m->per_face) {
-        m->frames = CFI_ALLOC(ctx, double, 9 * (size_t)nf);
-        m->term_a = CFI_ALLOC(ctx, double, 2 * (size_t)m->term_count);
+        m->frames = CFI_WS_ALLOC(&m->ws, double, 9 * (size_t)nf);
+        m->term_a = CFI_WS_ALLOC(&m->ws, double, 2 * (size_t)m->term_count);
         if (!m->frames || !m->term_a) {
             st = CF_ERR_NOMEM;
             goto done;
         }
     } else if (m->rot_count > 0) {
-        m->quats = CFI_ALLOC(ctx, double, 4 * (size_t)m->rot_count);
+        m->quats = CFI_WS_ALLOC(&m->ws, double, 4 * (size_t)m->rot_count);
         if (!m->quats) {
             st = CF_ERR_NOMEM;
             goto done;
@@ -277,9 +262,9 @@ cf_status cfi_stretch_bend_model_init(cfi_stretch_bend_model *m, cf_context *ctx
     }
 
     if (m->beta > 0.0) {
-        m->mass = CFI_ALLOC(ctx, double, (size_t)nv);
-        m->hm = CFI_ALLOC(ctx, double, (size_t)nv);
-        m->u = CFI_ALLOC(ctx, double, 3 * (size_t)nv);
+        m->mass = CFI_WS_ALLOC(&m->ws, double, (size_t)nv);
+        m->hm = CFI_WS_ALLOC(&m->ws, double, (size_t)nv);
+        m->u = CFI_WS_ALLOC(&m->ws, double, 3 * (size_t)nv);
         if (!m->mass || !m->hm || !m->u) {
             st = CF_ERR_NOMEM;
             goto done;

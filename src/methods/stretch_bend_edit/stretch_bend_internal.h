@@ -16,7 +16,8 @@
  * grouped by rotation r (one per face for E_s, one per vertex for ARAP).
  * The bending part is sum_v (|(K x')_v| - hm_v)^2 / M_v at the optimal u'. */
 typedef struct cfi_stretch_bend_model {
-    cf_context *ctx;
+    cf_context *ctx;         /* set by init (NULL: nothing to free) */
+    cfi_workspace ws;        /* every array below the model owns (not rhs, hu) */
     const cf_mesh *mesh;
     int32_t nv;
     cf_stretch_bend_energy_kind energy;

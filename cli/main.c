@@ -7,6 +7,7 @@
 #include "curvflow/curvflow.h"
 
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 typedef struct command {
@@ -48,7 +49,7 @@ static void print_help(FILE *out)
             "must not be written), 3 numerical failure.\n");
 }
 
-int main(int argc, char **argv)
+static int dispatch(int argc, char **argv)
 {
     /* before any command writes: an interrupted run leaves no temporary file */
     cli_install_signal_cleanup();
@@ -69,4 +70,18 @@ int main(int argc, char **argv)
         if (strcmp(name, commands[i].name) == 0) return commands[i].run(argc - 1, argv + 1);
     fprintf(stderr, "curvflow: unknown command '%s'\nTry 'curvflow --help' for more information.\n", name);
     return CLI_EXIT_USAGE;
+}
+
+/* OpenBLAS joins its worker threads at exit; a worker stuck retrying the
+ * allocation of its buffer under a too low address-space limit would hang
+ * exit() forever (cf_blas_threads_stuck, docs/memory.md). Then leave with
+ * _Exit after flushing: every output is already renamed into place. */
+int main(int argc, char **argv)
+{
+    int code = dispatch(argc, argv);
+    if (cf_blas_threads_stuck()) {
+        fflush(NULL);
+        _Exit(code);
+    }
+    return code;
 }

@@ -140,6 +140,16 @@ CF_API cf_status cf_context_set_threads(cf_context *ctx, int32_t threads);
 /* The context's setting (1 for a NULL ctx). */
 CF_API int32_t cf_context_threads(const cf_context *ctx);
 
+/* 1 if OpenBLAS's worker threads of this process are stuck: under an
+ * address-space limit (RLIMIT_AS) that was too low when the process started
+ * they could not map their work buffers (128 MB each) and retry forever.
+ * Then every threaded BLAS call would wait for them (the library refuses
+ * factorisations with CF_ERR_NOMEM instead), and exit() hangs, because
+ * OpenBLAS joins its threads in its destructor: a program should flush its
+ * streams and leave with _exit(). 0 otherwise, without a limit, or with
+ * another BLAS. Process-wide; takes no context, never fails. */
+CF_API int cf_blas_threads_stuck(void);
+
 /* "0.1.0" */
 CF_API const char *cf_version_string(void);
 

@@ -33,6 +33,7 @@ struct cf_cholesky {
     cfi_quat_map *quat;   /* quaternion_blocks: the factor is of the complex form */
     double *zwork;        /* complex right-hand sides, n doubles per column */
     int32_t zwork_cols;
+    double factor_entries; /* entries of L from the analysis (complex ones with quat), for messages */
 };
 
 void cf_cholesky_options_default(cf_cholesky_options *options)
@@ -301,6 +302,9 @@ cf_status cf_cholesky_create(cf_context *ctx, const cf_sparse *a, const cf_chole
     }
     cfi_cholmod_reset_parameters(c);
     if ((st = cfi_cholmod_check(ctx, c, chol->factor != NULL, "cholesky analyse")) != CF_OK) goto fail;
+    /* a supernodal factor's size is its value array's (with the explicit
+     * zeros of amalgamation); a simplicial one's the analysis's count */
+    chol->factor_entries = chol->factor->is_super ? (double)chol->factor->xsize : c->lnz;
     CFI_FREE(ctx, perm, chol->n);
     chol->timings.analyze_seconds = cfi_now_seconds() - t0;
     *out = chol;
@@ -343,6 +347,9 @@ static cf_status factorize(cf_cholesky *chol, const cf_sparse *a, double shift)
     } else {
         cfi_cholmod_view(a, 1, &view);
     }
+    /* the supernodal numeric factorisation is the first BLAS call
+     * (LAPACK potrf, syrk/herk, gemm, trsm): OpenBLAS's buffer first */
+    if (chol->factor->is_super && (st = cfi_blas_reserve(ctx, "cholesky factorise")) != CF_OK) return st;
     double beta[2] = {shift, 0.0};
     int ok = cholmod_factorize_p(&view, beta, NULL, 0, chol->factor, c);
     chol->timings.factorize_seconds = cfi_now_seconds() - t0;
@@ -362,7 +369,19 @@ static cf_status factorize(cf_cholesky *chol, const cf_sparse *a, double shift)
                          "cholesky factorise: matrix not positive definite at column %d (pivot %zu of %d)", col, minor,
                          chol->n);
     }
-    if ((st = cfi_cholmod_check(ctx, c, ok, "cholesky factorise")) != CF_OK) return st;
+    if ((st = cfi_cholmod_check(ctx, c, ok, "cholesky factorise")) != CF_OK) {
+        if (st == CF_ERR_NOMEM) {
+            /* name the need and the limit instead of CHOLMOD's bare "out of memory" */
+            char note[128];
+            cfi_address_space_note(note, sizeof note);
+            double bytes = chol->factor_entries * (chol->quat ? 16.0 : 8.0);
+            return cfi_error(ctx, CF_ERR_NOMEM,
+                             "cholesky factorise: out of memory for the factor (%.3g %s entries, %.0f MB, %d columns; %s)",
+                             chol->factor_entries, chol->quat ? "complex" : "real", bytes / (1024.0 * 1024.0),
+                             (int)chol->factor->n, note);
+        }
+        return st;
+    }
     chol->factorized = 1;
     return CF_OK;
 }
@@ -407,6 +426,12 @@ cf_status cf_cholesky_solve(cf_cholesky *chol, int32_t nrhs, const double *b, do
     if (bad >= 0)
         return cfi_error(ctx, CF_ERR_NUMERICAL, "cholesky solve: right-hand side %lld, row %lld is not finite",
                          (long long)(bad / chol->n), (long long)(bad % chol->n));
+    /* supernodal solves call BLAS (trsm, gemm), maybe on another thread
+     * than the factorisation */
+    if (chol->factor->is_super) {
+        cf_status sr = cfi_blas_reserve(ctx, "cholesky solve");
+        if (sr != CF_OK) return sr;
+    }
     double t0 = cfi_now_seconds();
     cholmod_common *c = chol->common;
     c->status = CHOLMOD_OK;

@@ -186,8 +186,11 @@ cf_status cfi_cholmod_check(cf_context *ctx, cholmod_common *c, int ok, const ch
     text = said;
     cfi_cholmod_clear_message();
     switch (st) {
-    case CHOLMOD_OUT_OF_MEMORY:
-        return cfi_error(ctx, CF_ERR_NOMEM, "%s: CHOLMOD out of memory (%s)", what, text);
+    case CHOLMOD_OUT_OF_MEMORY: {
+        char note[128];
+        cfi_address_space_note(note, sizeof note);
+        return cfi_error(ctx, CF_ERR_NOMEM, "%s: CHOLMOD out of memory (%s; %s)", what, text, note);
+    }
     case CHOLMOD_TOO_LARGE:
         return cfi_error(ctx, CF_ERR_NOMEM, "%s: CHOLMOD integer overflow, problem too large (%s)", what, text);
     case CHOLMOD_INVALID:

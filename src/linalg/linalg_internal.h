@@ -63,6 +63,19 @@ void cfi_cholmod_view(const cf_sparse *a, int stype, cholmod_sparse *view);
  * (UMFPACK's default 2); the saddle solver refines on its own and sets 0. */
 void cfi_lu_set_refinement_steps(cf_lu *lu, int32_t steps);
 
+/* Makes sure the calling thread has OpenBLAS's work buffer before the
+ * first BLAS call (blas_buffers.c): checks that the address space for it is
+ * there and makes OpenBLAS map it with a tiny LAPACK call; once per thread,
+ * a no-op with another BLAS. Call it before anything that reaches BLAS
+ * (supernodal factorisations and solves, UMFPACK). `what` prefixes the
+ * message. Statuses: CF_OK, CF_ERR_NOMEM (the buffer does not fit under the
+ * address-space limit, or OpenBLAS's worker threads are stuck without
+ * theirs: the message names the need and the limit). */
+cf_status cfi_blas_reserve(cf_context *ctx, const char *what);
+/* "address-space limit (RLIMIT_AS) 288 MB, 270 MB in use" (or "no
+ * address-space limit, ... mapped") into buf, for out-of-memory messages. */
+void cfi_address_space_note(char *buf, size_t size);
+
 /* The context a factorisation was created with. */
 cf_context *cfi_cholesky_context(const cf_cholesky *chol);
 

@@ -108,6 +108,8 @@ cf_status cf_lu_factorize(cf_lu *lu, const cf_sparse *a)
         memcmp(a->colptr, lu->colptr, ((size_t)lu->n + 1) * sizeof *lu->colptr) != 0)
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "LU factorise: pattern differs from the analysed one");
     if (lu->numeric) umfpack_di_free_numeric(&lu->numeric);
+    /* UMFPACK's numeric factorisation and solves call BLAS: OpenBLAS's buffer first */
+    if ((st = cfi_blas_reserve(ctx, "LU factorise")) != CF_OK) return st;
     const cf_sparse *m = umf_matrix(lu, a);
     int ust = umfpack_di_numeric(m->colptr, m->rowind, m->values, lu->symbolic, &lu->numeric, lu->control, lu->info);
     if (ust != UMFPACK_OK && lu->numeric && ust != UMFPACK_WARNING_determinant_underflow &&
@@ -168,6 +170,8 @@ cf_status cf_lu_solve(cf_lu *lu, const double *b, double *x)
     if (!lu->numeric) return cfi_error(ctx, CF_ERR_INVALID_ARG, "LU solve: no successful factorisation");
     int64_t bad = cfi_first_nonfinite(b, lu->n);
     if (bad >= 0) return cfi_error(ctx, CF_ERR_NUMERICAL, "LU solve: right-hand side row %lld is not finite", (long long)bad);
+    cf_status sr = cfi_blas_reserve(ctx, "LU solve"); /* the solve may run on another thread */
+    if (sr != CF_OK) return sr;
     const cf_sparse *m = lu->full;
     memcpy(lu->bcopy, b, (size_t)lu->n * sizeof *b); /* x may alias b */
     int ust = umfpack_di_wsolve(UMFPACK_A, m->colptr, m->rowind, m->values, x, lu->bcopy, lu->numeric, lu->control,

@@ -250,6 +250,7 @@ def _declare(lib):
     f("cf_flow_common_params", S, POINTER(POINTER(ParamDesc)), POINTER(c_int32))
     f("cf_flow_param_range_format", S, POINTER(ParamDesc), c_char_p, c_size_t)
     f("cf_flow_create", S, P, P, P, POINTER(FlowOptions), POINTER(c_void_p))
+    f("cf_flow_create_at", S, P, P, P, POINTER(FlowOptions), POINTER(c_void_p))
     f("cf_flow_run", S, P, I64, POINTER(FlowInfo))
     f("cf_flow_set_progress", None, P, PROGRESS_FN, P)
     f("cf_flow_positions", POINTER(c_double), P)

@@ -409,7 +409,8 @@ def _run(method, V, F, steps, time_step, callback, params, start=None, handles=N
                 keep.append(r)
                 m.rest_positions = r.ctypes.data
         fl = c_void_p()
-        st = L.cf_flow_create(ctx.ptr, mesh, start.ctypes.data if start is not None else None, byref(opts),
+        # the mesh is the reference, start only the initial state (as the CLI's --start)
+        st = L.cf_flow_create_at(ctx.ptr, mesh, start.ctypes.data if start is not None else None, byref(opts),
                               byref(fl))
         ctx.check(st)
         ctx.defer(L.cf_flow_destroy, fl)

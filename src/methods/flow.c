@@ -539,7 +539,6 @@ static cf_status policy_init(cf_flow *flow, const cfi_flow_method *m)
     if (st != CF_OK) return st;
     p->full_step = 1.0; /* until the method gives its own (cfi_flow_set_time_step) */
     p->step = 1.0;
-    p->halvings = 0;
     /* energy_check=false accepts every step as the method gives it: no
      * rise test and nothing to redo */
     p->rise_check = m->policy.rise_check && p->opt.energy_check;
@@ -900,7 +899,6 @@ cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info)
         cfi_error(ctx, CF_ERR_NUMERICAL, "area or volume is not finite");
         return fail_step(flow, CF_ERR_NUMERICAL, iteration, start_step);
     }
-    pol->halvings = halvings;
     if (pol->backtrack) {
         /* in the log: the first free residual slot */
         for (int r = 0; r < CF_FLOW_MAX_RESIDUALS; ++r) {

@@ -92,7 +92,6 @@ typedef struct cfi_step_policy_state {
     double tolerance;       /* convergence tolerance (desc.convergence), 0: never */
     int32_t rise_check;     /* this flow's: desc.rise_check and energy_check (cfi_flow_policy_restrict) */
     int32_t backtrack;      /* this flow's: desc.backtrack, backtrack and energy_check (ditto) */
-    int32_t halvings;       /* of the last accepted step */
 } cfi_step_policy_state;
 
 /* Upper end of the byte range of cf_flow_options.storage a method's options

@@ -41,7 +41,7 @@ static void bench_file(const char *path, int steps, int complex_form)
     ((cf_spin_willmore_options *)cf_flow_options_method(&o))->complex_factorization = complex_form;
     /* timing of ten steps: elephant_g3_3k diverges at the default tau (W
      * rises from step 2), which the default check would stop */
-    ((cf_spin_willmore_options *)cf_flow_options_method(&o))->divergence_factor = 0.0;
+    cf_flow_options_policy(&o)->divergence_factor = 0.0;
     cf_flow *flow = NULL;
     double t0 = 0.0;
     double asm_s = 0, fac_s = 0, sol_s = 0, tot_s = 0, w0 = 0, w = 0;

@@ -129,6 +129,15 @@ typedef struct cf_step_policy {
     double rise_tolerance;      /* relative rise of the energy in a step taken as rounding, [0, 1] [1e-9] */
     double divergence_tolerance; /* relative slack of divergence tests against the start, [0, 1] [1e-4] */
     double energy_floor;        /* absolute slack of every energy test, in the method's unit, [0, 1] [1e-12] */
+    double blowup_factor;       /* an accepted step whose energy exceeds this factor times the energy
+                                 * before it (and the floor) fails (CF_ERR_NUMERICAL, the last good
+                                 * state kept); 0 (off) or > 1. Default per method (docs/flowcli.md):
+                                 * 10 for spin-willmore and the explicit flows, 0 for the implicit
+                                 * ones; no effect on a method that opts out (stretch-bend-edit) */
+    double divergence_factor;   /* an accepted step that leaves the energy above this factor times the
+                                 * starting energy (with divergence_tolerance and the floor) fails;
+                                 * 0 (off) or >= 1. Default per method: 1 for spin-willmore (not with
+                                 * prescribed / cmc boundaries), 0 for the baselines */
 } cf_step_policy;
 
 /* The common step policy inside `options` (NULL for NULL). */

@@ -82,13 +82,9 @@ typedef struct cf_spin_willmore_options {
                                 * scale invariant). Default 1 */
     double tolerance;          /* converged when the relative energy decrease of a step is
                                 * below this. Default 1e-6 */
-    double blowup_factor;      /* a step whose energy exceeds this factor times the energy before
-                                * it is a numerical failure (CF_ERR_NUMERICAL, the last good state
-                                * is kept). Default 10; 0 disables the check */
-    double divergence_factor;  /* a step that leaves W above this factor times the starting W is a
-                                * numerical failure (the last good state is kept). Prescribed and
-                                * cmc boundaries are exempt (they may raise W by design). Default 1;
-                                * 0 disables the check (docs/spin.md, "Option notes") */
+    /* blowup_factor and divergence_factor are the common step policy's
+     * (cf_step_policy in curvflow/flow.h; spin's defaults 10 and 1, the
+     * divergence check not with prescribed / cmc boundaries) */
     int32_t complex_factorization; /* factorise the quaternionic matrices as their complex
                                 * Hermitian form of half the size (same result to rounding); 0 uses
                                 * the real 4 nv x 4 nv form. Prescribed/cmc boundaries always use

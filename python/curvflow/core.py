@@ -201,7 +201,8 @@ def method_params(method):
     `curvflow flow --method NAME --list-params`): {name: dict}, the method's
     own first, then the step policy common to every method (energy_check,
     backtrack, max_halvings, step_growth, rise_tolerance,
-    divergence_tolerance, energy_floor; docs/flowcli.md). Each dict: type,
+    divergence_tolerance, energy_floor, blowup_factor, divergence_factor,
+    whose defaults depend on the method; docs/flowcli.md). Each dict: type,
     default (text, as the CLI prints it), help, group ("method" or
     "step-policy"), accepts (the accepted values as the CLI prints them,
     e.g. "[0, 60]" or "true|false"), and range (min, max) for numbers or

@@ -18,7 +18,13 @@ COMMON = {  # name: (type, default text, accepted values as printed)
     "rise_tolerance": ("double", "1e-09", "[0, 1]"),
     "divergence_tolerance": ("double", "0.0001", "[0, 1]"),
     "energy_floor": ("double", "1e-12", "[0, 1000000]"),
+    "blowup_factor": ("double", None, "[0, 1000000000000]"),
+    "divergence_factor": ("double", None, "[0, 1000000000000]"),
 }
+# the defaults that depend on the method (its step policy descriptor):
+# (blowup_factor, divergence_factor); stretch-bend-edit opts out of both
+PER_METHOD = {"spin-willmore": ("10", "1"), "explicit-mcf": ("10", "0"), "explicit-bilaplacian": ("10", "0")}
+OTHERS = ("0", "0")  # implicit flows: off unless set; stretch-bend-edit: no checks
 
 
 def _cli_params(cli, method):
@@ -36,7 +42,9 @@ def _cli_params(cli, method):
 def test_common_params_match_cli(cli, method):
     params = curvflow.method_params(method)
     listed = _cli_params(cli, method)
+    checks = dict(zip(("blowup_factor", "divergence_factor"), PER_METHOD.get(method, OTHERS)))
     for name, (kind, default, accepts) in COMMON.items():
+        default = checks.get(name, default)
         p = params[name]
         assert p["group"] == "step-policy"
         assert (p["type"], p["default"], p["accepts"]) == (kind, default, accepts)

@@ -69,7 +69,7 @@ cf_status cf_flow_options_default(cf_flow_kind kind, cf_flow_options *options)
     memset(options, 0, sizeof *options);
     options->kind = kind;
     if (m->options_default) m->options_default(options->storage.bytes);
-    cfi_step_policy_default(cf_flow_options_policy(options));
+    cfi_step_policy_default_for(cf_flow_options_policy(options), &m->policy);
     return CF_OK;
 }
 
@@ -532,7 +532,7 @@ static cf_status policy_init(cf_flow *flow, const cfi_flow_method *m)
     const cf_step_policy *given = cf_flow_options_policy_const(&flow->options);
     static const cf_step_policy zero;
     if (memcmp(given, &zero, sizeof zero) == 0)
-        cfi_step_policy_default(&p->opt);
+        cfi_step_policy_default_for(&p->opt, &m->policy);
     else
         p->opt = *given;
     cf_status st = cfi_step_policy_validate(flow->ctx, &p->opt);
@@ -543,6 +543,9 @@ static cf_status policy_init(cf_flow *flow, const cfi_flow_method *m)
      * rise test and nothing to redo */
     p->rise_check = m->policy.rise_check && p->opt.energy_check;
     p->backtrack = m->policy.backtrack && p->opt.backtrack && p->opt.energy_check;
+    /* a method that opts out of a check ignores its option */
+    p->blowup_factor = m->policy.blowup_check ? p->opt.blowup_factor : 0.0;
+    p->divergence_factor = m->policy.divergence_check ? p->opt.divergence_factor : 0.0;
     switch (m->policy.unit) {
     case CFI_ENERGY_UNIT_4PI: p->unit = 4.0 * 3.14159265358979323846; break;
     case CFI_ENERGY_UNIT_INITIAL_AREA: p->unit = flow->initial_area > 0.0 ? flow->initial_area : 1.0; break;
@@ -572,6 +575,12 @@ void cfi_flow_policy_restrict(cf_flow *flow, int keep_rise_check, int keep_backt
 {
     flow->policy.rise_check = flow->policy.rise_check && keep_rise_check;
     flow->policy.backtrack = flow->policy.backtrack && keep_backtrack;
+}
+
+void cfi_flow_policy_restrict_checks(cf_flow *flow, int keep_blowup, int keep_divergence)
+{
+    if (!keep_blowup) flow->policy.blowup_factor = 0.0;
+    if (!keep_divergence) flow->policy.divergence_factor = 0.0;
 }
 
 void cf_flow_destroy(cf_flow **pflow)
@@ -652,6 +661,7 @@ cf_status cf_flow_create(cf_context *ctx, const cf_mesh *mesh, const double *pos
         cf_flow_destroy(&flow);
         return cfi_error(ctx, CF_ERR_NUMERICAL, "%s: initial energy is not finite", m->name);
     }
+    flow->policy.initial_energy = flow->info.energy;
     *out = flow;
     return CF_OK;
 }
@@ -766,6 +776,39 @@ static cf_status back_to_start(cf_flow *flow)
     return m->reset ? m->reset(flow) : CF_OK;
 }
 
+/* The policy's checks of an accepted step (also of a stall, at the state
+ * before it): a blow-up (energy above blowup_factor times the energy
+ * before the step) and a divergence (above divergence_factor times the
+ * starting energy) are numerical failures, whatever the rise check said:
+ * a method that allows single rising steps (spin-willmore without
+ * `adaptive`, an explicit flow with energy_check=false) fails cleanly
+ * instead of going on from an exploded state. CF_OK or CF_ERR_NUMERICAL
+ * with the message (the caller restores the state). */
+static cf_status check_energy_jumps(cf_flow *flow, double before, const cf_flow_info *step)
+{
+    const cfi_flow_method *m = flow->method;
+    const cfi_step_policy_state *pol = &flow->policy;
+    if (cfi_step_policy_blew_up(pol, before, step->energy, pol->blowup_factor))
+        return cfi_error(flow->ctx, CF_ERR_NUMERICAL,
+                         "%s: energy grew from %.6g to %.6g in one step (more than %gx): the step blew up; try a "
+                         "smaller time_step",
+                         m->name, before, step->energy, pol->blowup_factor);
+    if (cfi_step_policy_diverged(pol, step->energy, pol->initial_energy, pol->divergence_factor)) {
+        /* shown in the unit of the floor when it is 4pi (W/4pi: 1 for a round sphere) */
+        int per_4pi = m->policy.unit == CFI_ENERGY_UNIT_4PI;
+        double shown = per_4pi ? pol->unit : 1.0;
+        const char *hint = m->policy.divergence_hint;
+        return cfi_error(flow->ctx, CF_ERR_NUMERICAL,
+                         "%s: %s%s rose to %.6g, above %g times its starting value %.6g: the flow diverges "
+                         "(time_step %g%s); try a smaller time_step%s%s",
+                         m->name, m->policy.energy_name ? m->policy.energy_name : "the energy", per_4pi ? "/4pi" : "",
+                         step->energy / shown, pol->divergence_factor, pol->initial_energy / shown, step->time_step,
+                         m->policy.divergence_cause ? m->policy.divergence_cause : "", hint ? ", " : "",
+                         hint ? hint : "");
+    }
+    return CF_OK;
+}
+
 /* One step under the shared safety net and step policy. The method's
  * begin_step (if any), then attempts (its attempt, or its whole step) at
  * the policy's current step. An attempt is rejected when the method says
@@ -779,9 +822,10 @@ static cf_status back_to_start(cf_flow *flow)
  * up to the limit max_halvings sets; at the limit a failure fails and a
  * rise or the method's rejection is a stall: the run stops as converged at
  * the state before the step. Without backtracking a rise fails (or, with
- * rise_stops, stops the run). After an accepted step without retries a
- * reduced step grows back by step_growth; the convergence tolerance is
- * tested. */
+ * rise_stops, stops the run). The accepted step (after the method's
+ * end_step) then passes the blow-up and divergence checks or fails
+ * (check_energy_jumps). After an accepted step without retries a reduced
+ * step grows back by step_growth; the convergence tolerance is tested. */
 cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info)
 {
     if (!flow) return CF_ERR_INVALID_ARG;
@@ -888,6 +932,7 @@ cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info)
         st = m->end_step(flow, &step);
         if (st != CF_OK) return fail_method(flow, st, iteration, start_step);
     }
+    if (check_energy_jumps(flow, before, &step) != CF_OK) return fail_step(flow, CF_ERR_NUMERICAL, iteration, start_step);
     if (stalled) {
         /* an accepted step of time step 0 at the state before it */
         step.time_step = 0.0;
@@ -966,6 +1011,7 @@ cf_status cf_flow_set_positions(cf_flow *flow, const double *positions)
     }
     flow->converged = 0;
     flow->policy.step = flow->policy.full_step; /* a new state: the step policy starts from time_step again */
+    flow->policy.initial_energy = flow->info.energy; /* and the divergence check from its energy */
     return CF_OK;
 }
 

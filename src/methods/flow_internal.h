@@ -107,6 +107,12 @@ void cfi_flow_set_time_step(cf_flow *flow, double full_step);
  * spin-willmore without `adaptive`, or with boundaries that may raise W. */
 void cfi_flow_policy_restrict(cf_flow *flow, int keep_rise_check, int keep_backtrack);
 
+/* Called by a method's create to turn the blow-up or divergence check off
+ * for this flow (1 keeps what the options and the descriptor give, 0 turns
+ * it off), e.g. spin-willmore's divergence check with prescribed or cmc
+ * boundaries, which may raise W by design. */
+void cfi_flow_policy_restrict_checks(cf_flow *flow, int keep_blowup, int keep_divergence);
+
 /* The registry entry of a kind, NULL if out of range. */
 const cfi_flow_method *cfi_flow_method_of(cf_flow_kind kind);
 

@@ -29,6 +29,15 @@ void cfi_step_policy_default(cf_step_policy *p)
      * (elephant_g3_3k: +8 % at step 2), but 1e-9 called it one (issue 15 M1) */
     p->divergence_tolerance = 1e-4;
     p->energy_floor = 1e-12;
+    /* blowup_factor, divergence_factor: 0 (off) unless the method's
+     * descriptor gives a default (cfi_step_policy_default_for) */
+}
+
+void cfi_step_policy_default_for(cf_step_policy *p, const cfi_step_policy_desc *desc)
+{
+    cfi_step_policy_default(p);
+    if (desc->blowup_check) p->blowup_factor = desc->blowup_default;
+    if (desc->divergence_check) p->divergence_factor = desc->divergence_default;
 }
 
 #define POL(f) (CFI_STEP_POLICY_OFFSET + offsetof(cf_step_policy, f))
@@ -47,11 +56,16 @@ static const cf_param_desc policy_params[] = {
     {"rise_tolerance", CF_PARAM_DOUBLE, POL(rise_tolerance), 0.0, 1.0, NULL,
      "step policy: rise of the energy in one step, relative to it, taken as rounding"},
     {"divergence_tolerance", CF_PARAM_DOUBLE, POL(divergence_tolerance), 0.0, 1.0, NULL,
-     "step policy: relative slack of the divergence test against the starting energy (spin-willmore's "
-     "divergence_factor)"},
+     "step policy: relative slack of the divergence test (divergence_factor) against the starting energy"},
     {"energy_floor", CF_PARAM_DOUBLE, POL(energy_floor), 0.0, 1e6, NULL,
      "step policy: absolute slack of every energy test, in the method's unit (area of the start for area flows, "
      "4pi for W, 1 for the bi-Laplacian energy)"},
+    {"blowup_factor", CF_PARAM_DOUBLE, POL(blowup_factor), 0.0, 1e12, NULL,
+     "step policy: fail a step whose energy grows more than this factor (0: never; else > 1; spin-willmore and "
+     "explicit flows 10, implicit flows 0; stretch-bend-edit: no check)"},
+    {"divergence_factor", CF_PARAM_DOUBLE, POL(divergence_factor), 0.0, 1e12, NULL,
+     "step policy: fail a step that leaves the energy above this factor times the starting energy (0: never; "
+     "else >= 1; spin-willmore 1, not for boundary=prescribed/cmc; baselines 0; stretch-bend-edit: no check)"},
 };
 #undef POL
 #define POLICY_PARAM_COUNT ((int32_t)(sizeof policy_params / sizeof policy_params[0]))
@@ -105,6 +119,15 @@ cf_status cfi_step_policy_validate(cf_context *ctx, const cf_step_policy *p)
             return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter '%s': %g is outside [%g, %g]", d->name, v,
                              d->min_value, d->max_value);
     }
+    /* what a range cannot say: a factor of 1 or less would fail every
+     * step that does not lower the energy (blow-up), below 1 every run
+     * that starts near its minimum (divergence) */
+    if (!(p->blowup_factor == 0.0 || p->blowup_factor > 1.0))
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter 'blowup_factor': must be 0 (off) or > 1, got %g",
+                         p->blowup_factor);
+    if (!(p->divergence_factor == 0.0 || p->divergence_factor >= 1.0))
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter 'divergence_factor': must be 0 (off) or >= 1, got %g",
+                         p->divergence_factor);
     return CF_OK;
 }
 
@@ -128,4 +151,10 @@ int cfi_step_policy_diverged(const cfi_step_policy_state *p, double energy, doub
 int cfi_step_policy_converged(double before, double after, double tolerance)
 {
     return tolerance > 0.0 && ((before > 0.0 && fabs(before - after) < tolerance * before) || after == 0.0);
+}
+
+int cfi_step_policy_blew_up(const cfi_step_policy_state *p, double before, double after, double factor)
+{
+    if (!(factor > 0.0) || !(before > 0.0)) return 0;
+    return cfi_step_policy_exceeds(after, factor * before, 0.0, p->opt.energy_floor * p->unit);
 }

@@ -71,7 +71,28 @@ typedef struct cfi_step_policy_desc {
      * decrease for any time step down to ..."): spin-willmore. 0: the
      * iteration does not advance and a WARNING says why the run stops. */
     int32_t stall_as_step;
-    const char *energy_name; /* in the stall notice (NULL: "the energy") */
+    const char *energy_name; /* in the stall and divergence messages (NULL: "the energy") */
+    /* 1: the blow-up check applies (the common option blowup_factor): an
+     * accepted step whose energy exceeds blowup_factor times the energy
+     * before it, plus the floor, is a numerical failure; blowup_default is
+     * the option's default for this method (0: off unless set). 0 opts
+     * out: the option has no effect (a method without a time step whose
+     * rise already ends the run: stretch-bend-edit). */
+    int32_t blowup_check;
+    double blowup_default;
+    /* 1: the divergence check applies (divergence_factor): an accepted
+     * step that leaves the energy above divergence_factor times the
+     * starting energy (of create or cf_flow_set_positions), with
+     * divergence_tolerance and the floor, is a numerical failure;
+     * divergence_default as above. */
+    int32_t divergence_check;
+    double divergence_default;
+    /* What the divergence message "... the flow diverges (time_step T<cause>);
+     * try a smaller time_step<, hint>" says (NULL: nothing), e.g. cause " is
+     * above this mesh's stability limit" (an explicit step), hint
+     * "adaptive=1 or a larger regularization (docs/spin.md)". */
+    const char *divergence_cause;
+    const char *divergence_hint;
 } cfi_step_policy_desc;
 
 /* How an attempt (cfi_flow_method.attempt) judges its own result, besides
@@ -92,14 +113,25 @@ typedef struct cfi_step_policy_state {
     double tolerance;       /* convergence tolerance (desc.convergence), 0: never */
     int32_t rise_check;     /* this flow's: desc.rise_check and energy_check (cfi_flow_policy_restrict) */
     int32_t backtrack;      /* this flow's: desc.backtrack, backtrack and energy_check (ditto) */
+    double blowup_factor;   /* this flow's: opt.blowup_factor if desc.blowup_check, else 0 (off) */
+    double divergence_factor; /* this flow's: opt.divergence_factor if desc.divergence_check (and
+                               * cfi_flow_policy_restrict_checks), else 0 (off) */
+    double initial_energy;  /* energy at create / cf_flow_set_positions (divergence check) */
 } cfi_step_policy_state;
 
 /* Upper end of the byte range of cf_flow_options.storage a method's options
  * may use; the common options follow it. */
 #define CFI_STEP_POLICY_OFFSET (CF_FLOW_OPTIONS_STORAGE - CF_STEP_POLICY_STORAGE)
 
-/* Defaults of the common options. */
+/* Defaults of the common options; blowup_factor and divergence_factor 0
+ * (off), which a method's descriptor overrides through
+ * cfi_step_policy_default_for. */
 void cfi_step_policy_default(cf_step_policy *policy);
+
+/* Defaults of the common options for a method: cfi_step_policy_default
+ * with the descriptor's blowup_default / divergence_default (only where
+ * the check applies; else 0). */
+void cfi_step_policy_default_for(cf_step_policy *policy, const cfi_step_policy_desc *desc);
 
 /* The parameter table of the common options (offsets into
  * cf_flow_options.storage, like a method's table, so that the same set /
@@ -121,10 +153,14 @@ int cfi_step_policy_exceeds(double after, double before, double rel, double floo
 int cfi_step_policy_rose(const cfi_step_policy_state *p, double before, double after);
 
 /* 1 when `energy` is above factor times the starting energy by more than
- * divergence_tolerance and the floor: the divergence test of methods that
- * allow single rising steps (spin-willmore's divergence_factor). factor 0:
- * never. */
+ * divergence_tolerance and the floor: the divergence test (the flow's
+ * divergence_factor; cf_flow_step). factor 0: never. */
 int cfi_step_policy_diverged(const cfi_step_policy_state *p, double energy, double initial, double factor);
+
+/* 1 when a step from energy `before` > 0 to `after` is a blow-up: after >
+ * factor before + the floor (the flow's blowup_factor; no relative slack,
+ * the factor is one). factor 0 or before <= 0: never; NaN after: always. */
+int cfi_step_policy_blew_up(const cfi_step_policy_state *p, double before, double after, double factor);
 
 /* 1 when a step from `before` to `after` changed the energy by less than
  * the tolerance (relative to before > 0), or reached energy 0: the run has

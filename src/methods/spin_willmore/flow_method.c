@@ -205,6 +205,8 @@ cf_status cfi_spin_create(cf_flow *flow, const void *options)
     s->fixed_boundary = o->boundary_mode == CF_SPIN_BOUNDARY_FIXED;
     s->restricted_boundary = o->boundary_mode == CF_SPIN_BOUNDARY_PRESCRIBED || o->boundary_mode == CF_SPIN_BOUNDARY_CMC;
     cfi_flow_policy_restrict(flow, cfi_flow_backtracks(flow) && !s->restricted_boundary, 1);
+    /* the layer's divergence check neither (W may end above its start) */
+    cfi_flow_policy_restrict_checks(flow, 1, !s->restricted_boundary);
 
     int32_t dim = 0;
     st = cfi_spin_exactness_dimension(flow, o, &dim);
@@ -243,7 +245,6 @@ cf_status cfi_spin_create(cf_flow *flow, const void *options)
     if (st != CF_OK) goto fail;
 
     flow->info.energy = s->energy;
-    s->initial_energy = s->energy;
     flow->info.energy_terms[0] = s->energy / (4.0 * CFI_PI);
     flow->info.term_names[0] = "W/4pi";
     return CF_OK;
@@ -436,8 +437,7 @@ cf_status cfi_spin_revert(cf_flow *flow)
 cf_status cfi_spin_end_step(cf_flow *flow, cf_flow_info *info)
 {
     cfi_spin_state *s = flow->impl;
-    cf_status st = cfi_spin_check_energy(flow, s, s->energy_before, info->time_step);
-    if (st != CF_OK) return st;
+    /* the blow-up and divergence checks follow in the flow layer (its step policy) */
     info->energy = s->energy;
     info->energy_terms[0] = s->energy / (4.0 * CFI_PI);
     info->term_names[0] = "W/4pi";
@@ -460,7 +460,6 @@ cf_status cfi_spin_reset(cf_flow *flow)
     if (!s) return CF_OK;
     flow->converged = 0;
     cf_status st = cfi_spin_update_geometry(flow, s, flow->positions);
-    s->initial_energy = s->energy; /* new positions: a new start for the divergence check */
     /* the flow layer compares the next step's W with this one */
     flow->info.energy = s->energy;
     flow->info.energy_terms[0] = s->energy / (4.0 * CFI_PI);

@@ -29,8 +29,6 @@ void cf_spin_willmore_options_default(cf_spin_willmore_options *o)
     o->power_iterations = 1;
     o->normalize = 1;
     o->tolerance = 1e-6;
-    o->blowup_factor = 10.0;
-    o->divergence_factor = 1.0;
     o->complex_factorization = 1;
     o->harmonic_update = 1;
     o->exactness_linearized = 1;
@@ -71,10 +69,6 @@ static const cf_param_desc spin_params[] = {
     {"power_iterations", CF_PARAM_INT, OPT(power_iterations), 1, 100, NULL, "inverse power iterations per step"},
     {"normalize", CF_PARAM_BOOL, OPT(normalize), 0, 1, NULL, "keep total area and centroid"},
     {"tolerance", CF_PARAM_DOUBLE, OPT(tolerance), 0.0, 1.0, NULL, "converged below this relative energy decrease"},
-    {"blowup_factor", CF_PARAM_DOUBLE, OPT(blowup_factor), 0.0, 1e12, NULL,
-     "fail a step whose energy grows more than this factor (0: never)"},
-    {"divergence_factor", CF_PARAM_DOUBLE, OPT(divergence_factor), 0.0, 1e12, NULL,
-     "fail a step that leaves W above this factor times the starting W (0: never; not for prescribed/cmc)"},
     {"complex_factorization", CF_PARAM_BOOL, OPT(complex_factorization), 0, 1, NULL,
      "factorise X as its complex Hermitian form of half the size (0: real 4n x 4n form)"},
     {"input_metric", CF_PARAM_BOOL, OPT(input_metric), 0, 1, NULL,
@@ -102,12 +96,6 @@ cf_status cfi_spin_validate_options(cf_context *ctx, const cf_mesh *mesh, const 
      * regularization, power_iterations, boundary, mobius_weight, the count of
      * boundary_targets) was checked by cf_flow_create; what follows are the
      * rules a range cannot express. */
-    if (!(o->blowup_factor == 0.0 || o->blowup_factor > 1.0) || !isfinite(o->blowup_factor))
-        return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: blowup_factor must be 0 (off) or > 1, got %g",
-                         o->blowup_factor);
-    if (!(o->divergence_factor == 0.0 || o->divergence_factor >= 1.0) || !isfinite(o->divergence_factor))
-        return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: divergence_factor must be 0 (off) or >= 1, got %g",
-                         o->divergence_factor);
     if (!(o->regularization > 0.0) || !isfinite(o->regularization))
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: regularization must be > 0, got %g", o->regularization);
     double axis_len = sqrt(o->boundary_axis[0] * o->boundary_axis[0] + o->boundary_axis[1] * o->boundary_axis[1] +
@@ -152,8 +140,18 @@ const cfi_flow_method cfi_spin_willmore_method = {
      * rhodot (begin_step) with a smaller tau while W would rise at all or
      * the attempt rejects its scale change, max_halvings times per step,
      * and a stall is a step of time step 0 that ends the run. Prescribed
-     * and cmc boundaries may raise W by design: no rise check (create).
-     * Convergence, blow-up and divergence are the method's (end_step). */
+     * and cmc boundaries may raise W by design: no rise check and no
+     * divergence check (create). An explicit step on rho can overshoot
+     * where the realised curvature change is far from the prescribed one
+     * (thin cone tips, slivers; docs/spin.md): the blow-up check (default
+     * 10) fails a step whose W jumps, so that the last good state is kept.
+     * A descent that creeps above its start has diverged even without a
+     * jump (elephant_g3_3k at tau 0.5: W/4pi 24.99 -> 12.46 -> 26.9 ->
+     * 102): the divergence check (default 1). Convergence is the method's
+     * (end_step; step_policy.c says why). */
     .policy = {.rise_check = 1, .backtrack = 1, .unit = CFI_ENERGY_UNIT_4PI, .rise_exact = 1,
-               .halvings_per_step = 1, .stall_as_step = 1, .energy_name = "W"},
+               .halvings_per_step = 1, .stall_as_step = 1, .energy_name = "W", .blowup_check = 1,
+               .blowup_default = 10.0, .divergence_check = 1, .divergence_default = 1.0,
+               .divergence_cause = " is above this mesh's stability limit",
+               .divergence_hint = "adaptive=1 or a larger regularization (docs/spin.md)"},
 };

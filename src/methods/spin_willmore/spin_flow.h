@@ -62,7 +62,6 @@ typedef struct cfi_spin_state {
     double *vtmp, *vtmp2;    /* nv */
     double energy;
     double energy_before;    /* W at the start of the current step */
-    double initial_energy;   /* W of the starting surface (divergence check) */
     cfi_spin_diagnostics diag;
 } cfi_spin_state;
 
@@ -127,8 +126,6 @@ cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, in
 /* ---- step_policy.c ---- */
 /* Largest change of the log conformal scale across an edge, |log(|l_i|^2 / |l_j|^2)|. */
 double cfi_spin_max_scale_change(const cf_mesh *mesh, const double *lambda);
-/* Blow-up and divergence checks of an accepted step (CF_ERR_NUMERICAL with a message). */
-cf_status cfi_spin_check_energy(cf_flow *flow, const cfi_spin_state *s, double energy_before, double tau);
 /* Relative energy decrease below tolerance (a stall also converges: the flow layer). */
 int32_t cfi_spin_converged(const cfi_spin_state *s, double energy_before);
 

@@ -49,7 +49,7 @@ static cf_flow *make_flow_regularized(cf_context *ctx, const cf_mesh *mesh, doub
     so->tolerance = 0.0;
     /* Fig. 18 observes the oscillation above the threshold, which takes W
      * above its start: the divergence check (default on) would stop it */
-    so->divergence_factor = 0.0;
+    cf_flow_options_policy(&o)->divergence_factor = 0.0;
     if (regularization > 0.0) so->regularization = regularization;
     so->boundary_mode = boundary_mode;
     cf_flow *flow = NULL;

@@ -87,7 +87,7 @@ static void test_options(void)
     const cf_param_desc *params = NULL;
     int32_t count = 0;
     CHECK_OK(ctx, cf_flow_common_params(&params, &count));
-    CHECK(count == 7);
+    CHECK(count == 9);
     CHECK_STATUS(cf_flow_common_params(NULL, &count), CF_ERR_INVALID_ARG);
     for (int k = 0; k < CF_FLOW_KIND_COUNT; ++k) {
         cf_flow_options o;
@@ -96,6 +96,10 @@ static void test_options(void)
         CHECK(p->energy_check == 1 && p->backtrack == 1 && p->max_halvings == 10);
         CHECK(p->step_growth == 2.0 && p->rise_tolerance == 1e-9 && p->divergence_tolerance == 1e-4);
         CHECK(p->energy_floor == 1e-12);
+        /* the blow-up and divergence defaults are the method's (its descriptor) */
+        int explicit_flow = k == CF_FLOW_EXPLICIT_MCF || k == CF_FLOW_EXPLICIT_BILAPLACIAN;
+        CHECK(p->blowup_factor == (k == CF_FLOW_SPIN_WILLMORE || explicit_flow ? 10.0 : 0.0));
+        CHECK(p->divergence_factor == (k == CF_FLOW_SPIN_WILLMORE ? 1.0 : 0.0));
         /* a method's own parameters do not reach into the policy's bytes */
         CHECK(cfi_flow_method_of((cf_flow_kind)k)->options_size <= CFI_STEP_POLICY_OFFSET);
         for (int32_t i = 0; i < count; ++i) {
@@ -129,10 +133,38 @@ static void test_options(void)
     CHECK_STATUS(cf_flow_create(ctx, mesh, NULL, &o, &flow), CF_ERR_INVALID_ARG);
     CHECK(flow == NULL);
     CHECK(strstr(cf_context_message(ctx), "'step_growth'") != NULL);
+    /* the rules a range cannot say, for a field and by name alike */
+    static const struct {
+        const char *name, *value, *message;
+    } bad[] = {
+        {"blowup_factor", "1", "parameter 'blowup_factor': must be 0 (off) or > 1, got 1"},
+        {"blowup_factor", "0.5", "parameter 'blowup_factor': must be 0 (off) or > 1, got 0.5"},
+        {"divergence_factor", "0.99", "parameter 'divergence_factor': must be 0 (off) or >= 1, got 0.99"},
+        {"divergence_factor", "1e13", "'divergence_factor'"},
+    };
+    for (size_t b = 0; b < sizeof bad / sizeof bad[0]; ++b) {
+        CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_IMPLICIT_MCF, &o));
+        cf_status set = cf_flow_options_set(ctx, &o, bad[b].name, bad[b].value);
+        if (set == CF_OK) CHECK_STATUS(cf_flow_create(ctx, mesh, NULL, &o, &flow), CF_ERR_INVALID_ARG);
+        else CHECK_STATUS(set, CF_ERR_INVALID_ARG);
+        CHECK(flow == NULL);
+        CHECK(strstr(cf_context_message(ctx), bad[b].message) != NULL);
+    }
+    CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_IMPLICIT_MCF, &o));
+    cf_flow_options_policy(&o)->blowup_factor = 1.0;
+    CHECK_STATUS(cf_flow_create(ctx, mesh, NULL, &o, &flow), CF_ERR_INVALID_ARG);
+    CHECK(strstr(cf_context_message(ctx), "'blowup_factor': must be 0 (off) or > 1") != NULL);
+    CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_IMPLICIT_MCF, &o));
     /* a policy left all zero (options filled without cf_flow_options_default) means the defaults */
     memset(cf_flow_options_policy(&o), 0, sizeof(cf_step_policy));
     CHECK_OK(ctx, cf_flow_create(ctx, mesh, NULL, &o, &flow));
     if (flow) CHECK(flow->policy.opt.backtrack == 1 && flow->policy.opt.max_halvings == 10);
+    cf_flow_destroy(&flow);
+    /* ... the method's defaults, blow-up and divergence included */
+    CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o));
+    memset(cf_flow_options_policy(&o), 0, sizeof(cf_step_policy));
+    CHECK_OK(ctx, cf_flow_create(ctx, mesh, NULL, &o, &flow));
+    if (flow) CHECK(flow->policy.blowup_factor == 10.0 && flow->policy.divergence_factor == 1.0);
     cf_flow_destroy(&flow);
     cf_mesh_destroy(&mesh);
     CHECK(cf_context_bytes_in_use(ctx) == 0);
@@ -158,6 +190,9 @@ static void test_method_opt_outs(void)
         CHECK(d->rise_stops == (k == CF_FLOW_STRETCH_BEND_EDIT));
         CHECK(d->convergence == !spin);
         CHECK(d->rise_exact == spin && d->halvings_per_step == spin && d->stall_as_step == spin);
+        /* the edit's iteration has no time step and a rise already ends it: no blow-up or divergence check */
+        CHECK(d->blowup_check == (k != CF_FLOW_STRETCH_BEND_EDIT));
+        CHECK(d->divergence_check == (k != CF_FLOW_STRETCH_BEND_EDIT));
         /* a whole step, or the step in parts (spin-willmore) */
         CHECK((m->step != NULL) == !spin);
         CHECK((m->begin_step != NULL) == spin && (m->attempt != NULL) == spin && (m->end_step != NULL) == spin);
@@ -185,9 +220,12 @@ static void test_spin_policy_per_flow(void)
         const char *name, *value;
         int tube;
         int32_t rise_check, backtrack;
+        double divergence_factor;
     } cases[] = {
-        {"adaptive", "true", 0, 1, 1},     {"adaptive", "false", 0, 0, 0}, {"backtrack", "false", 0, 0, 0},
-        {"energy_check", "false", 0, 0, 0}, {"boundary", "cmc", 1, 0, 1},   {"boundary", "fixed", 1, 1, 1},
+        {"adaptive", "true", 0, 1, 1, 1.0},      {"adaptive", "false", 0, 0, 0, 1.0},
+        {"backtrack", "false", 0, 0, 0, 1.0},    {"energy_check", "false", 0, 0, 0, 1.0},
+        {"boundary", "cmc", 1, 0, 1, 0.0},       {"boundary", "fixed", 1, 1, 1, 1.0},
+        {"divergence_factor", "2", 0, 1, 1, 2.0}, {"blowup_factor", "0", 0, 1, 1, 1.0},
     };
     for (size_t c = 0; c < sizeof cases / sizeof cases[0]; ++c) {
         cf_flow_options o;
@@ -199,6 +237,9 @@ static void test_spin_policy_per_flow(void)
         CHECK(flow->policy.rise_check == cases[c].rise_check);
         CHECK(flow->policy.backtrack == cases[c].backtrack);
         CHECK(flow->policy.full_step == 0.5 && cfi_flow_time_step(flow) == 0.5); /* spin's default tau */
+        /* cmc (and prescribed) may raise W by design: no divergence check for that flow */
+        CHECK(flow->policy.divergence_factor == cases[c].divergence_factor);
+        CHECK(flow->policy.blowup_factor == (strcmp(cases[c].name, "blowup_factor") == 0 ? 0.0 : 10.0));
         cf_flow_destroy(&flow);
     }
     cf_mesh_destroy(&sphere);
@@ -678,6 +719,200 @@ static void test_not_posdef_backtracks(void)
     cf_context_destroy(&ctx);
 }
 
+/* Steps one flow until a step fails (at most `max`), keeping the state
+ * before each step; returns the failing iteration (0: none). */
+static int64_t step_until_failure(cf_flow *flow, int max, double *good, double *good_energy, cf_status *st)
+{
+    int32_t nv = cf_mesh_vertex_count(cf_flow_mesh(flow));
+    for (int i = 1; i <= max; ++i) {
+        memcpy(good, cf_flow_positions(flow), 3 * (size_t)nv * sizeof(double));
+        *good_energy = cf_flow_energy(flow);
+        *st = cf_flow_step(flow, NULL);
+        if (*st != CF_OK) return i;
+    }
+    return 0;
+}
+
+/* The blow-up check in the flow layer for a baseline: explicit-mcf with
+ * energy_check=false (no rise check) at time_step 20 on the bumpy sphere
+ * (curvflow generate bumpy-sphere) is above its stability limit, and its
+ * area jumps from 24.96 to 26 734 in step 3: that step fails with
+ * CF_ERR_NUMERICAL naming the iteration, the state after step 2 is kept
+ * bit for bit. blowup_factor=0 (the user's opt-out) lets the same step
+ * through. The implicit flows' default is 0 (energy_check=false is their
+ * raw steps). */
+static void test_blowup_baseline(void)
+{
+    cf_context *ctx = policy_context();
+    cf_mesh *mesh = NULL;
+    CHECK_OK(ctx, cf_generate_bumpy_sphere(ctx, 4, 0.25, 1u, &mesh));
+    if (!mesh) { cf_context_destroy(&ctx); return; }
+    int32_t nv = cf_mesh_vertex_count(mesh);
+    double *good = malloc(3 * (size_t)nv * sizeof(double));
+    double jump[2] = {0.0, 0.0};
+    for (int off = 0; off < 2; ++off) {
+        cf_flow_options o;
+        CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_EXPLICIT_MCF, &o));
+        CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "energy_check", "false"));
+        CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "time_step", "20"));
+        if (off) CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "blowup_factor", "0"));
+        cf_flow *flow = NULL;
+        CHECK_OK(ctx, cf_flow_create(ctx, mesh, NULL, &o, &flow));
+        if (!flow) continue;
+        double good_energy = 0.0;
+        cf_status st = CF_OK;
+        int64_t failed = step_until_failure(flow, 3, good, &good_energy, &st);
+        const char *msg = cf_context_message(ctx);
+        fprintf(stderr, "   blowup_factor %s: failed at %lld: %s\n", off ? "0" : "10", (long long)failed,
+                failed ? msg : "");
+        if (!off) {
+            CHECK(failed == 3);
+            CHECK_STATUS(st, CF_ERR_NUMERICAL);
+            CHECK(strstr(msg, "iteration 3: explicit-mcf: energy grew from 24.9613 to ") == msg);
+            CHECK(strstr(msg, "in one step (more than 10x): the step blew up; try a smaller time_step") != NULL);
+            CHECK(memcmp(good, cf_flow_positions(flow), 3 * (size_t)nv * sizeof(double)) == 0);
+            CHECK(cf_flow_energy(flow) == good_energy);
+            CHECK(cf_flow_last_info(flow)->iteration == 2);
+            jump[0] = good_energy;
+        } else {
+            CHECK(failed == 0);
+            CHECK(cf_flow_last_info(flow)->iteration == 3);
+            jump[1] = cf_flow_energy(flow) / good_energy;
+            CHECK(good_energy == jump[0]); /* the same state before step 3 */
+            CHECK(jump[1] > 10.0);         /* the step the check stopped */
+        }
+        cf_flow_destroy(&flow);
+    }
+    /* the implicit flows: available, off by default */
+    cf_flow_options o;
+    CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_IMPLICIT_MCF, &o));
+    CHECK(cf_flow_options_policy(&o)->blowup_factor == 0.0);
+    free(good);
+    cf_mesh_destroy(&mesh);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+/* The divergence check in the flow layer for a baseline: the bumpy plane's
+ * raw implicit bi-Laplacian steps (energy_check=false, cli.cli_policy S3)
+ * go 130.83 -> 588.21 -> 13 551.6. divergence_factor 1 fails step 1
+ * (state and iteration 0 kept); 30 fails step 2 (above 30 x 130.83); after
+ * cf_flow_set_positions the start is the new state (30 x 588.21 is not
+ * exceeded), and at the default (0) both steps pass. */
+static void test_divergence_baseline(void)
+{
+    cf_context *ctx = policy_context();
+    cf_mesh *mesh = NULL;
+    CHECK_OK(ctx, cf_generate_bumpy_plane(ctx, 32, 1.0, 0.1, 1u, &mesh));
+    if (!mesh) { cf_context_destroy(&ctx); return; }
+    int32_t nv = cf_mesh_vertex_count(mesh);
+    double *good = malloc(3 * (size_t)nv * sizeof(double));
+    static const struct {
+        const char *factor;
+        int restart;
+        int64_t fails_at;
+    } cases[] = {{"1", 0, 1}, {"30", 0, 2}, {"30", 1, 0}, {"0", 0, 0}};
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; ++c) {
+        cf_flow_options o;
+        CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_IMPLICIT_BILAPLACIAN, &o));
+        CHECK(cf_flow_options_policy(&o)->divergence_factor == 0.0);
+        CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "energy_check", "false"));
+        CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "divergence_factor", cases[c].factor));
+        cf_flow *flow = NULL;
+        CHECK_OK(ctx, cf_flow_create(ctx, mesh, NULL, &o, &flow));
+        if (!flow) continue;
+        double e0 = cf_flow_energy(flow), good_energy = 0.0;
+        cf_status st = CF_OK;
+        int64_t failed;
+        if (cases[c].restart) {
+            CHECK_OK(ctx, cf_flow_step(flow, NULL));
+            memcpy(good, cf_flow_positions(flow), 3 * (size_t)nv * sizeof(double));
+            CHECK_OK(ctx, cf_flow_set_positions(flow, good)); /* a new start: 588.21 */
+            failed = step_until_failure(flow, 1, good, &good_energy, &st);
+        } else {
+            failed = step_until_failure(flow, 2, good, &good_energy, &st);
+        }
+        const char *msg = cf_context_message(ctx);
+        fprintf(stderr, "   divergence_factor %s%s: E0 %.6g, failed at %lld: %s\n", cases[c].factor,
+                cases[c].restart ? " (restarted)" : "", e0, (long long)failed, failed ? msg : "");
+        CHECK(failed == cases[c].fails_at);
+        if (failed) {
+            char expect[256];
+            snprintf(expect, sizeof expect,
+                     "iteration %lld: implicit-bilaplacian: the energy rose to %s, above %s times its starting value "
+                     "130.83: the flow diverges (time_step ",
+                     (long long)failed, failed == 1 ? "588.21" : "13551.6", cases[c].factor);
+            CHECK(strstr(msg, expect) == msg);
+            CHECK(strstr(msg, "); try a smaller time_step") != NULL);
+            CHECK_STATUS(st, CF_ERR_NUMERICAL);
+            CHECK(memcmp(good, cf_flow_positions(flow), 3 * (size_t)nv * sizeof(double)) == 0);
+            CHECK(cf_flow_energy(flow) == good_energy);
+            CHECK(cf_flow_last_info(flow)->iteration == failed - 1);
+        } else {
+            CHECK(cf_flow_energy(flow) > 30.0 * e0 || cases[c].restart);
+        }
+        cf_flow_destroy(&flow);
+    }
+    free(good);
+    cf_mesh_destroy(&mesh);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+/* spin-willmore's checks are the layer's, with its defaults and messages:
+ * the eight-armed star at tau 5 with the paper's fixed step (adaptive=0):
+ * W/4pi goes from 4.48 to 28.4 in step 1, more than 5x (blow-up with
+ * blowup_factor 5; the default 10 lets it through), above its start
+ * (divergence, default factor 1: W/4pi and spin's advice); with both 0
+ * the step is accepted. */
+static void test_spin_checks_in_layer(void)
+{
+    cf_context *ctx = policy_context();
+    cf_mesh *mesh = star(ctx);
+    if (!mesh) { cf_context_destroy(&ctx); return; }
+    int32_t nv = cf_mesh_vertex_count(mesh);
+    static const struct {
+        const char *blowup, *divergence, *message;
+    } cases[] = {
+        {"5", NULL, "iteration 1: spin-willmore: energy grew from 56.2555 to "},
+        {NULL, NULL, "iteration 1: spin-willmore: W/4pi rose to 28.4284, above 1 times its starting value 4.47667: "},
+        {"0", NULL, "iteration 1: spin-willmore: W/4pi rose to 28.4284, above 1 times its starting value 4.47667: "},
+        {"0", "0", NULL},
+    };
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; ++c) {
+        cf_flow_options o;
+        CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o));
+        CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "adaptive", "false"));
+        CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "time_step", "5"));
+        if (cases[c].blowup) CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "blowup_factor", cases[c].blowup));
+        if (cases[c].divergence) CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "divergence_factor", cases[c].divergence));
+        cf_flow *flow = NULL;
+        CHECK_OK(ctx, cf_flow_create(ctx, mesh, NULL, &o, &flow));
+        if (!flow) continue;
+        double w0 = cf_flow_energy(flow);
+        cf_status st = cf_flow_step(flow, NULL);
+        const char *msg = cf_context_message(ctx);
+        fprintf(stderr, "   spin blowup %s divergence %s: W %.6g -> %s\n", cases[c].blowup ? cases[c].blowup : "10",
+                cases[c].divergence ? cases[c].divergence : "1", w0, st == CF_OK ? "accepted" : msg);
+        if (cases[c].message) {
+            CHECK_STATUS(st, CF_ERR_NUMERICAL);
+            CHECK(strstr(msg, cases[c].message) == msg);
+            CHECK(strstr(msg, c == 0 ? "(more than 5x): the step blew up; try a smaller time_step"
+                                     : "the flow diverges (time_step 5 is above this mesh's stability limit); try a "
+                                       "smaller time_step, adaptive=1 or a larger regularization (docs/spin.md)") != NULL);
+            CHECK(memcmp(mesh->positions, cf_flow_positions(flow), 3 * (size_t)nv * sizeof(double)) == 0);
+            CHECK(cf_flow_energy(flow) == w0 && cf_flow_last_info(flow)->iteration == 0);
+        } else {
+            CHECK_OK(ctx, st);
+            CHECK(cf_flow_energy(flow) > 5.0 * w0);
+        }
+        cf_flow_destroy(&flow);
+    }
+    cf_mesh_destroy(&mesh);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 int main(void)
 {
     CFT_RUN(test_tolerance_and_floor);
@@ -692,5 +927,8 @@ int main(void)
     CFT_RUN(test_m1_flat_sheet);
     CFT_RUN(test_m1_spot_tiny_steps);
     CFT_RUN(test_spin_uses_policy);
+    CFT_RUN(test_blowup_baseline);
+    CFT_RUN(test_divergence_baseline);
+    CFT_RUN(test_spin_checks_in_layer);
     return cft_finish();
 }

@@ -79,3 +79,23 @@ def test_common_params_reach_the_flow(meshes):
     assert len(log) == 1
     with pytest.raises(curvflow.NumericalError, match="energy rose"):
         curvflow.flow(V, F, "implicit-bilaplacian", steps=1, time_step=1.0, backtrack=False)
+
+
+def test_blowup_and_divergence_reach_the_flow(meshes):
+    """The common blowup_factor / divergence_factor by name: explicit-mcf
+    without the rise check at time_step 20 on this bumpy sphere blows up in
+    step 2 (area 5.04 -> 2.6e5) under its default factor 10, and runs on
+    with blowup_factor=0; spin-willmore keeps the spelling of its former
+    options (divergence_factor=0 is accepted, 1.5 too, 0.5 refused by the
+    flow's creation)."""
+    V, F, _ = curvflow.load(meshes["bumpy"])
+    with pytest.raises(curvflow.NumericalError,
+                       match=r"iteration 2: explicit-mcf: energy grew from 5.03918 to .*blew up"):
+        curvflow.flow(V, F, "explicit-mcf", steps=2, time_step=20.0, energy_check=False)
+    _, log = curvflow.flow(V, F, "explicit-mcf", steps=2, time_step=20.0, energy_check=False, blowup_factor=0)
+    assert len(log) == 3 and log[2]["energy"] > 10 * log[1]["energy"]
+    curvflow.check_params("spin-willmore", divergence_factor=0, blowup_factor=5)
+    curvflow.check_params("spin-willmore", divergence_factor=1.5)
+    with pytest.raises(curvflow.UsageError,
+                       match=r"parameter 'divergence_factor': must be 0 \(off\) or >= 1, got 0.5"):
+        curvflow.flow(V, F, "spin-willmore", steps=1, divergence_factor=0.5)

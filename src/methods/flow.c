@@ -872,15 +872,22 @@ cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info)
         } else if (verdict.rejected) {
             reason = REJECT_METHOD;
         } else {
-            if (check_positions(ctx, flow->positions, nv, CF_ERR_NUMERICAL, "position") != CF_OK)
-                return fail_step(flow, CF_ERR_NUMERICAL, iteration, start_step);
-            if (check_faces(flow) != CF_OK) return fail_step(flow, CF_ERR_NUMERICAL, iteration, start_step);
-            if (!isfinite(step.energy)) {
-                cfi_error(ctx, CF_ERR_NUMERICAL, "energy is %s", isnan(step.energy) ? "NaN" : "infinite");
-                return fail_step(flow, CF_ERR_NUMERICAL, iteration, start_step);
+            /* a result that would not load again (non-finite, a face of zero
+             * area) is a failed attempt: with backtracking it is retried at
+             * a smaller step like a failed factorisation, else the step fails */
+            cf_status valid = check_positions(ctx, flow->positions, nv, CF_ERR_NUMERICAL, "position");
+            if (valid == CF_OK) valid = check_faces(flow);
+            if (valid == CF_OK && !isfinite(step.energy))
+                valid = cfi_error(ctx, CF_ERR_NUMERICAL, "energy is %s", isnan(step.energy) ? "NaN" : "infinite");
+            if (valid != CF_OK) {
+                if (!pol->backtrack) return fail_step(flow, CF_ERR_NUMERICAL, iteration, start_step);
+                st = CF_ERR_NUMERICAL;
+                reason = REJECT_FAILURE;
+            } else if (!pol->rise_check || !rose(flow, before, step.energy)) {
+                break;
+            } else {
+                reason = REJECT_RISE;
             }
-            if (!pol->rise_check || !rose(flow, before, step.energy)) break;
-            reason = REJECT_RISE;
         }
         if (!pol->backtrack) {
             if (CF_NEVER(reason != REJECT_RISE)) {

@@ -300,17 +300,12 @@ static cf_status refactor(cf_min_quad *s, const cf_sparse *a, const cf_sparse *a
     return CF_OK;
 }
 
-cf_status cf_min_quad_create(cf_context *ctx, const cf_sparse *a, int32_t known_count, const int32_t *known,
-                             const cf_sparse *aeq, const cf_min_quad_options *options, cf_min_quad **out)
+/* The arguments of cf_min_quad_create that need no allocation: options,
+ * counts, and what quaternion blocks require. */
+static cf_status check_create_arguments(cf_context *ctx, const cf_sparse *a, int32_t known_count, const int32_t *known,
+                                        const cf_sparse *aeq, const cf_min_quad_options *opt_in)
 {
-    if (!ctx) return CF_ERR_INVALID_ARG;
-    if (!out) return cfi_error(ctx, CF_ERR_INVALID_ARG, "min_quad create: output is NULL");
-    *out = NULL;
-    cf_status st = check_shapes(ctx, a, aeq, "min_quad create");
-    if (st != CF_OK) return st;
-    cf_min_quad_options opt;
-    cf_min_quad_options_default(&opt);
-    if (options) opt = *options;
+    const cf_min_quad_options opt = *opt_in;
     if (opt.max_rhs < 1 || opt.max_rhs > 4096)
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "min_quad create: max_rhs %d not in [1, 4096]", opt.max_rhs);
     if (opt.block_size < 1)
@@ -337,6 +332,78 @@ cf_status cf_min_quad_create(cf_context *ctx, const cf_sparse *a, int32_t known_
     if (m > 0 && known_count == n)
         return cfi_error(ctx, CF_ERR_INVALID_ARG,
                          "min_quad create: every variable is known, none is left for the %d equality constraints", m);
+    return CF_OK;
+}
+
+/* Splits the variables into free and known (known[k] = the caller's slot
+ * k), refusing indices out of range, repeats, partly known quaternion
+ * blocks and a block size that does not divide the free count. */
+static cf_status partition_variables(cf_min_quad *s, const int32_t *known)
+{
+    cf_context *ctx = s->ctx;
+    const cf_min_quad_options opt = s->opt;
+    int32_t n = s->n;
+    /* known variables: range, repeats; free_index temporarily holds the
+     * caller's slot + 1 of each known variable */
+    for (int32_t v = 0; v < n; ++v) s->free_index[v] = 0;
+    for (int32_t k = 0; k < s->nk; ++k) {
+        int32_t v = known[k];
+        if (v < 0 || v >= n) {
+            return cfi_error(ctx, CF_ERR_INVALID_ARG, "min_quad create: known[%d] = %d is outside [0, %d)", k, v, n);
+        }
+        if (s->free_index[v] != 0) {
+            return cfi_error(ctx, CF_ERR_INVALID_ARG, "min_quad create: variable %d is known twice (known[%d], known[%d])",
+                           v, s->free_index[v] - 1, k);
+        }
+        s->free_index[v] = k + 1;
+    }
+    {
+        int32_t nu = 0, nk = 0;
+        for (int32_t v = 0; v < n; ++v) {
+            if (s->free_index[v] == 0) {
+                s->free_var[nu] = v;
+                s->free_index[v] = nu++;
+            } else {
+                s->known_var[nk] = v;
+                s->known_slot[nk++] = s->free_index[v] - 1;
+                s->free_index[v] = -1;
+            }
+        }
+    }
+    /* Whole blocks known or free: then A_uu keeps A's quaternion blocks
+     * (rows and columns of a block are removed together). */
+    for (int32_t b = 0; opt.quaternion_blocks && b < n / 4; ++b) {
+        int known_here = 0;
+        for (int c = 0; c < 4; ++c) known_here += s->free_index[4 * b + c] < 0;
+        if (known_here != 0 && known_here != 4) {
+            return cfi_error(ctx, CF_ERR_INVALID_ARG,
+                           "min_quad create: quaternion blocks: block %d (variables %d..%d) is partly known (%d of 4 "
+                           "components); fix whole blocks",
+                           b, 4 * b, 4 * b + 3, known_here);
+        }
+    }
+    if (s->nu > 0 && s->nu % opt.block_size != 0) {
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "min_quad create: block size %d does not divide the %d free variables",
+                       opt.block_size, s->nu);
+    }
+    return CF_OK;
+}
+
+cf_status cf_min_quad_create(cf_context *ctx, const cf_sparse *a, int32_t known_count, const int32_t *known,
+                             const cf_sparse *aeq, const cf_min_quad_options *options, cf_min_quad **out)
+{
+    if (!ctx) return CF_ERR_INVALID_ARG;
+    if (!out) return cfi_error(ctx, CF_ERR_INVALID_ARG, "min_quad create: output is NULL");
+    *out = NULL;
+    cf_status st = check_shapes(ctx, a, aeq, "min_quad create");
+    if (st != CF_OK) return st;
+    cf_min_quad_options opt;
+    cf_min_quad_options_default(&opt);
+    if (options) opt = *options;
+    st = check_create_arguments(ctx, a, known_count, known, aeq, &opt);
+    if (st != CF_OK) return st;
+    int32_t n = a->ncols;
+    int32_t m = aeq ? aeq->nrows : 0;
     int32_t *cursor = CFI_ALLOC(ctx, int32_t, n);
     if (!cursor) return CF_ERR_NOMEM;
     st = check_a_values(ctx, a, "min_quad create", cursor);
@@ -391,53 +458,8 @@ cf_status cf_min_quad_create(cf_context *ctx, const cf_sparse *a, int32_t known_
         memcpy(s->e_colptr, aeq->colptr, ((size_t)n + 1) * sizeof *s->e_colptr);
         memcpy(s->e_rowind, aeq->rowind, (size_t)s->e_nnz * sizeof *s->e_rowind);
     }
-    /* known variables: range, repeats; free_index temporarily holds the
-     * caller's slot + 1 of each known variable */
-    for (int32_t v = 0; v < n; ++v) s->free_index[v] = 0;
-    for (int32_t k = 0; k < s->nk; ++k) {
-        int32_t v = known[k];
-        if (v < 0 || v >= n) {
-            st = cfi_error(ctx, CF_ERR_INVALID_ARG, "min_quad create: known[%d] = %d is outside [0, %d)", k, v, n);
-            goto fail;
-        }
-        if (s->free_index[v] != 0) {
-            st = cfi_error(ctx, CF_ERR_INVALID_ARG, "min_quad create: variable %d is known twice (known[%d], known[%d])",
-                           v, s->free_index[v] - 1, k);
-            goto fail;
-        }
-        s->free_index[v] = k + 1;
-    }
-    {
-        int32_t nu = 0, nk = 0;
-        for (int32_t v = 0; v < n; ++v) {
-            if (s->free_index[v] == 0) {
-                s->free_var[nu] = v;
-                s->free_index[v] = nu++;
-            } else {
-                s->known_var[nk] = v;
-                s->known_slot[nk++] = s->free_index[v] - 1;
-                s->free_index[v] = -1;
-            }
-        }
-    }
-    /* Whole blocks known or free: then A_uu keeps A's quaternion blocks
-     * (rows and columns of a block are removed together). */
-    for (int32_t b = 0; opt.quaternion_blocks && b < n / 4; ++b) {
-        int known_here = 0;
-        for (int c = 0; c < 4; ++c) known_here += s->free_index[4 * b + c] < 0;
-        if (known_here != 0 && known_here != 4) {
-            st = cfi_error(ctx, CF_ERR_INVALID_ARG,
-                           "min_quad create: quaternion blocks: block %d (variables %d..%d) is partly known (%d of 4 "
-                           "components); fix whole blocks",
-                           b, 4 * b, 4 * b + 3, known_here);
-            goto fail;
-        }
-    }
-    if (s->nu > 0 && s->nu % opt.block_size != 0) {
-        st = cfi_error(ctx, CF_ERR_INVALID_ARG, "min_quad create: block size %d does not divide the %d free variables",
-                       opt.block_size, s->nu);
-        goto fail;
-    }
+    st = partition_variables(s, known);
+    if (st != CF_OK) goto fail;
     st = split_columns(s, a, s->free_index, s->nu, 1, &s->a_split);
     if (st != CF_OK) goto fail;
     if (m > 0) {

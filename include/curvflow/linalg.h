@@ -167,6 +167,65 @@ CF_API void cf_cholesky_timings(const cf_cholesky *chol, cf_solver_timings *timi
 
 CF_API void cf_cholesky_destroy(cf_cholesky **chol);
 
+/* ---- Hermitian quaternionic matrices in complex form ------------------ */
+
+/* An nb x nb Hermitian quaternionic matrix (block (I, J) the quaternion
+ * q_IJ, q_JI = conj(q_IJ), real diagonal blocks): the operator that
+ * cf_cholesky_options.quaternion_blocks takes as a real symmetric 4 nb x
+ * 4 nb matrix of left-multiplication blocks, stored instead as the upper
+ * triangle of the complex Hermitian 2 nb x 2 nb matrix of the same operator
+ * (docs/linalg.md, "Quaternion blocks"), a quarter of the real form's
+ * values and no second copy at factorisation. q = a + b i + c j + d k is
+ * the complex 2 x 2 block [[a + b i, -c - d i], [c - d i, a - b i]] on the
+ * unknowns 2 I, 2 I + 1; a real vector (w, x, y, z) per block maps to
+ * (w + x i, y - z i). Layout (CSC, int32 indices, sorted rows): complex
+ * column 2 J holds rows 2 I, 2 I + 1 of every stored block I < J (I
+ * ascending), then row 2 J; column 2 J + 1 the same rows, then 2 J, 2 J + 1.
+ * So block k of block column J (counting from 0, I ascending, the diagonal
+ * block last) has its entry (2 I, 2 J) at colptr[2 J] + 2 k, (2 I + 1, 2 J)
+ * at colptr[2 J] + 2 k + 1 (I < J only), (2 I, 2 J + 1) at colptr[2 J + 1]
+ * + 2 k and (2 I + 1, 2 J + 1) after it. values: (re, im) interleaved. */
+typedef struct cf_quat_sparse {
+    int32_t nb;        /* quaternion blocks per side */
+    int32_t *colptr;   /* 2 nb + 1 */
+    int32_t *rowind;   /* colptr[2 nb] */
+    double *values;    /* 2 colptr[2 nb] */
+    cf_context *ctx;   /* allocator owner */
+} cf_quat_sparse;
+
+/* Pattern (values zero) from the block graph: `graph` is nb x nb with
+ * sorted rows; its entries (I, J) with I <= J are the stored blocks, in
+ * order, so the k-th entry of graph column J with row <= J is block k of
+ * block column J (above). Entries below the diagonal are ignored (a graph
+ * with both triangles may be given). Statuses: CF_ERR_INVALID_ARG (not
+ * square, a missing diagonal entry or unsorted rows, named by column; more
+ * than INT32_MAX complex entries), CF_ERR_NOMEM. */
+CF_API cf_status cf_quat_sparse_create(cf_context *ctx, const cf_sparse *graph, cf_quat_sparse **out);
+CF_API void cf_quat_sparse_destroy(cf_quat_sparse **a);
+/* Complex entries stored (colptr[2 nb]). */
+CF_API int64_t cf_quat_sparse_nnz(const cf_quat_sparse *a);
+/* y = A x on real vectors (4 nb entries, (w, x, y, z) per block), summed
+ * in the order of cf_sparse_multiply on the real form with both triangles
+ * (each row over block columns ascending); the lower blocks are the
+ * conjugates of the stored upper ones. x and y must not overlap. */
+CF_API void cf_quat_sparse_multiply(const cf_quat_sparse *a, const double *x, double *y);
+
+/* cf_cholesky_create / cf_cholesky_factorize for a matrix in complex form:
+ * the same ordering (the block graph's, shared through the context's
+ * cache), analysis and factor as cf_cholesky_create with quaternion_blocks
+ * on the real form of the same operator, without that real form or a copy
+ * of the values: the factorisation reads a->values. Solves
+ * (cf_cholesky_solve, cf_inverse_iteration_blocks) take and return real
+ * vectors of 4 nb entries; cf_cholesky_size is 4 nb. options: only
+ * `ordering` is read (may be NULL). Factorising needs a's pattern of the
+ * analysis (CF_ERR_INVALID_ARG otherwise); NaN/Inf: CF_ERR_NUMERICAL
+ * naming the block; not positive definite: CF_ERR_NOT_POSDEF naming the
+ * real column as cf_cholesky_factorize does. A factorisation created by
+ * one of the two create functions refuses the other's factorize. */
+CF_API cf_status cf_cholesky_create_quat(cf_context *ctx, const cf_quat_sparse *a,
+                                         const cf_cholesky_options *options, cf_cholesky **out);
+CF_API cf_status cf_cholesky_factorize_quat(cf_cholesky *chol, const cf_quat_sparse *a);
+
 /* CHOLMOD's OpenMP threads: a context option, cf_context_set_threads
  * (curvflow.h; default serial). */
 

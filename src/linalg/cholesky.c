@@ -22,15 +22,18 @@ struct cf_cholesky {
     cf_context *ctx;
     cholmod_common *common;
     cholmod_factor *factor;
-    int32_t n;
+    int32_t n;            /* real unknowns (4 nb for the quaternion forms) */
     int64_t nnz;          /* of the analysed pattern */
-    int32_t *colptr;      /* analysed pattern's column pointers (n + 1), to detect a changed pattern */
+    int32_t ncols;        /* columns of the analysed pattern: n, or 2 nb for a cf_quat_sparse */
+    int32_t *colptr;      /* analysed pattern's column pointers (ncols + 1), to detect a changed pattern */
     int factorized;       /* last numeric factorisation succeeded */
     cholmod_dense *x;     /* solve workspace, reused (cholmod_solve2) */
     cholmod_dense *y;
     cholmod_dense *e;
     cf_solver_timings timings;
     cfi_quat_map *quat;   /* quaternion_blocks: the factor is of the complex form */
+    int32_t complex_form; /* the factor is of the complex form (quat, or created from a cf_quat_sparse) */
+    int32_t quat_input;   /* created by cf_cholesky_create_quat */
     double *zwork;        /* complex right-hand sides, n doubles per column */
     int32_t zwork_cols;
     double factor_entries; /* entries of L from the analysis (complex ones with quat), for messages */
@@ -66,7 +69,7 @@ void cf_cholesky_destroy(cf_cholesky **pchol)
         cholmod_free_dense(&chol->y, chol->common);
         cholmod_free_dense(&chol->e, chol->common);
     }
-    CFI_FREE(ctx, chol->colptr, (size_t)chol->n + 1);
+    CFI_FREE(ctx, chol->colptr, (size_t)chol->ncols + 1);
     cfi_quat_map_destroy(ctx, &chol->quat);
     CFI_FREE(ctx, chol->zwork, (size_t)chol->n * chol->zwork_cols);
     CFI_FREE(ctx, chol, 1);
@@ -171,7 +174,10 @@ static cf_status graph_ordering(cf_cholesky *chol, cholmod_sparse *view, int32_t
 }
 
 /* Fill-reducing permutation of the block graph, expanded to a: perm[b K + d]
- * = b perm_blocks[K] + d. AUTO applies CHOLMOD's own rule (its default
+ * = b perm_blocks[K] + d. rule_b: the block size of the real matrix whose
+ * counts the rule below estimates (b, or 4 for the complex form of a
+ * quaternion matrix, whose 2 x 2 blocks stand for 4 x 4 real ones, so that
+ * both forms choose the same ordering). AUTO applies CHOLMOD's own rule (its default
  * nmethods = 0 strategy) with the counts of the expanded matrix: AMD first;
  * METIS is tried only if AMD's ordering is costly, i.e. fl / lnz >= 500 and
  * lnz / anz >= 5, and kept if it needs fewer flops. Expanding b x b blocks
@@ -181,7 +187,8 @@ static cf_status graph_ordering(cf_cholesky *chol, cholmod_sparse *view, int32_t
  * where it pays back in every refactorisation (docs/linalg.md). The block
  * orderings of the last block graph are kept in the context, so that the
  * matrices of one mesh (Laplacians, the Dirac matrix) share them. */
-static cf_status block_ordering(cf_cholesky *chol, const cf_sparse *a, int32_t b, cf_ordering ordering, int32_t *perm)
+static cf_status block_ordering(cf_cholesky *chol, const cf_sparse *a, int32_t b, int32_t rule_b, cf_ordering ordering,
+                                int32_t *perm)
 {
     cf_context *ctx = chol->ctx;
     cf_sparse *pattern = NULL;
@@ -199,7 +206,7 @@ static cf_status block_ordering(cf_cholesky *chol, const cf_sparse *a, int32_t b
     double fl = 0.0, lnz = 0.0, fl_metis = 0.0, lnz_metis = 0.0;
     int first = ordering == CF_ORDERING_METIS;
     st = graph_ordering(chol, &view, nb, nnz, hash, first, &pb, &own_b, &fl, &lnz);
-    if (st == CF_OK && ordering == CF_ORDERING_AUTO && lnz > 0.0 && b * fl / lnz >= 500.0 && lnz / (double)nnz >= 5.0) {
+    if (st == CF_OK && ordering == CF_ORDERING_AUTO && lnz > 0.0 && rule_b * fl / lnz >= 500.0 && lnz / (double)nnz >= 5.0) {
         /* (the AMD ordering pb stays valid: storing METIS keeps the cache's AMD entry of the same graph) */
         st = graph_ordering(chol, &view, nb, nnz, hash, 1, &pm, &own_m, &fl_metis, &lnz_metis);
         if (st == CF_OK && fl_metis < fl) pb = pm;
@@ -218,6 +225,95 @@ static cf_status check_matrix(cf_context *ctx, const cf_sparse *a, const char *w
     if (!a) return cfi_error(ctx, CF_ERR_INVALID_ARG, "%s: matrix is NULL", what);
     if (a->nrows != a->ncols) return cfi_error(ctx, CF_ERR_INVALID_ARG, "%s: matrix is %d x %d, not square", what, a->nrows, a->ncols);
     return CF_OK;
+}
+
+/* A factorisation object for n real unknowns whose analysed pattern has
+ * ncols columns with column pointers colptr (kept to detect a changed
+ * pattern at factorisation). */
+static cf_status new_cholesky(cf_context *ctx, int32_t n, int32_t ncols, const int32_t *colptr, cf_cholesky **out)
+{
+    *out = NULL;
+    cholmod_common *c = NULL;
+    cf_status st = cfi_cholmod_common(ctx, &c);
+    if (st != CF_OK) return st;
+    cf_cholesky *chol = CFI_ALLOC(ctx, cf_cholesky, 1);
+    if (!chol) return CF_ERR_NOMEM;
+    chol->ctx = ctx;
+    chol->common = c;
+    chol->n = n;
+    chol->ncols = ncols;
+    chol->nnz = colptr[ncols];
+    chol->colptr = CFI_ALLOC(ctx, int32_t, (size_t)ncols + 1);
+    if (!chol->colptr) {
+        cf_cholesky_destroy(&chol);
+        return CF_ERR_NOMEM;
+    }
+    memcpy(chol->colptr, colptr, ((size_t)ncols + 1) * sizeof *chol->colptr);
+    *out = chol;
+    return CF_OK;
+}
+
+/* Symbolic analysis of `view` (the matrix CHOLMOD factorises: the real one,
+ * or the complex form of a quaternion matrix) with the ordering of the
+ * graph of b x b blocks of `blocks` (whose pattern is view's), expanded
+ * (block_ordering; rule_b there). t0: start time for the timings. */
+static cf_status analyse(cf_cholesky *chol, cholmod_sparse *view, const cf_sparse *blocks, int32_t b, int32_t rule_b,
+                         cf_ordering ordering, double t0)
+{
+    cf_context *ctx = chol->ctx;
+    cholmod_common *c = chol->common;
+    cf_status st = CF_OK;
+    int32_t *perm = NULL;
+    size_t nperm = (size_t)blocks->ncols;
+    if (ordering == CF_ORDERING_NATURAL) {
+        cfi_cholmod_reset_parameters(c);
+        c->nmethods = 1;
+        c->method[0].ordering = CHOLMOD_NATURAL;
+        c->postorder = 0;
+        chol->factor = cholmod_analyze(view, c);
+    } else {
+        perm = CFI_ALLOC(ctx, int32_t, nperm);
+        if (!perm) return CF_ERR_NOMEM;
+        if ((st = block_ordering(chol, blocks, b, rule_b, ordering, perm)) != CF_OK) goto done;
+        if (chol->quat) {
+            /* the block order, expanded to 2 complex unknowns per block
+             * (in place: the first pass reads ahead of what it writes, the
+             * second behind) */
+            int32_t nb = chol->n / 4;
+            for (int32_t K = 0; K < nb; ++K) perm[K] = perm[4 * K] / 4;
+            for (int32_t k = 2 * nb - 1; k >= 0; --k) perm[k] = 2 * perm[k / 2] + k % 2;
+        }
+        cfi_cholmod_reset_parameters(c);
+        c->nmethods = 1;
+        c->method[0].ordering = CHOLMOD_GIVEN;
+        if (chol->complex_form && chol->n / 2 <= CFI_QUAT_WIDE_RELAX_MAX_COLUMNS) {
+            /* Twice CHOLMOD's relaxed amalgamation (nrelax 4/16/48 -> 8/32/96,
+             * zrelax 0.1/0.05 -> 0.2/0.1): the complex factor of a vertex-graph
+             * matrix has many small supernodes whose BLAS calls cost more than
+             * the explicit zeros that merging them adds. Measured per step of
+             * the spin flow: spot_3k 7.6 -> 6.4 ms, armadillo_26k 78 -> 72 ms,
+             * 10k-vertex sphere 46 -> 41 ms, 41k/164k within noise; three times
+             * was slower, and for scalar Laplacians it is slower beyond 10k
+             * vertices (docs/linalg.md). Beyond 50k vertices the explicit zeros
+             * cost memory for no measured gain (docs/memory.md): CHOLMOD's
+             * default there. */
+            c->nrelax[0] = 8;
+            c->nrelax[1] = 32;
+            c->nrelax[2] = 96;
+            c->zrelax[1] = 0.2;
+            c->zrelax[2] = 0.1;
+        }
+        chol->factor = cholmod_analyze_p(view, perm, NULL, 0, c);
+    }
+    cfi_cholmod_reset_parameters(c);
+    if ((st = cfi_cholmod_check(ctx, c, chol->factor != NULL, "cholesky analyse")) != CF_OK) goto done;
+    /* a supernodal factor's size is its value array's (with the explicit
+     * zeros of amalgamation); a simplicial one's the analysis's count */
+    chol->factor_entries = chol->factor->is_super ? (double)chol->factor->xsize : c->lnz;
+    chol->timings.analyze_seconds = cfi_now_seconds() - t0;
+done:
+    CFI_FREE(ctx, perm, nperm);
+    return st;
 }
 
 cf_status cf_cholesky_create(cf_context *ctx, const cf_sparse *a, const cf_cholesky_options *options, cf_cholesky **out)
@@ -240,80 +336,81 @@ cf_status cf_cholesky_create(cf_context *ctx, const cf_sparse *a, const cf_chole
                          opt.block_size);
 
     double t0 = cfi_now_seconds();
-    cholmod_common *c = NULL;
-    if ((st = cfi_cholmod_common(ctx, &c)) != CF_OK) return st;
-    cf_cholesky *chol = CFI_ALLOC(ctx, cf_cholesky, 1);
-    if (!chol) return CF_ERR_NOMEM;
-    chol->ctx = ctx;
-    chol->common = c;
-    chol->n = a->ncols;
-    chol->nnz = a->colptr[a->ncols];
-    int32_t *perm = NULL;
-    chol->colptr = CFI_ALLOC(ctx, int32_t, (size_t)chol->n + 1);
-    if (!chol->colptr) { st = CF_ERR_NOMEM; goto fail; }
-    memcpy(chol->colptr, a->colptr, ((size_t)chol->n + 1) * sizeof *chol->colptr);
-
+    cf_cholesky *chol = NULL;
+    if ((st = new_cholesky(ctx, a->ncols, a->ncols, a->colptr, &chol)) != CF_OK) return st;
     cholmod_sparse view;
     cfi_cholmod_view(a, 1, &view);
     if (opt.quaternion_blocks) {
         /* analyse the complex form's pattern (2 unknowns per block) */
         if ((st = cfi_quat_map_create(ctx, a, &chol->quat)) != CF_OK) goto fail;
+        chol->complex_form = 1;
         cfi_quat_map_view(chol->quat, 0, &view);
     }
-    if (opt.ordering == CF_ORDERING_NATURAL) {
-        cfi_cholmod_reset_parameters(c);
-        c->nmethods = 1;
-        c->method[0].ordering = CHOLMOD_NATURAL;
-        c->postorder = 0;
-        chol->factor = cholmod_analyze(&view, c);
-    } else {
-        perm = CFI_ALLOC(ctx, int32_t, (size_t)chol->n);
-        if (!perm) { st = CF_ERR_NOMEM; goto fail; }
-        if ((st = block_ordering(chol, a, opt.block_size, opt.ordering, perm)) != CF_OK) goto fail;
-        if (chol->quat) {
-            /* the block order, expanded to 2 complex unknowns per block
-             * (in place: the first pass reads ahead of what it writes, the
-             * second behind) */
-            int32_t nb = chol->n / 4;
-            for (int32_t K = 0; K < nb; ++K) perm[K] = perm[4 * K] / 4;
-            for (int32_t k = 2 * nb - 1; k >= 0; --k) perm[k] = 2 * perm[k / 2] + k % 2;
-        }
-        cfi_cholmod_reset_parameters(c);
-        c->nmethods = 1;
-        c->method[0].ordering = CHOLMOD_GIVEN;
-        if (chol->quat && chol->n / 2 <= CFI_QUAT_WIDE_RELAX_MAX_COLUMNS) {
-            /* Twice CHOLMOD's relaxed amalgamation (nrelax 4/16/48 -> 8/32/96,
-             * zrelax 0.1/0.05 -> 0.2/0.1): the complex factor of a vertex-graph
-             * matrix has many small supernodes whose BLAS calls cost more than
-             * the explicit zeros that merging them adds. Measured per step of
-             * the spin flow: spot_3k 7.6 -> 6.4 ms, armadillo_26k 78 -> 72 ms,
-             * 10k-vertex sphere 46 -> 41 ms, 41k/164k within noise; three times
-             * was slower, and for scalar Laplacians it is slower beyond 10k
-             * vertices (docs/linalg.md). Beyond 50k vertices the explicit zeros
-             * cost memory for no measured gain (docs/memory.md): CHOLMOD's
-             * default there. */
-            c->nrelax[0] = 8;
-            c->nrelax[1] = 32;
-            c->nrelax[2] = 96;
-            c->zrelax[1] = 0.2;
-            c->zrelax[2] = 0.1;
-        }
-        chol->factor = cholmod_analyze_p(&view, perm, NULL, 0, c);
-    }
-    cfi_cholmod_reset_parameters(c);
-    if ((st = cfi_cholmod_check(ctx, c, chol->factor != NULL, "cholesky analyse")) != CF_OK) goto fail;
-    /* a supernodal factor's size is its value array's (with the explicit
-     * zeros of amalgamation); a simplicial one's the analysis's count */
-    chol->factor_entries = chol->factor->is_super ? (double)chol->factor->xsize : c->lnz;
-    CFI_FREE(ctx, perm, chol->n);
-    chol->timings.analyze_seconds = cfi_now_seconds() - t0;
+    if ((st = analyse(chol, &view, a, opt.block_size, opt.block_size, opt.ordering, t0)) != CF_OK) goto fail;
     *out = chol;
     return CF_OK;
 fail:
-    CFI_FREE(ctx, perm, chol->n);
     cf_cholesky_destroy(&chol);
     return st;
 }
+
+/* CHOLMOD header over a cf_quat_sparse (stype 1: its upper triangle). */
+static void quat_sparse_view(const cf_quat_sparse *a, int with_values, cholmod_sparse *view)
+{
+    memset(view, 0, sizeof *view);
+    view->nrow = view->ncol = (size_t)2 * a->nb;
+    view->nzmax = (size_t)a->colptr[2 * (size_t)a->nb];
+    view->p = a->colptr;
+    view->i = a->rowind;
+    view->x = with_values ? a->values : NULL;
+    view->stype = 1;
+    view->itype = CHOLMOD_INT;
+    view->xtype = with_values ? CHOLMOD_COMPLEX : CHOLMOD_PATTERN;
+    view->dtype = CHOLMOD_DOUBLE;
+    view->sorted = 1;
+    view->packed = 1;
+}
+
+static cf_status check_quat(cf_context *ctx, const cf_quat_sparse *a, const char *what)
+{
+    if (!a || !a->colptr) return cfi_error(ctx, CF_ERR_INVALID_ARG, "%s: quaternion matrix is NULL", what);
+    if (a->nb < 0 || (int64_t)4 * a->nb > INT32_MAX)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "%s: %d quaternion blocks exceed int32 indices", what, a->nb);
+    return CF_OK;
+}
+
+cf_status cf_cholesky_create_quat(cf_context *ctx, const cf_quat_sparse *a, const cf_cholesky_options *options,
+                                  cf_cholesky **out)
+{
+    if (!ctx) return CF_ERR_INVALID_ARG;
+    if (!out) return cfi_error(ctx, CF_ERR_INVALID_ARG, "cholesky create: out is NULL");
+    *out = NULL;
+    cf_status st = check_quat(ctx, a, "cholesky create");
+    if (st != CF_OK) return st;
+    cf_cholesky_options opt;
+    cf_cholesky_options_default(&opt);
+    if (options) opt = *options;
+    if (opt.ordering < CF_ORDERING_AUTO || opt.ordering > CF_ORDERING_NATURAL)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "cholesky create: unknown ordering %d", (int)opt.ordering);
+    double t0 = cfi_now_seconds();
+    cf_cholesky *chol = NULL;
+    if ((st = new_cholesky(ctx, 4 * a->nb, 2 * a->nb, a->colptr, &chol)) != CF_OK) return st;
+    chol->complex_form = 1;
+    chol->quat_input = 1;
+    cholmod_sparse view;
+    quat_sparse_view(a, 0, &view);
+    /* the block graph from the complex pattern's 2 x 2 blocks is the real
+     * form's graph of 4 x 4 blocks: same cache key, same ordering */
+    cf_sparse pattern = {2 * a->nb, 2 * a->nb, a->colptr, a->rowind, NULL, 1, 1, ctx};
+    if ((st = analyse(chol, &view, &pattern, 2, 4, opt.ordering, t0)) != CF_OK) goto fail;
+    *out = chol;
+    return CF_OK;
+fail:
+    cf_cholesky_destroy(&chol);
+    return st;
+}
+
+static cf_status factorize_view(cf_cholesky *chol, cholmod_sparse *view, double shift, double t0);
 
 static cf_status factorize(cf_cholesky *chol, const cf_sparse *a, double shift)
 {
@@ -322,6 +419,9 @@ static cf_status factorize(cf_cholesky *chol, const cf_sparse *a, double shift)
     chol->factorized = 0;
     cf_status st = check_matrix(ctx, a, "cholesky factorise");
     if (st != CF_OK) return st;
+    if (chol->quat_input)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG,
+                         "cholesky factorise: analysed from a quaternion matrix in complex form (cf_cholesky_factorize_quat)");
     if (a->ncols != chol->n || a->colptr[a->ncols] != chol->nnz ||
         memcmp(a->colptr, chol->colptr, ((size_t)chol->n + 1) * sizeof *chol->colptr) != 0)
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "cholesky factorise: pattern differs from the analysed one");
@@ -334,10 +434,6 @@ static cf_status factorize(cf_cholesky *chol, const cf_sparse *a, double shift)
                          a->rowind[bad], j);
     }
     double t0 = cfi_now_seconds();
-    cholmod_common *c = chol->common;
-    cfi_cholmod_apply_threads(ctx); /* the context's OpenMP setting (cf_context_set_threads) */
-    c->status = CHOLMOD_OK;
-    cfi_cholmod_clear_message();
     cholmod_sparse view;
     if (chol->quat) {
         /* the Dirac matrices are exact left-multiplication blocks; allow
@@ -347,11 +443,24 @@ static cf_status factorize(cf_cholesky *chol, const cf_sparse *a, double shift)
     } else {
         cfi_cholmod_view(a, 1, &view);
     }
+    return factorize_view(chol, &view, shift, t0);
+}
+
+/* The numeric factorisation of view (A, or its complex form), with the
+ * failures named for the caller's real matrix. */
+static cf_status factorize_view(cf_cholesky *chol, cholmod_sparse *view, double shift, double t0)
+{
+    cf_context *ctx = chol->ctx;
+    cf_status st = CF_OK;
+    cholmod_common *c = chol->common;
+    cfi_cholmod_apply_threads(ctx); /* the context's OpenMP setting (cf_context_set_threads) */
+    c->status = CHOLMOD_OK;
+    cfi_cholmod_clear_message();
     /* the supernodal numeric factorisation is the first BLAS call
      * (LAPACK potrf, syrk/herk, gemm, trsm): OpenBLAS's buffer first */
     if (chol->factor->is_super && (st = cfi_blas_reserve(ctx, "cholesky factorise")) != CF_OK) return st;
     double beta[2] = {shift, 0.0};
-    int ok = cholmod_factorize_p(&view, beta, NULL, 0, chol->factor, c);
+    int ok = cholmod_factorize_p(view, beta, NULL, 0, chol->factor, c);
     chol->timings.factorize_seconds = cfi_now_seconds() - t0;
     if (c->status == CHOLMOD_NOT_POSDEF || (ok && chol->factor->minor < chol->factor->n)) {
         /* L->minor is the column (in the permuted order) where the pivot
@@ -359,7 +468,7 @@ static cf_status factorize(cf_cholesky *chol, const cf_sparse *a, double shift)
         size_t minor = chol->factor->minor;
         const int *p = chol->factor->Perm;
         int32_t col = (p && minor < chol->factor->n) ? p[minor] : (int32_t)minor;
-        if (chol->quat) {
+        if (chol->complex_form) {
             /* complex unknown k of block K = k / 2: real columns 4 K + 2 (k % 2) .. + 1 */
             col = 4 * (col / 2) + 2 * (col % 2);
             minor *= 2;
@@ -374,10 +483,10 @@ static cf_status factorize(cf_cholesky *chol, const cf_sparse *a, double shift)
             /* name the need and the limit instead of CHOLMOD's bare "out of memory" */
             char note[128];
             cfi_address_space_note(note, sizeof note);
-            double bytes = chol->factor_entries * (chol->quat ? 16.0 : 8.0);
+            double bytes = chol->factor_entries * (chol->complex_form ? 16.0 : 8.0);
             return cfi_error(ctx, CF_ERR_NOMEM,
                              "cholesky factorise: out of memory for the factor (%.3g %s entries, %.0f MB, %d columns; %s)",
-                             chol->factor_entries, chol->quat ? "complex" : "real", bytes / (1024.0 * 1024.0),
+                             chol->factor_entries, chol->complex_form ? "complex" : "real", bytes / (1024.0 * 1024.0),
                              (int)chol->factor->n, note);
         }
         return st;
@@ -393,10 +502,37 @@ cf_status cf_cholesky_factorize_shifted(cf_cholesky *chol, const cf_sparse *a, d
     return factorize(chol, a, shift);
 }
 
+cf_status cf_cholesky_factorize_quat(cf_cholesky *chol, const cf_quat_sparse *a)
+{
+    if (!chol) return CF_ERR_INVALID_ARG;
+    cf_context *ctx = chol->ctx;
+    chol->factorized = 0;
+    cf_status st = check_quat(ctx, a, "cholesky factorise");
+    if (st != CF_OK) return st;
+    if (!chol->quat_input)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG,
+                         "cholesky factorise: analysed from a real matrix (cf_cholesky_factorize), not a quaternion one");
+    if (2 * a->nb != chol->ncols || a->colptr[2 * a->nb] != chol->nnz ||
+        memcmp(a->colptr, chol->colptr, ((size_t)chol->ncols + 1) * sizeof *chol->colptr) != 0)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "cholesky factorise: pattern differs from the analysed one");
+    int64_t bad = cfi_first_nonfinite(a->values, 2 * chol->nnz);
+    if (bad >= 0) {
+        int64_t e = bad / 2;
+        int32_t j = 0;
+        while (a->colptr[j + 1] <= e) ++j;
+        return cfi_error(ctx, CF_ERR_NUMERICAL, "cholesky factorise: quaternion block (%d, %d) is not finite",
+                         a->rowind[e] / 2, j / 2);
+    }
+    double t0 = cfi_now_seconds();
+    cholmod_sparse view;
+    quat_sparse_view(a, 1, &view);
+    return factorize_view(chol, &view, 0.0, t0);
+}
+
 /* The complex-form buffer of quaternion-block solves, grown to nrhs columns. */
 static cf_status reserve_zwork(cf_cholesky *chol, int32_t nrhs)
 {
-    if (!chol->quat || nrhs <= chol->zwork_cols) return CF_OK;
+    if (!chol->complex_form || nrhs <= chol->zwork_cols) return CF_OK;
     cf_context *ctx = chol->ctx;
     double *w = CFI_ALLOC(ctx, double, (size_t)chol->n * (size_t)nrhs);
     if (!w) return CF_ERR_NOMEM;
@@ -445,7 +581,7 @@ cf_status cf_cholesky_solve(cf_cholesky *chol, int32_t nrhs, const double *b, do
     bd.x = (void *)b;
     bd.xtype = CHOLMOD_REAL;
     bd.dtype = CHOLMOD_DOUBLE;
-    if (chol->quat) {
+    if (chol->complex_form) {
         cf_status sz = reserve_zwork(chol, nrhs);
         if (sz != CF_OK) return sz;
         cfi_quat_to_complex(chol->n, nrhs, b, chol->zwork);
@@ -458,7 +594,7 @@ cf_status cf_cholesky_solve(cf_cholesky *chol, int32_t nrhs, const double *b, do
     int ok = cholmod_solve2(CHOLMOD_A, chol->factor, &bd, NULL, &chol->x, NULL, &chol->y, &chol->e, c);
     cf_status st = cfi_cholmod_check(ctx, c, ok, "cholesky solve");
     if (st != CF_OK) return st;
-    if (chol->quat)
+    if (chol->complex_form)
         cfi_quat_from_complex(chol->n, nrhs, chol->x->x, x);
     else
         memcpy(x, chol->x->x, (size_t)total * sizeof *x);

@@ -250,3 +250,141 @@ void cfi_quat_from_complex(int32_t n, int32_t nrhs, const double *cplx, double *
 {
     cfi_quat_to_complex(n, nrhs, cplx, real); /* the map is its own inverse */
 }
+
+/* ---- cf_quat_sparse: the complex form held directly -------------------- */
+
+/* A Dirac-type matrix can be assembled straight into the complex form
+ * (the caller adds each quaternion contribution to the four complex
+ * entries of its block), so that the real 4 n x 4 n form, its slot table
+ * and the real -> complex copy above are never made (docs/memory.md). */
+
+void cf_quat_sparse_destroy(cf_quat_sparse **pa)
+{
+    if (!pa || !*pa) return;
+    cf_quat_sparse *a = *pa;
+    cf_context *ctx = a->ctx;
+    size_t nnz = a->colptr ? (size_t)a->colptr[2 * (size_t)a->nb] : 0;
+    CFI_FREE(ctx, a->rowind, nnz);
+    CFI_FREE(ctx, a->values, 2 * nnz);
+    CFI_FREE(ctx, a->colptr, 2 * (size_t)a->nb + 1);
+    CFI_FREE(ctx, a, 1);
+    *pa = NULL;
+}
+
+int64_t cf_quat_sparse_nnz(const cf_quat_sparse *a) { return a && a->colptr ? a->colptr[2 * (int64_t)a->nb] : 0; }
+
+cf_status cf_quat_sparse_create(cf_context *ctx, const cf_sparse *g, cf_quat_sparse **out)
+{
+    if (!ctx) return CF_ERR_INVALID_ARG;
+    if (!g || !out) return cfi_error(ctx, CF_ERR_INVALID_ARG, "quaternion matrix create: graph or out is NULL");
+    *out = NULL;
+    if (g->nrows != g->ncols)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "quaternion matrix create: block graph is %d x %d, not square",
+                         g->nrows, g->ncols);
+    int32_t nb = g->ncols;
+    if ((int64_t)2 * nb + 1 > INT32_MAX)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "quaternion matrix create: %d blocks exceed int32 indices", nb);
+    const int32_t *gcp = g->colptr, *gri = g->rowind;
+    int64_t znnz = 0;
+    for (int32_t J = 0; J < nb; ++J) {
+        int64_t upper = 0;
+        int diag = 0;
+        for (int32_t p = gcp[J]; p < gcp[J + 1]; ++p) {
+            if (p > gcp[J] && gri[p] <= gri[p - 1])
+                return cfi_error(ctx, CF_ERR_INVALID_ARG,
+                                 "quaternion matrix create: block graph column %d: rows not sorted (row %d after %d)", J,
+                                 gri[p], gri[p - 1]);
+            upper += gri[p] < J;
+            diag |= gri[p] == J;
+        }
+        if (!diag)
+            return cfi_error(ctx, CF_ERR_INVALID_ARG, "quaternion matrix create: block column %d has no diagonal block", J);
+        znnz += 4 * upper + 3;
+    }
+    if (znnz > INT32_MAX)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG,
+                         "quaternion matrix create: %lld complex entries exceed int32 indices", (long long)znnz);
+    cf_quat_sparse *a = CFI_ALLOC(ctx, cf_quat_sparse, 1);
+    if (!a) return CF_ERR_NOMEM;
+    a->ctx = ctx;
+    a->nb = nb;
+    a->colptr = CFI_ALLOC(ctx, int32_t, 2 * (size_t)nb + 1);
+    if (!a->colptr) {
+        CFI_FREE(ctx, a, 1);
+        return CF_ERR_NOMEM;
+    }
+    a->rowind = CFI_ALLOC(ctx, int32_t, (size_t)znnz);
+    a->values = CFI_ALLOC(ctx, double, 2 * (size_t)znnz);
+    if (znnz && (!a->rowind || !a->values)) {
+        /* colptr is still zero: destroy frees nothing by a wrong count */
+        CFI_FREE(ctx, a->rowind, (size_t)znnz);
+        CFI_FREE(ctx, a->values, 2 * (size_t)znnz);
+        cf_quat_sparse_destroy(&a);
+        return CF_ERR_NOMEM;
+    }
+    int32_t z = 0;
+    for (int32_t J = 0; J < nb; ++J) {
+        int32_t col0 = z, k = 0;
+        for (int32_t p = gcp[J]; p < gcp[J + 1] && gri[p] < J; ++p) k += 2;
+        int32_t col1 = col0 + k + 1;
+        for (int32_t p = gcp[J]; p < gcp[J + 1] && gri[p] <= J; ++p) {
+            int32_t I = gri[p], off = 2 * (p - gcp[J]);
+            a->rowind[col0 + off] = 2 * I;
+            a->rowind[col1 + off] = 2 * I;
+            if (I < J) {
+                a->rowind[col0 + off + 1] = 2 * I + 1;
+                a->rowind[col1 + off + 1] = 2 * I + 1;
+            } else {
+                a->rowind[col1 + off + 1] = 2 * J + 1;
+            }
+        }
+        z = col1 + k + 2;
+        a->colptr[2 * J + 1] = col1;
+        a->colptr[2 * J + 2] = z;
+    }
+    *out = a;
+    return CF_OK;
+}
+
+/* y (4 entries) += L(q) x, or L(q)^T x = L(conj q) x, with L(q) the
+ * left-multiplication matrix of q (Le Folgoc Eq. 7), column by column as
+ * cf_sparse_multiply runs through the real form's columns. */
+static inline void add_block_product(const double q[4], int transpose, const double *x, double *y)
+{
+    /* column-major: column c is q e_c */
+    const double m[16] = {q[0], q[1], q[2], q[3], -q[1], q[0], q[3], -q[2],
+                          -q[2], -q[3], q[0], q[1], -q[3], q[2], -q[1], q[0]};
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r) y[r] += (transpose ? m[4 * r + c] : m[4 * c + r]) * x[c];
+}
+
+void cf_quat_sparse_multiply(const cf_quat_sparse *a, const double *x, double *y)
+{
+    if (!a || !x || !y) return;
+    int32_t nb = a->nb;
+    const int32_t *cp = a->colptr, *ri = a->rowind;
+    const double *v = a->values;
+    memset(y, 0, 4 * (size_t)nb * sizeof *y);
+    /* Row block J receives, in the real form's order, the products with
+     * block columns I < J (the conjugates of the blocks stored in column
+     * J), then its diagonal block, then those with J' > J, added when
+     * column J' is reached; so column J first completes y_J's left part,
+     * then adds its blocks' products to the rows I < J. */
+    for (int32_t J = 0; J < nb; ++J) {
+        int32_t c0 = cp[2 * J], c1 = cp[2 * J + 1];
+        int32_t nblk = (c1 - c0 + 1) / 2; /* blocks I < J, then the diagonal */
+        for (int32_t k = 0; k < nblk; ++k) {
+            /* q = a + b i + c j + d k: (2I, 2J) = a + b i, (2I, 2J+1) = -c - d i */
+            const double q[4] = {v[2 * ((int64_t)c0 + 2 * k)], v[2 * ((int64_t)c0 + 2 * k) + 1],
+                                 -v[2 * ((int64_t)c1 + 2 * k)], -v[2 * ((int64_t)c1 + 2 * k) + 1]};
+            int32_t I = ri[c0 + 2 * k] / 2;
+            add_block_product(q, I < J, x + 4 * (int64_t)I, y + 4 * (int64_t)J);
+        }
+        for (int32_t k = 0; k + 1 < nblk; ++k) {
+            const double q[4] = {v[2 * ((int64_t)c0 + 2 * k)], v[2 * ((int64_t)c0 + 2 * k) + 1],
+                                 -v[2 * ((int64_t)c1 + 2 * k)], -v[2 * ((int64_t)c1 + 2 * k) + 1]};
+            int32_t I = ri[c0 + 2 * k] / 2;
+            add_block_product(q, 0, x + 4 * (int64_t)J, y + 4 * (int64_t)I);
+        }
+    }
+}

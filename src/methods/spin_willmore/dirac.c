@@ -11,19 +11,62 @@
 #include <math.h>
 #include <string.h>
 
-cf_status cfi_dirac_create(cf_context *ctx, const cf_mesh *mesh, cfi_dirac **out)
+/* The complex form: the vertex graph from the 6 pairs per face that lie
+ * on or above the diagonal (rows tri[m] <= columns tri[n]), its
+ * cf_quat_sparse pattern, and the complex entry of each face's blocks:
+ * block k of block column J starts at colptr[2 J] + 2 k (curvflow/linalg.h),
+ * and graph slot q of column J is that block k = q - gcp[J]. */
+static cf_status create_complex(cf_context *ctx, const cf_mesh *mesh, cfi_dirac *d)
 {
-    *out = NULL;
+    int32_t nf = mesh->nf;
+    int64_t npair = (int64_t)nf * 6;
+    int32_t *rows = CFI_ALLOC(ctx, int32_t, npair);
+    int32_t *cols = CFI_ALLOC(ctx, int32_t, npair);
+    int64_t *slots = CFI_ALLOC(ctx, int64_t, npair);
+    cf_sparse *g = NULL;
+    d->zslot = CFI_ALLOC(ctx, int32_t, (int64_t)nf * 3);
+    d->zdiag = CFI_ALLOC(ctx, int32_t, d->nv);
+    cf_status st = CF_OK;
+    if (!rows || !cols || !slots || !d->zslot || !d->zdiag) {
+        st = CF_ERR_NOMEM;
+        goto done;
+    }
+    /* pairs 6 k + m + n - 1 (m < n; 0, 1, 2) and 6 k + 3 + m (diagonal) */
+    for (int32_t k = 0; k < nf; ++k) {
+        const int32_t *tri = mesh->triangles + 3 * k;
+        for (int m = 0; m < 3; ++m)
+            for (int n = m + 1; n < 3; ++n) {
+                int64_t q = (int64_t)k * 6 + m + n - 1;
+                rows[q] = tri[m] < tri[n] ? tri[m] : tri[n];
+                cols[q] = tri[m] < tri[n] ? tri[n] : tri[m];
+            }
+        for (int m = 0; m < 3; ++m) rows[(int64_t)k * 6 + 3 + m] = cols[(int64_t)k * 6 + 3 + m] = tri[m];
+    }
+    st = cf_sparse_from_triplets(ctx, d->nv, d->nv, npair, rows, cols, NULL, 0, &g, slots);
+    if (st == CF_OK) st = cf_quat_sparse_create(ctx, g, &d->z);
+    if (st != CF_OK) goto done;
+    const int32_t *zcp = d->z->colptr, *gcp = g->colptr;
+    for (int64_t q = 0; q < npair; ++q) {
+        int32_t j = cols[q];
+        int32_t entry = zcp[2 * j] + 2 * (int32_t)(slots[q] - gcp[j]);
+        if (q % 6 < 3) d->zslot[q / 6 * 3 + q % 6] = entry;
+        else d->zdiag[j] = entry;
+    }
+done:
+    cf_sparse_destroy(&g);
+    CFI_FREE(ctx, rows, npair);
+    CFI_FREE(ctx, cols, npair);
+    CFI_FREE(ctx, slots, npair);
+    return st;
+}
+
+/* The real form: the vertex graph with a dense 4 x 4 block per entry,
+ * assembled from 9 vertex pairs per face and lifted, instead of from 144
+ * triplets per face (at 655k vertices those took 6 GB of index and sort
+ * arrays and 20 s; docs/memory.md). Same pattern and slots. */
+static cf_status create_real(cf_context *ctx, const cf_mesh *mesh, cfi_dirac *d)
+{
     int32_t nv = mesh->nv, nf = mesh->nf;
-    if ((int64_t)nv * 4 > INT32_MAX) return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin: mesh too large (%d vertices)", nv);
-    cfi_dirac *d = CFI_ALLOC(ctx, cfi_dirac, 1);
-    if (!d) return CF_ERR_NOMEM;
-    d->nv = nv;
-    d->nf = nf;
-    /* The pattern is the vertex graph with a dense 4 x 4 block per entry:
-     * assembled from 9 vertex pairs per face and lifted, instead of from
-     * 144 triplets per face (at 655k vertices those took 6 GB of index and
-     * sort arrays and 20 s; docs/memory.md). Same pattern and slots. */
     int64_t npair = (int64_t)nf * 9;
     int32_t *rows = CFI_ALLOC(ctx, int32_t, npair);
     int32_t *cols = CFI_ALLOC(ctx, int32_t, npair);
@@ -68,6 +111,19 @@ done:
     CFI_FREE(ctx, rows, npair);
     CFI_FREE(ctx, cols, npair);
     CFI_FREE(ctx, slots, npair);
+    return st;
+}
+
+cf_status cfi_dirac_create_form(cf_context *ctx, const cf_mesh *mesh, int32_t complex_form, cfi_dirac **out)
+{
+    *out = NULL;
+    int32_t nv = mesh->nv;
+    if ((int64_t)nv * 4 > INT32_MAX) return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin: mesh too large (%d vertices)", nv);
+    cfi_dirac *d = CFI_ALLOC(ctx, cfi_dirac, 1);
+    if (!d) return CF_ERR_NOMEM;
+    d->nv = nv;
+    d->nf = mesh->nf;
+    cf_status st = complex_form ? create_complex(ctx, mesh, d) : create_real(ctx, mesh, d);
     if (st != CF_OK) {
         cfi_dirac_destroy(ctx, &d);
         return st;
@@ -76,25 +132,74 @@ done:
     return CF_OK;
 }
 
+cf_status cfi_dirac_create(cf_context *ctx, const cf_mesh *mesh, cfi_dirac **out)
+{
+    return cfi_dirac_create_form(ctx, mesh, 0, out);
+}
+
 void cfi_dirac_destroy(cf_context *ctx, cfi_dirac **d)
 {
     if (!d || !*d) return;
     cfi_dirac *p = *d;
     cf_sparse_destroy(&p->x);
+    cf_quat_sparse_destroy(&p->z);
     cf_min_quad_destroy(&p->fixed);
     CFI_FREE(ctx, p->known, p->nknown);
     CFI_FREE(ctx, p->known_values, p->nknown);
     CFI_FREE(ctx, p->block_slot, (int64_t)p->nf * 36);
     CFI_FREE(ctx, p->diag_slot, (int64_t)p->nv * 4);
+    CFI_FREE(ctx, p->zslot, (int64_t)p->nf * 3);
+    CFI_FREE(ctx, p->zdiag, p->nv);
     CFI_FREE(ctx, p, 1);
     *d = NULL;
+}
+
+cf_status cfi_dirac_analyse(cf_context *ctx, const cfi_dirac *d, const cf_cholesky_options *co, cf_cholesky **out)
+{
+    return d->z ? cf_cholesky_create_quat(ctx, d->z, co, out) : cf_cholesky_create(ctx, d->x, co, out);
+}
+
+cf_status cfi_dirac_factorize(const cfi_dirac *d, cf_cholesky *chol)
+{
+    return d->z ? cf_cholesky_factorize_quat(chol, d->z) : cf_cholesky_factorize(chol, d->x);
+}
+
+double cfi_dirac_quotient(const cfi_dirac *d, const double *area, const double *lambda, double *work)
+{
+    if (!d->z) return cf_rayleigh_quotient_blocks(d->x, area, 4, lambda, work);
+    /* the sums of cf_rayleigh_quotient_blocks */
+    cf_quat_sparse_multiply(d->z, lambda, work);
+    double num = 0.0, den = 0.0;
+    for (int32_t i = 0; i < d->nv; ++i)
+        for (int c = 0; c < 4; ++c) {
+            int64_t k = 4 * (int64_t)i + c;
+            num += lambda[k] * work[k];
+            den += area[i] * lambda[k] * lambda[k];
+        }
+    return den > 0.0 ? num / den : NAN;
+}
+
+/* Crane 2013, App. G: the quaternion X_mn of face k's corners m, n
+ * (e: the face's ccw edges opposite each corner, r: rho at the corners):
+ * X_mn = -e_m e_n / (4A) + (rho_m e_n - rho_n e_m) / 6 + A rho_m rho_n / 9;
+ * for imaginary e: e_m e_n = -<e_m, e_n> + e_m x e_n. Plus the shift on
+ * the diagonal. One function for both forms: the same arithmetic. */
+static inline void face_quaternion(double e[3][3], const double r[3], double area, double shift, int m, int n,
+                                   double q[4])
+{
+    const double *em = e[m], *en = e[n];
+    q[0] = (em[0] * en[0] + em[1] * en[1] + em[2] * en[2]) / (4.0 * area) + area * r[m] * r[n] / 9.0;
+    double cr[3] = {em[1] * en[2] - em[2] * en[1], em[2] * en[0] - em[0] * en[2], em[0] * en[1] - em[1] * en[0]};
+    for (int c = 0; c < 3; ++c) q[1 + c] = -cr[c] / (4.0 * area) + (r[m] * en[c] - r[n] * em[c]) / 6.0;
+    if (m == n) q[0] += shift * area / 3.0;
 }
 
 cf_status cfi_dirac_fill(cfi_dirac *d, const cf_mesh *mesh, const double *positions, const double *rho,
                          double shift)
 {
-    double *val = d->x->values;
-    memset(val, 0, (size_t)cf_sparse_nnz(d->x) * sizeof(double));
+    double *val = d->z ? d->z->values : d->x->values;
+    memset(val, 0, (size_t)(d->z ? 2 * cf_quat_sparse_nnz(d->z) : cf_sparse_nnz(d->x)) * sizeof(double));
+    const int32_t *zcp = d->z ? d->z->colptr : NULL;
     for (int32_t k = 0; k < mesh->nf; ++k) {
         const int32_t *tri = mesh->triangles + 3 * k;
         double e[3][3];
@@ -111,17 +216,41 @@ cf_status cfi_dirac_fill(cfi_dirac *d, const cf_mesh *mesh, const double *positi
         double r[3] = {0.0, 0.0, 0.0};
         if (rho)
             for (int m = 0; m < 3; ++m) r[m] = rho[tri[m]];
+        if (d->z) {
+            /* The upper blocks only (tri[m] <= tri[n]; the lower one is its
+             * conjugate), as q = a + b i + c j + d k -> [[a + b i, -c - d i],
+             * [c - d i, a - b i]]. Each complex entry receives the same
+             * component sums, in the same face order, as the real form's
+             * entries that its conversion reads. The diagonal blocks' imaginary
+             * parts vanish exactly (e x e = 0) and are not written. */
+            for (int m = 0; m < 3; ++m)
+                for (int n = 0; n < 3; ++n) {
+                    if (tri[m] > tri[n]) continue;
+                    double q[4];
+                    face_quaternion(e, r, area, shift, m, n, q);
+                    int32_t j = tri[n];
+                    int64_t d0 = m == n ? d->zdiag[j] : d->zslot[3 * (int64_t)k + m + n - 1];
+                    int64_t d2 = d0 + (zcp[2 * j + 1] - zcp[2 * j]);
+                    if (m == n) {
+                        val[2 * d0] += q[0];
+                        val[2 * d2 + 2] += q[0];
+                        continue;
+                    }
+                    val[2 * d0] += q[0];
+                    val[2 * d0 + 1] += q[1];
+                    val[2 * d0 + 2] += q[2];
+                    val[2 * d0 + 3] -= q[3];
+                    val[2 * d2] -= q[2];
+                    val[2 * d2 + 1] -= q[3];
+                    val[2 * d2 + 2] += q[0];
+                    val[2 * d2 + 3] -= q[1];
+                }
+            continue;
+        }
         for (int m = 0; m < 3; ++m) {
             for (int n = 0; n < 3; ++n) {
-                /* Crane 2013, App. G: X_mn = -e_m e_n / (4A) + (rho_m e_n - rho_n e_m) / 6 + A rho_m rho_n / 9;
-                 * for imaginary e: e_m e_n = -<e_m, e_n> + e_m x e_n. */
-                const double *em = e[m], *en = e[n];
                 double q[4];
-                q[0] = (em[0] * en[0] + em[1] * en[1] + em[2] * en[2]) / (4.0 * area) + area * r[m] * r[n] / 9.0;
-                double cr[3] = {em[1] * en[2] - em[2] * en[1], em[2] * en[0] - em[0] * en[2],
-                                em[0] * en[1] - em[1] * en[0]};
-                for (int c = 0; c < 3; ++c) q[1 + c] = -cr[c] / (4.0 * area) + (r[m] * en[c] - r[n] * em[c]) / 6.0;
-                if (m == n) q[0] += shift * area / 3.0;
+                face_quaternion(e, r, area, shift, m, n, q);
                 /* columns of the left-multiplication matrix of q (cf_quat_left_matrix,
                  * Le Folgoc Eq. (7)), written out here: the library call per block
                  * (a 32-byte struct by value, no inlining across the library) cost

@@ -74,7 +74,7 @@ static cf_status exactness_columns(cf_flow *flow, cfi_spin_state *s, const doubl
     double t0 = cfi_now_seconds();
     cf_status st = cfi_dirac_fill(s->dirac, mesh, x, NULL, s->eps);
     if (st != CF_OK) return st;
-    st = cf_cholesky_factorize(s->chol0, s->dirac->x);
+    st = cfi_dirac_factorize(s->dirac, s->chol0);
     double t1 = cfi_now_seconds();
     *factor_seconds += t1 - t0;
     if (st != CF_OK) return st;
@@ -161,7 +161,7 @@ static cf_status exactness_columns_linearized(cf_flow *flow, cfi_spin_state *s, 
     double t0 = cfi_now_seconds();
     cf_status st = cfi_dirac_fill(s->dirac, mesh, x, NULL, s->eps);
     if (st != CF_OK) return st;
-    st = cf_cholesky_factorize(s->chol0, s->dirac->x);
+    st = cfi_dirac_factorize(s->dirac, s->chol0);
     double t1 = cfi_now_seconds();
     *factor_seconds += t1 - t0;
     if (st != CF_OK) return st;

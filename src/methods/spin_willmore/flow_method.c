@@ -155,7 +155,12 @@ static cf_status create_dirac(cf_flow *flow, cfi_spin_state *s)
 {
     cf_context *ctx = flow->ctx;
     const cf_mesh *mesh = flow->mesh;
-    cf_status st = cfi_dirac_create(ctx, mesh, &s->dirac);
+    /* X only in complex form (never the real one) when every use of it
+     * takes that form: complex factorisation, and neither the prescribed/cmc
+     * frames, which rewrite the real form's blocks, nor the fixed boundary,
+     * whose cf_min_quad eliminates blocks of the real form (docs/memory.md) */
+    int32_t complex_only = s->opt.complex_factorization && !s->restricted_boundary && !s->fixed_boundary;
+    cf_status st = cfi_dirac_create_form(ctx, mesh, complex_only, &s->dirac);
     if (st == CF_OK) st = cfi_dirac_fill(s->dirac, mesh, flow->positions, NULL, s->eps);
     if (st != CF_OK) return st;
     cf_cholesky_options co;
@@ -169,9 +174,9 @@ static cf_status create_dirac(cf_flow *flow, cfi_spin_state *s)
     /* A fixed boundary eliminates the boundary quaternions (whole blocks,
      * so the interior block keeps the complex form; dirac.c). */
     if (s->fixed_boundary) st = cfi_dirac_fixed_create(ctx, s->dirac, mesh, s->opt.complex_factorization);
-    else st = cf_cholesky_create(ctx, s->dirac->x, &co, &s->chol);
+    else st = cfi_dirac_analyse(ctx, s->dirac, &co, &s->chol);
     co.quaternion_blocks = s->opt.complex_factorization != 0;
-    if (st == CF_OK && s->harmonic_dim) st = cf_cholesky_create(ctx, s->dirac->x, &co, &s->chol0);
+    if (st == CF_OK && s->harmonic_dim) st = cfi_dirac_analyse(ctx, s->dirac, &co, &s->chol0);
     /* the solve workspaces now: steps allocate nothing (lambda: one column;
      * exactness: one per form, three per form when linearised) */
     if (st == CF_OK && s->chol) st = cf_cholesky_reserve_solve(s->chol, 1);
@@ -283,7 +288,7 @@ cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, in
     }
     double tb = cfi_now_seconds();
     t->assemble += tb - ta;
-    st = s->fixed_boundary ? cfi_dirac_fixed_factorize(s->dirac) : cf_cholesky_factorize(s->chol, s->dirac->x);
+    st = s->fixed_boundary ? cfi_dirac_fixed_factorize(s->dirac) : cfi_dirac_factorize(s->dirac, s->chol);
     double tc = cfi_now_seconds();
     t->factorize += tc - tb;
     if (st != CF_OK) return st;
@@ -308,7 +313,7 @@ cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, in
     t->solve += cfi_now_seconds() - tc;
     if (st != CF_OK) return cfi_error(ctx, st, "spin-willmore: eigenvector solve failed");
     double quotient = s->fixed_boundary ? cfi_dirac_fixed_quotient(s->dirac, mesh, s->area, s->lambda, s->qwork)
-                                        : cf_rayleigh_quotient_blocks(s->dirac->x, s->area, 4, s->lambda, s->qwork);
+                                        : cfi_dirac_quotient(s->dirac, s->area, s->lambda, s->qwork);
     s->diag.eigenvalue = isnan(quotient) ? 0.0 : quotient - s->eps;
     if (s->restricted_boundary) {
         /* back to lambda = Q mu on the boundary */

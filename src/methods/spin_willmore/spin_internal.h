@@ -16,12 +16,27 @@
 #include "curvflow/spin_willmore.h"
 #include "mesh/mesh_internal.h"
 
-/* The facewise matrix X(rho) of Crane 2013, App. G, as a real symmetric
- * 4 nv x 4 nv matrix with a fixed pattern; values are refilled in place. */
+/* The facewise matrix X(rho) of Crane 2013, App. G, with a fixed pattern;
+ * values are refilled in place. In one of two forms, chosen at creation:
+ * - real: a real symmetric 4 nv x 4 nv matrix (x), both triangles, for the
+ *   paths that read or rewrite the real form (boundary=prescribed/cmc,
+ *   boundary=fixed through cf_min_quad, complex_factorization=0, and
+ *   cf_spin_transform);
+ * - complex: only the upper triangle of the complex Hermitian 2 nv x 2 nv
+ *   form (z, curvflow/linalg.h cf_quat_sparse), filled straight from the
+ *   per-face quaternions and factorised without a copy: at 655k vertices
+ *   the real form, its 36 int64 slots per face and the real -> complex
+ *   copy took 1.7 GB at the factorisation's peak (docs/memory.md). The
+ *   faces are summed in the same order, so the complex values equal those
+ *   the real form's conversion gives, bit for bit. */
 typedef struct cfi_dirac {
-    cf_sparse *x;
-    int64_t *block_slot;   /* 36 nf: slot of entry (4 i, 4 j + c) for face k, pair (m, n), column c */
-    int64_t *diag_slot;    /* 4 nv: slot of entry (4 i + c, 4 i + c) */
+    cf_sparse *x;          /* real form, or NULL */
+    cf_quat_sparse *z;     /* complex form, or NULL */
+    int64_t *block_slot;   /* real: 36 nf: slot of entry (4 i, 4 j + c) for face k, pair (m, n), column c */
+    int64_t *diag_slot;    /* real: 4 nv: slot of entry (4 i + c, 4 i + c) */
+    int32_t *zslot;        /* complex: 3 nf: complex entry (2 I, 2 J) of face k's block (I, J), I < J, of its
+                            * corners (0, 1), (0, 2), (1, 2) (slot 3 k + m + n - 1) */
+    int32_t *zdiag;        /* complex: nv: complex entry (2 i, 2 i) */
     int32_t nv, nf;
     /* Fixed boundary (cfi_dirac_fixed_*): X with the boundary quaternions
      * known, eliminated by linalg's cf_min_quad in whole 4 x 4 blocks. */
@@ -31,8 +46,22 @@ typedef struct cfi_dirac {
     double *known_values;  /* nknown: lambda_B = 1 = (1, 0, 0, 0) per boundary vertex */
 } cfi_dirac;
 
+/* The real form (cfi_dirac_create) or, with complex_form, the complex one.
+ * Statuses: CF_ERR_INVALID_ARG (mesh beyond int32 indices), CF_ERR_NOMEM. */
 cf_status cfi_dirac_create(cf_context *ctx, const cf_mesh *mesh, cfi_dirac **out);
+cf_status cfi_dirac_create_form(cf_context *ctx, const cf_mesh *mesh, int32_t complex_form, cfi_dirac **out);
 void cfi_dirac_destroy(cf_context *ctx, cfi_dirac **d);
+/* Analysis of X's pattern for a factorisation of either form (co: block
+ * size 4, ordering, and for the real form whether to factorise it as its
+ * complex form), and the numeric factorisation of the current values. */
+cf_status cfi_dirac_analyse(cf_context *ctx, const cfi_dirac *d, const cf_cholesky_options *co, cf_cholesky **out);
+cf_status cfi_dirac_factorize(const cfi_dirac *d, cf_cholesky *chol);
+/* Rayleigh quotient lambda^T X lambda / sum_i area_i |lambda_i|^2
+ * (cf_rayleigh_quotient_blocks on the real form; on the complex form the
+ * same sums over cf_quat_sparse_multiply, whose lower blocks are the
+ * conjugates of the upper ones where the real form's lower blocks are
+ * summed separately: equal up to rounding). work: 4 nv doubles. */
+double cfi_dirac_quotient(const cfi_dirac *d, const double *area, const double *lambda, double *work);
 
 /* Fills X(rho) + shift * M (M: barycentric vertex areas) for `positions`.
  * rho may be NULL (rho = 0). Sign: X = (D - P rho)^* A (D - P rho) with

@@ -11,9 +11,11 @@
  *   bench_memory [--subdivisions 7,8] [--methods spin-willmore,implicit-mcf,...]
  *
  * Columns: mesh_MB is the peak after generating the mesh (before the flow),
- * peak_MB the peak of the whole child; create_s / step_s are wall seconds of
- * cf_flow_create / the first cf_flow_step, cpu_s the child's user + system
- * time.
+ * peak_MB the peak of the whole child, create_MB the peak by the end of
+ * cf_flow_create, held_MB the resident size after the step (what the flow
+ * keeps: the difference to peak_MB is what the step needed only while it
+ * ran); create_s / step_s are wall seconds of cf_flow_create / the first
+ * cf_flow_step, cpu_s the child's user + system time.
  */
 #define _DEFAULT_SOURCE 1 /* wait4 */
 #include "curvflow/flow.h"
@@ -28,6 +30,19 @@
 #include <time.h>
 #include <unistd.h>
 
+/* VmRSS of this process in MB (0 if /proc is not there) */
+static double resident_mb(void)
+{
+    FILE *f = fopen("/proc/self/status", "r");
+    if (!f) return 0.0;
+    char line[256];
+    double kb = 0.0;
+    while (fgets(line, sizeof line, f))
+        if (sscanf(line, "VmRSS: %lf", &kb) == 1) break;
+    fclose(f);
+    return kb / 1024.0;
+}
+
 static double now(void)
 {
     struct timespec t;
@@ -38,7 +53,7 @@ static double now(void)
 typedef struct child_report {
     int status;         /* cf_status of the first failing call, 0 if none */
     int32_t nv, nf;
-    double mesh_mb, create_s, step_s;
+    double mesh_mb, create_mb, held_mb, create_s, step_s;
     char message[200];
 } child_report;
 
@@ -63,12 +78,15 @@ static void run_child(int fd, int32_t sub, cf_flow_kind kind)
         double t0 = now();
         st = cf_flow_create(ctx, mesh, NULL, &o, &flow);
         r.create_s = now() - t0;
+        getrusage(RUSAGE_SELF, &ru);
+        r.create_mb = (double)ru.ru_maxrss / 1024.0;
     }
     if (st == CF_OK) {
         cf_flow_info info;
         double t0 = now();
         st = cf_flow_step(flow, &info);
         r.step_s = now() - t0;
+        r.held_mb = resident_mb();
     }
     r.status = (int)st;
     if (st != CF_OK) snprintf(r.message, sizeof r.message, "%s", cf_context_message(ctx));
@@ -103,8 +121,8 @@ static void run(int32_t sub, cf_flow_kind kind)
     double cpu = (double)ru.ru_utime.tv_sec + 1e-6 * (double)ru.ru_utime.tv_usec + (double)ru.ru_stime.tv_sec +
                  1e-6 * (double)ru.ru_stime.tv_usec;
     const char *result = got != (ssize_t)sizeof r ? "child died" : r.status ? r.message : "ok";
-    printf("%s\t%d\t%d\t%.0f\t%.0f\t%.2f\t%.2f\t%.2f\t%.2f\t%s\n", cf_flow_kind_name(kind), r.nv, r.nf, r.mesh_mb,
-           (double)ru.ru_maxrss / 1024.0, r.create_s, r.step_s, wall, cpu, result);
+    printf("%s\t%d\t%d\t%.0f\t%.0f\t%.0f\t%.0f\t%.2f\t%.2f\t%.2f\t%.2f\t%s\n", cf_flow_kind_name(kind), r.nv, r.nf,
+           r.mesh_mb, (double)ru.ru_maxrss / 1024.0, r.create_mb, r.held_mb, r.create_s, r.step_s, wall, cpu, result);
     fflush(stdout);
 }
 
@@ -121,7 +139,7 @@ int main(int argc, char **argv)
             return 1;
         }
     }
-    printf("method\tV\tF\tmesh_MB\tpeak_MB\tcreate_s\tstep_s\twall_s\tcpu_s\tresult\n");
+    printf("method\tV\tF\tmesh_MB\tpeak_MB\tcreate_MB\theld_MB\tcreate_s\tstep_s\twall_s\tcpu_s\tresult\n");
     char sbuf[256];
     snprintf(sbuf, sizeof sbuf, "%s", subs);
     for (char *s = strtok(sbuf, ","); s; s = strtok(NULL, ",")) {

@@ -216,7 +216,9 @@ CF_API void cf_quat_sparse_multiply(const cf_quat_sparse *a, const double *x, do
  * on the real form of the same operator, without that real form or a copy
  * of the values: the factorisation reads a->values. Solves
  * (cf_cholesky_solve, cf_inverse_iteration_blocks) take and return real
- * vectors of 4 nb entries; cf_cholesky_size is 4 nb. options: only
+ * vectors of 4 nb entries (converted to the complex form inside x, so no
+ * buffer is kept and cf_cholesky_reserve_solve has nothing to reserve);
+ * cf_cholesky_size is 4 nb. options: only
  * `ordering` is read (may be NULL). Factorising needs a's pattern of the
  * analysis (CF_ERR_INVALID_ARG otherwise); NaN/Inf: CF_ERR_NUMERICAL
  * naming the block; not positive definite: CF_ERR_NOT_POSDEF naming the

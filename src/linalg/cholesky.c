@@ -15,7 +15,8 @@
 /* Complex columns (2 per vertex) up to which the quaternion-block analysis
  * widens CHOLMOD's supernode amalgamation: at 164k / 655k vertices the
  * default gives a factor 15 % / 14 % smaller (49.0 -> 41.8 M, 218 -> 188 M
- * complex entries; 3.5 -> 3.0 GB) at the same speed. */
+ * complex entries; 3.5 -> 3.0 GB) at the same speed, and no amalgamation
+ * zeros (zrelax 0) another 7 % (175.7 M, 2.8 GB) at +5 % time (analyse). */
 #define CFI_QUAT_WIDE_RELAX_MAX_COLUMNS 100000
 
 struct cf_cholesky {
@@ -302,6 +303,15 @@ static cf_status analyse(cf_cholesky *chol, cholmod_sparse *view, const cf_spars
             c->nrelax[2] = 96;
             c->zrelax[1] = 0.2;
             c->zrelax[2] = 0.1;
+        } else if (chol->complex_form) {
+            /* Beyond, no explicit zeros at all (zrelax 0; supernodes of
+             * fewer than nrelax columns still merge): at 655k vertices X's
+             * factor 188.4 -> 175.7 M complex entries (-190 MB, the flow's
+             * peak 4429 -> 4248 MB) for +5 % in its factorisation; at 164k
+             * 41.8 -> 38.7 M (docs/memory.md). */
+            c->zrelax[0] = 0.0;
+            c->zrelax[1] = 0.0;
+            c->zrelax[2] = 0.0;
         }
         chol->factor = cholmod_analyze_p(view, perm, NULL, 0, c);
     }
@@ -532,7 +542,7 @@ cf_status cf_cholesky_factorize_quat(cf_cholesky *chol, const cf_quat_sparse *a)
 /* The complex-form buffer of quaternion-block solves, grown to nrhs columns. */
 static cf_status reserve_zwork(cf_cholesky *chol, int32_t nrhs)
 {
-    if (!chol->complex_form || nrhs <= chol->zwork_cols) return CF_OK;
+    if (!chol->complex_form || chol->quat_input || nrhs <= chol->zwork_cols) return CF_OK;
     cf_context *ctx = chol->ctx;
     double *w = CFI_ALLOC(ctx, double, (size_t)chol->n * (size_t)nrhs);
     if (!w) return CF_ERR_NOMEM;
@@ -582,12 +592,21 @@ cf_status cf_cholesky_solve(cf_cholesky *chol, int32_t nrhs, const double *b, do
     bd.xtype = CHOLMOD_REAL;
     bd.dtype = CHOLMOD_DOUBLE;
     if (chol->complex_form) {
-        cf_status sz = reserve_zwork(chol, nrhs);
-        if (sz != CF_OK) return sz;
-        cfi_quat_to_complex(chol->n, nrhs, b, chol->zwork);
+        /* From a cf_quat_sparse the complex right-hand sides go into the
+         * caller's x (n doubles per column hold n / 2 complex entries; x may
+         * be b, the conversion works in place): no buffer of our own (21 MB
+         * at 655k vertices; docs/memory.md). CHOLMOD reads B before it
+         * writes its own X. */
+        double *zb = x;
+        if (!chol->quat_input) {
+            cf_status sz = reserve_zwork(chol, nrhs);
+            if (sz != CF_OK) return sz;
+            zb = chol->zwork;
+        }
+        cfi_quat_to_complex(chol->n, nrhs, b, zb);
         bd.nrow = bd.d = (size_t)chol->n / 2;
         bd.nzmax = (size_t)total / 2;
-        bd.x = chol->zwork;
+        bd.x = zb;
         bd.xtype = CHOLMOD_COMPLEX;
     }
     /* x, y, e keep their storage between calls (reallocated only when nrhs grows) */

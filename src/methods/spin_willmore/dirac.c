@@ -11,45 +11,41 @@
 #include <math.h>
 #include <string.h>
 
-/* The complex form: the vertex graph from the 6 pairs per face that lie
- * on or above the diagonal (rows tri[m] <= columns tri[n]), its
- * cf_quat_sparse pattern, and the complex entry of each face's blocks:
- * block k of block column J starts at colptr[2 J] + 2 k (curvflow/linalg.h),
- * and graph slot q of column J is that block k = q - gcp[J]. */
+/* The complex form: the vertex graph from the edges (i < j, upper
+ * triangle) and the diagonal, its cf_quat_sparse pattern, and the complex
+ * entry of each edge's and vertex's block: block k of block column J
+ * starts at colptr[2 J] + 2 k (curvflow/linalg.h), and graph slot q of
+ * column J is that block k = q - gcp[J]. The same pairs as the faces'
+ * (every edge and vertex lies on a face), so the same pattern. */
 static cf_status create_complex(cf_context *ctx, const cf_mesh *mesh, cfi_dirac *d)
 {
-    int32_t nf = mesh->nf;
-    int64_t npair = (int64_t)nf * 6;
+    int32_t nv = mesh->nv, ne = mesh->ne;
+    int64_t npair = (int64_t)ne + nv;
     int32_t *rows = CFI_ALLOC(ctx, int32_t, npair);
     int32_t *cols = CFI_ALLOC(ctx, int32_t, npair);
     int64_t *slots = CFI_ALLOC(ctx, int64_t, npair);
     cf_sparse *g = NULL;
-    d->zslot = CFI_ALLOC(ctx, int32_t, (int64_t)nf * 3);
-    d->zdiag = CFI_ALLOC(ctx, int32_t, d->nv);
+    d->zslot = CFI_ALLOC(ctx, int32_t, ne);
+    d->zdiag = CFI_ALLOC(ctx, int32_t, nv);
     cf_status st = CF_OK;
     if (!rows || !cols || !slots || !d->zslot || !d->zdiag) {
         st = CF_ERR_NOMEM;
         goto done;
     }
-    /* pairs 6 k + m + n - 1 (m < n; 0, 1, 2) and 6 k + 3 + m (diagonal) */
-    for (int32_t k = 0; k < nf; ++k) {
-        const int32_t *tri = mesh->triangles + 3 * k;
-        for (int m = 0; m < 3; ++m)
-            for (int n = m + 1; n < 3; ++n) {
-                int64_t q = (int64_t)k * 6 + m + n - 1;
-                rows[q] = tri[m] < tri[n] ? tri[m] : tri[n];
-                cols[q] = tri[m] < tri[n] ? tri[n] : tri[m];
-            }
-        for (int m = 0; m < 3; ++m) rows[(int64_t)k * 6 + 3 + m] = cols[(int64_t)k * 6 + 3 + m] = tri[m];
+    /* pairs 0 .. ne - 1: the edges; ne + i: vertex i */
+    for (int32_t e = 0; e < ne; ++e) {
+        rows[e] = mesh->edge_vertices[2 * e];
+        cols[e] = mesh->edge_vertices[2 * e + 1];
     }
-    st = cf_sparse_from_triplets(ctx, d->nv, d->nv, npair, rows, cols, NULL, 0, &g, slots);
+    for (int32_t i = 0; i < nv; ++i) rows[(int64_t)ne + i] = cols[(int64_t)ne + i] = i;
+    st = cf_sparse_from_triplets(ctx, nv, nv, npair, rows, cols, NULL, 0, &g, slots);
     if (st == CF_OK) st = cf_quat_sparse_create(ctx, g, &d->z);
     if (st != CF_OK) goto done;
     const int32_t *zcp = d->z->colptr, *gcp = g->colptr;
     for (int64_t q = 0; q < npair; ++q) {
         int32_t j = cols[q];
         int32_t entry = zcp[2 * j] + 2 * (int32_t)(slots[q] - gcp[j]);
-        if (q % 6 < 3) d->zslot[q / 6 * 3 + q % 6] = entry;
+        if (q < ne) d->zslot[q] = entry;
         else d->zdiag[j] = entry;
     }
 done:
@@ -123,6 +119,7 @@ cf_status cfi_dirac_create_form(cf_context *ctx, const cf_mesh *mesh, int32_t co
     if (!d) return CF_ERR_NOMEM;
     d->nv = nv;
     d->nf = mesh->nf;
+    d->ne = mesh->ne;
     cf_status st = complex_form ? create_complex(ctx, mesh, d) : create_real(ctx, mesh, d);
     if (st != CF_OK) {
         cfi_dirac_destroy(ctx, &d);
@@ -148,7 +145,7 @@ void cfi_dirac_destroy(cf_context *ctx, cfi_dirac **d)
     CFI_FREE(ctx, p->known_values, p->nknown);
     CFI_FREE(ctx, p->block_slot, (int64_t)p->nf * 36);
     CFI_FREE(ctx, p->diag_slot, (int64_t)p->nv * 4);
-    CFI_FREE(ctx, p->zslot, (int64_t)p->nf * 3);
+    CFI_FREE(ctx, p->zslot, p->ne);
     CFI_FREE(ctx, p->zdiag, p->nv);
     CFI_FREE(ctx, p, 1);
     *d = NULL;
@@ -229,7 +226,10 @@ cf_status cfi_dirac_fill(cfi_dirac *d, const cf_mesh *mesh, const double *positi
                     double q[4];
                     face_quaternion(e, r, area, shift, m, n, q);
                     int32_t j = tri[n];
-                    int64_t d0 = m == n ? d->zdiag[j] : d->zslot[3 * (int64_t)k + m + n - 1];
+                    /* corners {0, 1}, {1, 2}, {2, 0}: halfedges 0, 1, 2 of the face
+                     * (halfedge 3 k + h runs tri[h] -> tri[h + 1]) */
+                    int h = m + n == 2 ? 2 : (m + n) / 2;
+                    int64_t d0 = m == n ? d->zdiag[j] : d->zslot[mesh->halfedge_edge[3 * (int64_t)k + h]];
                     int64_t d2 = d0 + (zcp[2 * j + 1] - zcp[2 * j]);
                     if (m == n) {
                         val[2 * d0] += q[0];

@@ -45,11 +45,12 @@ cf_status cfi_spin_update_geometry(cf_flow *flow, cfi_spin_state *s, const doubl
 {
     cf_context *ctx = flow->ctx;
     const cf_mesh *mesh = flow->mesh;
-    cf_status st = cf_edge_poisson_set_metric(s->poisson, x);
+    cf_status st = s->poisson ? cf_edge_poisson_set_metric(s->poisson, x)
+                              : cf_cotan_laplacian_refill(s->lap, mesh, x, s->lap_slots);
     if (st == CF_OK) st = cf_vertex_areas(ctx, mesh, x, CF_DUAL_AREA_BARYCENTRIC, s->area);
     if (st == CF_OK) st = cf_vertex_normals(ctx, mesh, x, s->normal);
     if (st != CF_OK) return st;
-    const cf_sparse *l = cf_edge_poisson_laplacian(s->poisson);
+    const cf_sparse *l = s->poisson ? cf_edge_poisson_laplacian(s->poisson) : s->lap;
     memset(s->lx, 0, 3 * (size_t)s->nv * sizeof(double));
     for (int32_t j = 0; j < s->nv; ++j)
         for (int32_t p = l->colptr[j]; p < l->colptr[j + 1]; ++p) {
@@ -83,6 +84,7 @@ void cfi_spin_destroy(cf_flow *flow)
     cf_cholesky_destroy(&s->chol0);
     cf_edge_poisson_destroy(&s->poisson);
     cf_edge_poisson_destroy(&s->poisson_input);
+    cf_sparse_destroy(&s->lap);
     cf_spectral_filter_destroy(&s->filter);
     cfi_workspace_free_all(&s->ws);
     CFI_FREE(ctx, s, 1);
@@ -96,7 +98,7 @@ static cf_status allocate_arrays(cfi_spin_state *s, int32_t dim)
     cfi_workspace *ws = &s->ws;
     int64_t nv = s->nv, ne = s->ne;
     int64_t zcols = s->linearized ? 3 * (int64_t)dim : dim;
-    s->max_cols = 4 + 3 * dim + 1;
+    s->max_cols = 4 + 3 * dim; /* N x,y,z, 1, and 3 per harmonic form at most (constraints.c) */
     int ok = 1;
 #define WS_ARRAY(field, count) ok = ok && ((field) = CFI_WS_ALLOC(ws, double, (count))) != NULL
     if (s->linearized) WS_ARRAY(s->hweights, ne);
@@ -107,19 +109,21 @@ static cf_status allocate_arrays(cfi_spin_state *s, int32_t dim)
     }
     WS_ARRAY(s->area, nv);
     WS_ARRAY(s->normal, 3 * nv);
-    WS_ARRAY(s->lx, 3 * nv);
     WS_ARRAY(s->h, nv);
-    WS_ARRAY(s->rest_area, nv);
+    if (s->opt.mobius) WS_ARRAY(s->rest_area, nv); /* Moebius balancing only, as vtmp */
     WS_ARRAY(s->rhodot, nv);
-    WS_ARRAY(s->rho, nv);
     WS_ARRAY(s->lambda, 4 * nv);
-    WS_ARRAY(s->qrhs, 4 * nv);
+    if (s->fixed_boundary) WS_ARRAY(s->qrhs, 4 * nv);
     WS_ARRAY(s->qwork, 4 * nv);
     WS_ARRAY(s->basis, nv * s->max_cols);
     WS_ARRAY(s->edges, 3 * ne);
     WS_ARRAY(s->newpos, 3 * nv);
-    WS_ARRAY(s->vtmp, nv);
-    WS_ARRAY(s->vtmp2, nv);
+    /* Scratch of one phase each, in one array: rho from IV to the fill of
+     * X in V, the recovered positions in VI, L f inside
+     * cfi_spin_update_geometry (after VI). */
+    s->lx = s->newpos;
+    s->rho = s->newpos;
+    if (s->opt.mobius) WS_ARRAY(s->vtmp, nv);
     if (s->restricted_boundary) {
         WS_ARRAY(s->frames, 16 * nv);
         WS_ARRAY(s->target, 3 * nv);
@@ -130,12 +134,21 @@ static cf_status allocate_arrays(cfi_spin_state *s, int32_t dim)
 }
 
 /* The Poisson solver in the current metric (H every step; the positions
- * when they keep the current metric). A fixed boundary makes its vertices
- * known values (Sec. 6.3.2). */
+ * when they keep the current metric; the harmonic forms of the exactness
+ * constraint). A fixed boundary makes its vertices known values (Sec.
+ * 6.3.2). When no solve needs it (input_metric without a fixed boundary,
+ * no exactness), only its Laplacian is kept, for H: its solver's symbolic
+ * factor, slots and right-hand sides took ~100 MB at 655k vertices
+ * (docs/memory.md). Same Laplacian, same values. */
 static cf_status create_current_poisson(cf_flow *flow, cfi_spin_state *s)
 {
     cf_context *ctx = flow->ctx;
     const cf_mesh *mesh = flow->mesh;
+    if (s->opt.input_metric && !s->fixed_boundary && s->harmonic_dim == 0) {
+        s->lap_slots = CFI_WS_ALLOC(&s->ws, int64_t, cf_cotan_laplacian_slot_count(mesh));
+        if (!s->lap_slots) return CF_ERR_NOMEM;
+        return cf_cotan_laplacian_with_slots(ctx, mesh, flow->positions, &s->lap, s->lap_slots);
+    }
     if (!s->fixed_boundary) return cf_edge_poisson_create(ctx, mesh, flow->positions, 0, NULL, &s->poisson);
     int32_t count = 0;
     for (int32_t i = 0; i < mesh->nv; ++i) count += mesh->vertex_on_boundary[i] != 0;
@@ -236,7 +249,7 @@ cf_status cfi_spin_create(cf_flow *flow, const void *options)
         st = cf_edge_poisson_create(ctx, mesh, flow->positions, 0, NULL, &s->poisson_input); /* filled with these positions */
     if (st == CF_OK) st = cfi_spin_update_geometry(flow, s, flow->positions);
     /* desired vertex areas of Moebius balancing: the mesh's rest shape */
-    if (st == CF_OK) st = cf_vertex_areas(ctx, mesh, mesh->positions, CF_DUAL_AREA_BARYCENTRIC, s->rest_area);
+    if (st == CF_OK && s->rest_area) st = cf_vertex_areas(ctx, mesh, mesh->positions, CF_DUAL_AREA_BARYCENTRIC, s->rest_area);
     if (st != CF_OK) goto fail;
     s->eps = o->regularization * 4.0 * CFI_PI / flow->initial_area;
     st = cfi_spin_boundary_targets(flow, s, o);

@@ -33,7 +33,10 @@ typedef struct cfi_spin_state {
     cfi_dirac *dirac;
     cf_cholesky *chol;       /* X(rho) + eps M */
     cf_cholesky *chol0;      /* X(0) + eps M, exactness only */
-    cf_edge_poisson *poisson;       /* cotan Laplacian of the current surface (H; fixed-boundary positions) */
+    cf_edge_poisson *poisson;       /* solver in the current metric: positions without input_metric or with a
+                                     * fixed boundary, harmonic forms (exactness); its Laplacian gives H */
+    cf_sparse *lap;          /* without that solver: the current surface's cotan Laplacian alone (H) */
+    int64_t *lap_slots;      /* its slot map (cf_cotan_laplacian_slot_count entries) */
     cf_edge_poisson *poisson_input; /* input_metric: that of the starting surface, factorised once */
     cf_spectral_filter *filter; /* sigma > 0: the spectral filter of the input (Sec. 4; curvflow/ops.h) */
     int32_t harmonic_dim;    /* dim H^1 (2g + b - 1 with boundary) if the exactness constraint is active */
@@ -49,17 +52,19 @@ typedef struct cfi_spin_state {
     double *harmonic;        /* ne x 2g */
     double *area;            /* nv barycentric areas of the current surface */
     double *normal;          /* 3 nv */
-    double *lx;              /* 3 nv: L f */
+    double *lx;              /* 3 nv: L f, scratch of cfi_spin_update_geometry (shares newpos's array) */
     double *h;               /* nv */
-    double *rest_area;       /* nv: areas of the input, for Moebius balancing */
-    double *rhodot, *rho;    /* nv */
-    double *lambda, *qrhs, *qwork;   /* 4 nv */
+    double *rest_area;       /* nv: areas of the input, for Moebius balancing (NULL without) */
+    double *rhodot;          /* nv */
+    double *rho;             /* nv, scratch until X is filled (shares newpos's array) */
+    double *lambda, *qwork;  /* 4 nv */
+    double *qrhs;            /* 4 nv, fixed boundary only */
     double *zrhs, *zsol;     /* 4 nv x dim (x 3 dim if linearized) */
     double *basis;           /* nv x max_cols */
     int32_t max_cols;
     double *edges;           /* 3 ne */
     double *newpos;          /* 3 nv */
-    double *vtmp, *vtmp2;    /* nv */
+    double *vtmp;            /* nv, Moebius balancing only */
     double energy;
     double energy_before;    /* W at the start of the current step */
     cfi_spin_diagnostics diag;

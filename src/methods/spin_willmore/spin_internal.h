@@ -34,10 +34,9 @@ typedef struct cfi_dirac {
     cf_quat_sparse *z;     /* complex form, or NULL */
     int64_t *block_slot;   /* real: 36 nf: slot of entry (4 i, 4 j + c) for face k, pair (m, n), column c */
     int64_t *diag_slot;    /* real: 4 nv: slot of entry (4 i + c, 4 i + c) */
-    int32_t *zslot;        /* complex: 3 nf: complex entry (2 I, 2 J) of face k's block (I, J), I < J, of its
-                            * corners (0, 1), (0, 2), (1, 2) (slot 3 k + m + n - 1) */
+    int32_t *zslot;        /* complex: ne: complex entry (2 i, 2 j) of edge (i, j)'s block, i < j */
     int32_t *zdiag;        /* complex: nv: complex entry (2 i, 2 i) */
-    int32_t nv, nf;
+    int32_t nv, nf, ne;
     /* Fixed boundary (cfi_dirac_fixed_*): X with the boundary quaternions
      * known, eliminated by linalg's cf_min_quad in whole 4 x 4 blocks. */
     cf_min_quad *fixed;

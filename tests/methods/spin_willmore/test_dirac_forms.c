@@ -54,9 +54,9 @@ static void test_forms_agree(void)
     CHECK(real->x != NULL && real->z == NULL && cplx->z != NULL && cplx->x == NULL);
     /* real: 16 (nv + 2 ne) values and row indices (12 bytes each) plus 36
      * int64 slots per face; complex: 4 ne + 3 nv complex entries (20 bytes)
-     * plus 3 int32 per face: with ne = 3 nv, nf = 2 nv, 360 vs 1248 + 576
-     * bytes per vertex, 0.17 (and the real form's factorisation needed a
-     * complex copy on top) */
+     * plus one int32 per edge and per vertex: with ne = 3 nv, nf = 2 nv,
+     * 316 vs 1344 + 576 bytes per vertex, 0.165 (and the real form's
+     * factorisation needed a complex copy on top) */
     fprintf(stderr, "   Dirac matrix of %d vertices: real form %zu bytes, complex form %zu bytes\n", nv, real_bytes,
             cplx_bytes);
     CHECK_LE((double)cplx_bytes, 0.2 * (double)real_bytes);

@@ -123,7 +123,7 @@ void cf_edge_poisson_destroy(cf_edge_poisson **pp)
     cf_cholesky_destroy(&p->chol);
     cf_min_quad_destroy(&p->quad);
     cf_sparse_destroy(&p->l);
-    CFI_FREE(ctx, p->slot_map, p->slot_count);
+    if (p->slot_map) CFI_FREE(ctx, p->slot_map, p->slot_count);
     CFI_FREE(ctx, p->edge_slot, p->ne);
     CFI_FREE(ctx, p->diag_slot, p->nv);
     CFI_FREE(ctx, p->rhs, 3 * (int64_t)p->nv);
@@ -134,9 +134,18 @@ void cf_edge_poisson_destroy(cf_edge_poisson **pp)
     *pp = NULL;
 }
 
+void cf_edge_poisson_freeze_metric(cf_edge_poisson *p)
+{
+    if (!p || !p->slot_map) return;
+    CFI_FREE(p->ctx, p->slot_map, p->slot_count);
+    p->slot_map = NULL;
+}
+
 cf_status cf_edge_poisson_set_metric(cf_edge_poisson *p, const double *positions)
 {
     if (!p || !positions) return CF_ERR_INVALID_ARG;
+    if (!p->slot_map)
+        return cfi_error(p->ctx, CF_ERR_INVALID_ARG, "edge poisson: the metric was frozen (cf_edge_poisson_freeze_metric)");
     p->factored = 0;
     return cf_cotan_laplacian_refill(p->l, p->mesh, positions, p->slot_map);
 }

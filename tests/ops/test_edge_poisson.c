@@ -286,6 +286,43 @@ static void test_invalid_and_allocation(void)
     cf_context_destroy(&ctx);
 }
 
+/* A frozen metric (spin-willmore's input-metric solver) frees the refill
+ * data: solves give the same result bit for bit, the bytes in use fall,
+ * and set_metric is refused by name. */
+static void test_freeze_metric(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *mesh = NULL;
+    CHECK_OK(ctx, cf_generate_bumpy_sphere(ctx, 3, 0.2, 7, &mesh));
+    int32_t nv = cf_mesh_vertex_count(mesh);
+    double *e = edges_of(mesh, cf_mesh_positions(mesh));
+    for (int32_t k = 0; k < cf_mesh_edge_count(mesh); ++k) e[3 * k] += 0.01 * (double)(k % 5);
+    double *x = malloc(3 * (size_t)nv * sizeof(double)), *y = malloc(3 * (size_t)nv * sizeof(double));
+    cf_edge_poisson *a = NULL, *b = NULL;
+    CHECK_OK(ctx, cf_edge_poisson_create(ctx, mesh, NULL, 0, NULL, &a));
+    CHECK_OK(ctx, cf_edge_poisson_create(ctx, mesh, NULL, 0, NULL, &b));
+    size_t before = cf_context_bytes_in_use(ctx);
+    cf_edge_poisson_freeze_metric(b);
+    cf_edge_poisson_freeze_metric(b); /* a second call does nothing */
+    size_t after = cf_context_bytes_in_use(ctx);
+    fprintf(stderr, "   freeze: %zu bytes freed (%d faces)\n", before - after, cf_mesh_face_count(mesh));
+    CHECK(after < before);
+    CHECK_OK(ctx, cf_edge_poisson_solve_from(a, cf_mesh_positions(mesh), e, NULL, x, NULL));
+    CHECK_OK(ctx, cf_edge_poisson_solve_from(b, cf_mesh_positions(mesh), e, NULL, y, NULL));
+    CHECK(memcmp(x, y, 3 * (size_t)nv * sizeof(double)) == 0);
+    CHECK_STATUS(cf_edge_poisson_set_metric(b, cf_mesh_positions(mesh)), CF_ERR_INVALID_ARG);
+    CHECK(strstr(cf_context_message(ctx), "frozen") != NULL);
+    CHECK_OK(ctx, cf_edge_poisson_set_metric(a, cf_mesh_positions(mesh)));
+    cf_edge_poisson_destroy(&a);
+    cf_edge_poisson_destroy(&b);
+    free(e);
+    free(x);
+    free(y);
+    cf_mesh_destroy(&mesh);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 int main(void)
 {
     CFT_RUN(test_integrable_edges_closed);
@@ -293,5 +330,6 @@ int main(void)
     CFT_RUN(test_metric);
     CFT_RUN(test_solve_from);
     CFT_RUN(test_invalid_and_allocation);
+    CFT_RUN(test_freeze_metric);
     return cft_finish();
 }

@@ -247,6 +247,8 @@ cf_status cfi_spin_create(cf_flow *flow, const void *options)
      * boundary rewrites the matrix every step and keeps the current metric. */
     if (st == CF_OK && o->input_metric && !s->fixed_boundary)
         st = cf_edge_poisson_create(ctx, mesh, flow->positions, 0, NULL, &s->poisson_input); /* filled with these positions */
+    /* its metric stays the input's: the refill data would only hold memory */
+    if (st == CF_OK && s->poisson_input) cf_edge_poisson_freeze_metric(s->poisson_input);
     if (st == CF_OK) st = cfi_spin_update_geometry(flow, s, flow->positions);
     /* desired vertex areas of Moebius balancing: the mesh's rest shape */
     if (st == CF_OK && s->rest_area) st = cf_vertex_areas(ctx, mesh, mesh->positions, CF_DUAL_AREA_BARYCENTRIC, s->rest_area);

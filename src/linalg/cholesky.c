@@ -367,18 +367,8 @@ fail:
 /* CHOLMOD header over a cf_quat_sparse (stype 1: its upper triangle). */
 static void quat_sparse_view(const cf_quat_sparse *a, int with_values, cholmod_sparse *view)
 {
-    memset(view, 0, sizeof *view);
-    view->nrow = view->ncol = (size_t)2 * a->nb;
-    view->nzmax = (size_t)a->colptr[2 * (size_t)a->nb];
-    view->p = a->colptr;
-    view->i = a->rowind;
-    view->x = with_values ? a->values : NULL;
-    view->stype = 1;
-    view->itype = CHOLMOD_INT;
-    view->xtype = with_values ? CHOLMOD_COMPLEX : CHOLMOD_PATTERN;
-    view->dtype = CHOLMOD_DOUBLE;
-    view->sorted = 1;
-    view->packed = 1;
+    cfi_complex_upper_view(a->nb, a->colptr[2 * (size_t)a->nb], a->colptr, a->rowind, with_values ? a->values : NULL,
+                           view);
 }
 
 static cf_status check_quat(cf_context *ctx, const cf_quat_sparse *a, const char *what)

@@ -102,6 +102,11 @@ typedef struct cfi_quat_map cfi_quat_map;
 cf_status cfi_quat_map_create(cf_context *ctx, const cf_sparse *a, cfi_quat_map **out);
 void cfi_quat_map_destroy(cf_context *ctx, cfi_quat_map **map);
 void cfi_quat_map_view(const cfi_quat_map *map, int with_values, cholmod_sparse *view);
+/* CHOLMOD header (no copy) over the upper triangle of a complex Hermitian
+ * 2 nb x 2 nb matrix in compressed columns: the quaternion map's and
+ * cf_quat_sparse's (stype 1; pattern only when values is NULL). */
+void cfi_complex_upper_view(int32_t nb, int64_t nnz, int32_t *colptr, int32_t *rowind, double *values,
+                            cholmod_sparse *view);
 cf_status cfi_quat_map_fill(cf_context *ctx, cfi_quat_map *map, const cf_sparse *a, double tolerance);
 /* Real n x nrhs (4 entries per quaternion) <-> complex n/2 x nrhs
  * interleaved; real and cplx may be the same array. */

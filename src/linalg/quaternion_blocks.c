@@ -165,20 +165,26 @@ cf_status cfi_quat_map_create(cf_context *ctx, const cf_sparse *a, cfi_quat_map 
     return CF_OK;
 }
 
-void cfi_quat_map_view(const cfi_quat_map *m, int with_values, cholmod_sparse *view)
+void cfi_complex_upper_view(int32_t nb, int64_t nnz, int32_t *colptr, int32_t *rowind, double *values,
+                            cholmod_sparse *view)
 {
     memset(view, 0, sizeof *view);
-    view->nrow = view->ncol = (size_t)2 * m->nb;
-    view->nzmax = (size_t)m->znnz;
-    view->p = m->zcolptr;
-    view->i = m->zrowind;
-    view->x = with_values ? m->zvalues : NULL;
+    view->nrow = view->ncol = (size_t)2 * nb;
+    view->nzmax = (size_t)nnz;
+    view->p = colptr;
+    view->i = rowind;
+    view->x = values;
     view->stype = 1;
     view->itype = CHOLMOD_INT;
-    view->xtype = with_values ? CHOLMOD_COMPLEX : CHOLMOD_PATTERN;
+    view->xtype = values ? CHOLMOD_COMPLEX : CHOLMOD_PATTERN;
     view->dtype = CHOLMOD_DOUBLE;
     view->sorted = 1;
     view->packed = 1;
+}
+
+void cfi_quat_map_view(const cfi_quat_map *m, int with_values, cholmod_sparse *view)
+{
+    cfi_complex_upper_view(m->nb, m->znnz, m->zcolptr, m->zrowind, with_values ? m->zvalues : NULL, view);
 }
 
 cf_status cfi_quat_map_fill(cf_context *ctx, cfi_quat_map *m, const cf_sparse *a, double tolerance)

@@ -52,28 +52,13 @@ static void write_grid(const char *name, const char *type, double bump, int over
     fclose(f);
 }
 
-static double *load_positions(const char *name, int32_t *nv)
-{
-    cf_context *ctx = NULL;
-    cf_mesh *mesh = NULL;
-    double *x = NULL;
-    if (cf_context_create(&ctx) == CF_OK && cf_load_mesh(ctx, cft_in_dir(name), &mesh) == CF_OK) {
-        *nv = cf_mesh_vertex_count(mesh);
-        x = malloc(3 * (size_t)*nv * sizeof *x);
-        memcpy(x, cf_mesh_positions(mesh), 3 * (size_t)*nv * sizeof *x);
-    }
-    cf_mesh_destroy(&mesh);
-    cf_context_destroy(&ctx);
-    return x;
-}
-
 static void test_fixed_sets_from_property(void)
 {
     write_grid("grid.ply", "int", 0.0, -1, NULL, -1);
     write_grid("bumped.ply", "int", 1.5, -1, NULL, -1); /* the start: same faces, interior lifted */
     CHECK_RUN("flow grid.ply --method stretch-bend-edit -p handles=@sel --start bumped.ply -n 20 -o out.ply -q", 0);
     int32_t nv = 0, ns = 0;
-    double *out = load_positions("out.ply", &nv), *start = load_positions("bumped.ply", &ns);
+    double *out = cft_load_positions("out.ply", &nv), *start = cft_load_positions("bumped.ply", &ns);
     CHECK(out && start && nv == G * G && ns == nv);
     if (!out || !start || nv != ns) return;
     double moved = 0.0;
@@ -103,7 +88,7 @@ static void test_fixed_sets_from_property(void)
     CHECK_RUN("flow grid.ply --method stretch-bend-edit -p handles=sets.json --start bumped.ply -n 20 -o json.ply -q",
               0);
     int32_t nj = 0;
-    double *viajson = load_positions("json.ply", &nj);
+    double *viajson = cft_load_positions("json.ply", &nj);
     CHECK(viajson && nj == nv);
     if (viajson && nj == nv) CHECK(memcmp(viajson, out, 3 * (size_t)nv * sizeof *out) == 0);
     free(viajson);

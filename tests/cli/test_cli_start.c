@@ -21,22 +21,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Positions of a mesh file in the run folder (malloc'd, 3 nv), NULL if unreadable. */
-static double *load_positions(const char *name, int32_t *nv)
-{
-    cf_context *ctx = NULL;
-    cf_mesh *mesh = NULL;
-    double *x = NULL;
-    if (cf_context_create(&ctx) == CF_OK && cf_load_mesh(ctx, cft_in_dir(name), &mesh) == CF_OK) {
-        *nv = cf_mesh_vertex_count(mesh);
-        x = malloc(3 * (size_t)*nv * sizeof *x);
-        memcpy(x, cf_mesh_positions(mesh), 3 * (size_t)*nv * sizeof *x);
-    }
-    cf_mesh_destroy(&mesh);
-    cf_context_destroy(&ctx);
-    return x;
-}
-
 /* Largest |a - b| over the largest |a|. */
 static double max_rel_diff(const double *a, const double *b, int32_t n)
 {
@@ -75,7 +59,7 @@ static void test_resume_continues_the_run(void)
     CHECK_RUN("flow bumpy.obj --method conformal-mcf -n 3 --start three.ply -o resumed.ply --log resumed.jsonl -q",
               0);
     int32_t n6 = 0, nr = 0;
-    double *x6 = load_positions("six.ply", &n6), *xr = load_positions("resumed.ply", &nr);
+    double *x6 = cft_load_positions("six.ply", &n6), *xr = cft_load_positions("resumed.ply", &nr);
     CHECK(x6 && xr && n6 == nr && n6 > 0);
     if (x6 && xr && n6 == nr) {
         double d = max_rel_diff(x6, xr, 3 * n6);
@@ -148,7 +132,7 @@ static void test_edit_start_same_path(void)
     CHECK_RUN("edit bar.obj --handles h.json --iterations 3 --start e1.obj -o e2.obj -q", 0);
     CHECK_RUN("flow bar.obj --method stretch-bend-edit --handles h.json -n 3 --start e1.obj -o f2.obj -q", 0);
     int32_t a = 0, b = 0;
-    double *xe = load_positions("e2.obj", &a), *xf = load_positions("f2.obj", &b);
+    double *xe = cft_load_positions("e2.obj", &a), *xf = cft_load_positions("f2.obj", &b);
     CHECK(xe && xf && a == b);
     if (xe && xf && a == b) CHECK(max_rel_diff(xe, xf, 3 * a) == 0.0);
     free(xe);

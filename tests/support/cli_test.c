@@ -2,6 +2,9 @@
 #define _POSIX_C_SOURCE 200809L
 #include "cli_test.h"
 
+#include "curvflow/io.h"
+#include "curvflow/mesh.h"
+
 #include <dirent.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -87,4 +90,19 @@ void cft_remove_dir(const char *path)
     }
     closedir(d);
     rmdir(path);
+}
+
+double *cft_load_positions(const char *name, int32_t *nv)
+{
+    cf_context *ctx = NULL;
+    cf_mesh *mesh = NULL;
+    double *x = NULL;
+    if (cf_context_create(&ctx) == CF_OK && cf_load_mesh(ctx, cft_in_dir(name), &mesh) == CF_OK) {
+        *nv = cf_mesh_vertex_count(mesh);
+        x = malloc(3 * (size_t)*nv * sizeof *x);
+        if (x) memcpy(x, cf_mesh_positions(mesh), 3 * (size_t)*nv * sizeof *x);
+    }
+    cf_mesh_destroy(&mesh);
+    cf_context_destroy(&ctx);
+    return x;
 }

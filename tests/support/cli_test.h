@@ -14,6 +14,7 @@
 #include "test.h"
 
 #include <stddef.h>
+#include <stdint.h>
 
 extern char cft_dir[1024];       /* this run's folder (cft_cli_setup) */
 extern char cft_out[1 << 16];    /* stdout of the last command, NUL-terminated (truncated) */
@@ -42,6 +43,9 @@ int cft_exists(const char *name);
 int cft_err_has(const char *part);
 /* Removes the files of a folder and the folder (one level). */
 void cft_remove_dir(const char *path);
+/* Positions of the mesh file <cft_dir>/<name> (malloc'd, 3 nv; *nv set),
+ * NULL if it does not load. */
+double *cft_load_positions(const char *name, int32_t *nv);
 
 /* Runs "curvflow ARGS" and checks its exit status (stdout and stderr in the
  * failure message). */

@@ -58,6 +58,17 @@ static cf_status update_harmonic_forms(cf_flow *flow, cfi_spin_state *s, double 
     return CF_OK;
 }
 
+/* Fills X(0) + eps M at the current surface x (the Dirac matrix without
+ * rho) and factorises it into chol0: both exactness variants solve with it. */
+static cf_status factorize_x0(cf_flow *flow, cfi_spin_state *s, const double *x, double *factor_seconds)
+{
+    double t0 = cfi_now_seconds();
+    cf_status st = cfi_dirac_fill(s->dirac, flow->mesh, x, NULL, s->eps);
+    if (st == CF_OK) st = cfi_dirac_factorize(s->dirac, s->chol0);
+    *factor_seconds += cfi_now_seconds() - t0;
+    return st;
+}
+
 /* Z_i of App. C.1 on the current surface x: face vectors v from the 2 x 2
  * systems, right-hand side D^* A v (vertex i gets sum_k e_i v_k / 2), and
  * solves with X(0). Fills columns of s->basis from `col` with the imaginary
@@ -71,13 +82,9 @@ static cf_status exactness_columns(cf_flow *flow, cfi_spin_state *s, const doubl
         cf_status sth = update_harmonic_forms(flow, s, factor_seconds, solve_seconds);
         if (sth != CF_OK) return sth;
     }
-    double t0 = cfi_now_seconds();
-    cf_status st = cfi_dirac_fill(s->dirac, mesh, x, NULL, s->eps);
+    cf_status st = factorize_x0(flow, s, x, factor_seconds);
     if (st != CF_OK) return st;
-    st = cfi_dirac_factorize(s->dirac, s->chol0);
     double t1 = cfi_now_seconds();
-    *factor_seconds += t1 - t0;
-    if (st != CF_OK) return st;
     memset(s->zrhs, 0, 4 * (size_t)nv * dim * sizeof(double));
     for (int32_t f = 0; f < s->nf; ++f) {
         const int32_t *t = mesh->triangles + 3 * f;
@@ -158,13 +165,9 @@ static cf_status exactness_columns_linearized(cf_flow *flow, cfi_spin_state *s, 
 {
     const cf_mesh *mesh = flow->mesh;
     int32_t nv = s->nv, dim = s->harmonic_dim, ncol = 3 * dim;
-    double t0 = cfi_now_seconds();
-    cf_status st = cfi_dirac_fill(s->dirac, mesh, x, NULL, s->eps);
+    cf_status st = factorize_x0(flow, s, x, factor_seconds);
     if (st != CF_OK) return st;
-    st = cfi_dirac_factorize(s->dirac, s->chol0);
     double t1 = cfi_now_seconds();
-    *factor_seconds += t1 - t0;
-    if (st != CF_OK) return st;
     memset(s->zrhs, 0, 4 * (size_t)nv * ncol * sizeof(double));
     for (int32_t e = 0; e < s->ne; ++e) {
         int32_t i = mesh->edge_vertices[2 * e], j = mesh->edge_vertices[2 * e + 1];

@@ -221,10 +221,8 @@ int cli_make_dir(const char *path)
 
 void cli_warn_if_unreadable(cf_context *ctx, const cf_mesh *mesh, const double *positions, const char *output)
 {
-    cf_mesh_desc d = {cf_mesh_vertex_count(mesh), positions, cf_mesh_face_count(mesh), cf_mesh_triangles(mesh), 0,
-                      NULL, NULL};
     cf_mesh_report r;
-    if (cf_mesh_validate(ctx, &d, &r) != CF_OK || r.first_status == CF_OK) return;
+    if (cf_mesh_check_positions(ctx, mesh, positions, &r) != CF_OK || r.first_status == CF_OK) return;
     fprintf(stderr,
             "curvflow: warning: %s was written, but its triangles have degenerated (%s; %d such faces), so it "
             "will not load as a valid mesh\n",

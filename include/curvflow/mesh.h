@@ -65,6 +65,14 @@ typedef struct cf_mesh_report {
 } cf_mesh_report;
 CF_API cf_status cf_mesh_validate(cf_context *ctx, const cf_mesh_desc *desc, cf_mesh_report *report);
 
+/* The same report for new positions of a built mesh (a flow's result): the
+ * connectivity is the mesh's, already valid, so only the geometric checks
+ * run (non-finite or out-of-range coordinates, degenerate faces). Equivalent
+ * to cf_mesh_validate on the mesh's triangles with these positions, without
+ * its O(faces) scratch memory. */
+CF_API cf_status cf_mesh_check_positions(cf_context *ctx, const cf_mesh *mesh, const double *positions,
+                                         cf_mesh_report *report);
+
 /* Counts. */
 CF_API int32_t cf_mesh_vertex_count(const cf_mesh *mesh);
 CF_API int32_t cf_mesh_face_count(const cf_mesh *mesh);

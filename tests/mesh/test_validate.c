@@ -1,10 +1,12 @@
 /* Mesh validation: every defect built by hand from tiny arrays gives its own
  * status and a one-line message naming the element; the check order decides
  * which defect is reported first; cf_mesh_validate counts all defects. */
+#include "curvflow/generate.h"
 #include "curvflow/mesh.h"
 #include "test.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 /* Regular tetrahedron-ish fixture, outward oriented. */
@@ -265,6 +267,59 @@ static void test_report_counts_topology(void)
     cf_context_destroy(&ctx);
 }
 
+
+/* cf_mesh_check_positions (a flow result on a built mesh) gives the same
+ * report as the full check of the same triangles and positions, and
+ * allocates nothing: the command line runs it on a 655k-vertex result while
+ * the flow still holds its factors (issue 15's memory line). */
+static void expect_same_report(cf_context *ctx, const cf_mesh *mesh, const double *pos)
+{
+    cf_mesh_desc d = {cf_mesh_vertex_count(mesh), pos, cf_mesh_face_count(mesh), cf_mesh_triangles(mesh), 0, NULL,
+                      NULL};
+    cf_mesh_report full, quick;
+    CHECK_OK(ctx, cf_mesh_validate(ctx, &d, &full));
+    int64_t allocations = cf_context_allocation_count(ctx);
+    CHECK_OK(ctx, cf_mesh_check_positions(ctx, mesh, pos, &quick));
+    CHECK(cf_context_allocation_count(ctx) == allocations);
+    CHECK(memcmp(&full, &quick, sizeof full) == 0);
+}
+
+static void test_check_positions(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *mesh = NULL;
+    CHECK_OK(ctx, cf_generate_icosphere(ctx, 2, 1.0, &mesh));
+    int32_t nv = cf_mesh_vertex_count(mesh);
+    const int32_t *tri = cf_mesh_triangles(mesh);
+    double *pos = calloc(3 * (size_t)nv, sizeof *pos);
+    CHECK(pos != NULL);
+    memcpy(pos, cf_mesh_positions(mesh), 3 * (size_t)nv * sizeof *pos);
+    cf_mesh_report r;
+    CHECK_OK(ctx, cf_mesh_check_positions(ctx, mesh, pos, &r));
+    CHECK_STATUS(r.first_status, CF_OK);
+    expect_same_report(ctx, mesh, pos);
+    /* face 7 collapsed onto a segment, then two non-finite coordinates */
+    int32_t a = tri[21], b = tri[22], c = tri[23];
+    for (int k = 0; k < 3; ++k) pos[3 * c + k] = 0.5 * (pos[3 * a + k] + pos[3 * b + k]);
+    expect_same_report(ctx, mesh, pos);
+    CHECK_OK(ctx, cf_mesh_check_positions(ctx, mesh, pos, &r));
+    CHECK_STATUS(r.first_status, CF_ERR_DEGENERATE_FACE);
+    CHECK(r.degenerate_faces >= 1);
+    pos[3 * 5 + 1] = NAN;
+    pos[3 * 9 + 2] = 1e300;
+    expect_same_report(ctx, mesh, pos);
+    CHECK_OK(ctx, cf_mesh_check_positions(ctx, mesh, pos, &r));
+    CHECK_STATUS(r.first_status, CF_ERR_NONFINITE);
+    CHECK(r.nonfinite_coordinates == 2);
+    CHECK(strcmp(r.first_message, "vertex 5: coordinate y is NaN") == 0);
+    CHECK_STATUS(cf_mesh_check_positions(ctx, mesh, pos, NULL), CF_ERR_INVALID_ARG);
+    CHECK_STATUS(cf_mesh_check_positions(ctx, NULL, pos, &r), CF_ERR_INVALID_ARG);
+    free(pos);
+    cf_mesh_destroy(&mesh);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 int main(void)
 {
     CFT_RUN(test_valid_tetrahedron);
@@ -282,5 +337,6 @@ int main(void)
     CFT_RUN(test_arguments);
     CFT_RUN(test_report_counts_everything);
     CFT_RUN(test_report_counts_topology);
+    CFT_RUN(test_check_positions);
     return cft_finish();
 }

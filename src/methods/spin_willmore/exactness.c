@@ -140,6 +140,40 @@ static cf_status exactness_columns(cf_flow *flow, cfi_spin_state *s, const doubl
     return CF_OK;
 }
 
+/* q u for the unit quaternion u = i, j, k (uc = 0, 1, 2) or u = 1 (uc < 0),
+ * q = (w, x, y, z): q i = (-x, w, z, -y), q j = (-y, -z, w, x),
+ * q k = (-z, y, -x, w). out may not alias q. */
+static inline void times_unit(const double q[4], int uc, double out[4])
+{
+    if (uc == 0) {
+        out[0] = -q[1], out[1] = q[0], out[2] = q[3], out[3] = -q[2];
+    } else if (uc == 1) {
+        out[0] = -q[2], out[1] = -q[3], out[2] = q[0], out[3] = q[1];
+    } else if (uc == 2) {
+        out[0] = -q[3], out[1] = q[2], out[2] = -q[1], out[3] = q[0];
+    } else {
+        memcpy(out, q, 4 * sizeof(double));
+    }
+}
+
+/* The path before the solves were shared (test hook s->x0_full_solves):
+ * zrhs's column 3 g + c becomes B_g u_c (from B_g in column g; zrhs has
+ * 3 dim columns) and all 3 dim columns are solved. */
+static cf_status solve_each_column(cfi_spin_state *s, int32_t dim)
+{
+    int64_t n = 4 * (int64_t)s->nv;
+    for (int32_t g = dim - 1; g >= 0; --g) /* downward: column g is read before 3 g .. 3 g + 2 are written */
+        for (int32_t i = 0; i < s->nv; ++i) {
+            double q[4], out[4];
+            memcpy(q, s->zrhs + g * n + 4 * i, sizeof q);
+            for (int c = 0; c < 3; ++c) {
+                times_unit(q, c, out);
+                memcpy(s->zrhs + (3 * g + c) * n + 4 * i, out, sizeof out);
+            }
+        }
+    return cf_cholesky_solve(s->chol0, 3 * dim, s->zrhs, s->zsol);
+}
+
 /* Exactness by linearising "no periods" through the discrete step; the
  * default, and the only way on a surface with free boundary: App. C's step "<D Z a,
  * lambda> = <Z a, D lambda>" needs D to be self-adjoint, which fails with
@@ -159,7 +193,14 @@ static cf_status exactness_columns(cf_flow *flow, cfi_spin_state *s, const doubl
  *  - so <d e~, h_g>^c = G_gc . mu, and the constraint is rhodot orthogonal
  *    (in M) to M^-1 K^T X(0)^-1 G_gc, three columns per harmonic form.
  * Exact to first order in tau for one inverse power iteration (the
- * default); an approximation for more. */
+ * default); an approximation for more.
+ * The three G_gc of a form are one quaternion field right-multiplied by
+ * i, j, k: G_gc = B_g u_c with B_g = -sum_e w h_g(e) e at both ends of
+ * each edge (e u_c = -<e, u_c> + e x u_c, so -e u_c = (e_c, u_c x e), the
+ * entries below). X's blocks multiply from the left, which commutes with a
+ * constant right factor, so X(0)^-1 G_gc = (X(0)^-1 B_g) u_c: one solve per
+ * form instead of three (bob_5k: 2 columns instead of 6, the solve's time
+ * a third; docs/spin.md, "Measured figures"). */
 static cf_status exactness_columns_linearized(cf_flow *flow, cfi_spin_state *s, const double *x, int32_t *col,
                                               double *factor_seconds, double *solve_seconds)
 {
@@ -168,29 +209,27 @@ static cf_status exactness_columns_linearized(cf_flow *flow, cfi_spin_state *s, 
     cf_status st = factorize_x0(flow, s, x, factor_seconds);
     if (st != CF_OK) return st;
     double t1 = cfi_now_seconds();
-    memset(s->zrhs, 0, 4 * (size_t)nv * ncol * sizeof(double));
+    memset(s->zrhs, 0, 4 * (size_t)nv * dim * sizeof(double));
     for (int32_t e = 0; e < s->ne; ++e) {
         int32_t i = mesh->edge_vertices[2 * e], j = mesh->edge_vertices[2 * e + 1];
         double v[3] = {x[3 * j] - x[3 * i], x[3 * j + 1] - x[3 * i + 1], x[3 * j + 2] - x[3 * i + 2]};
-        /* coefficient of u_l in (v x u)_c: (v x unit_l)_c */
-        const double vx[3][3] = {{0.0, v[2], -v[1]}, {-v[2], 0.0, v[0]}, {v[1], -v[0], 0.0}};
         for (int32_t g = 0; g < dim; ++g) {
             double wh = s->hweights[e] * s->harmonic[(int64_t)g * s->ne + e];
+            double *r = s->zrhs + (int64_t)g * 4 * nv;
             for (int c = 0; c < 3; ++c) {
-                double *r = s->zrhs + (int64_t)(3 * g + c) * 4 * nv;
-                double q[4] = {wh * v[c], wh * vx[0][c], wh * vx[1][c], wh * vx[2][c]};
-                for (int k = 0; k < 4; ++k) {
-                    r[4 * i + k] += q[k];
-                    r[4 * j + k] += q[k];
-                }
+                r[4 * i + 1 + c] -= wh * v[c]; /* B_g: the imaginary quaternion -w h_g e */
+                r[4 * j + 1 + c] -= wh * v[c];
             }
         }
     }
-    st = cf_cholesky_solve(s->chol0, ncol, s->zrhs, s->zsol);
+    st = s->x0_full_solves ? solve_each_column(s, dim) : cf_cholesky_solve(s->chol0, dim, s->zrhs, s->zsol);
+    s->diag.x0_solve_columns = s->x0_full_solves ? ncol : dim;
     *solve_seconds += cfi_now_seconds() - t1;
     if (st != CF_OK) return st;
     for (int32_t k = 0; k < ncol; ++k) {
-        const double *y = s->zsol + (int64_t)k * 4 * nv;
+        /* X(0)^-1 B_g, times u_c below (the hook: X(0)^-1 (B_g u_c) itself) */
+        const double *y = s->zsol + (int64_t)(s->x0_full_solves ? k : k / 3) * 4 * nv;
+        int uc = s->x0_full_solves ? -1 : k % 3;
         double *b = s->basis + (int64_t)(*col) * nv;
         memset(b, 0, (size_t)nv * sizeof(double));
         /* K^T y: face f adds -(1/6) sum_m <Im y_tri[m], e_m> to each corner */
@@ -198,7 +237,9 @@ static cf_status exactness_columns_linearized(cf_flow *flow, cfi_spin_state *s, 
             const int32_t *t = mesh->triangles + 3 * f;
             double sum = 0.0;
             for (int m = 0; m < 3; ++m) {
-                const double *a = x + 3 * t[(m + 1) % 3], *bb = x + 3 * t[(m + 2) % 3], *ym = y + 4 * t[m];
+                const double *a = x + 3 * t[(m + 1) % 3], *bb = x + 3 * t[(m + 2) % 3];
+                double ym[4];
+                times_unit(y + 4 * t[m], uc, ym);
                 for (int c = 0; c < 3; ++c) sum += ym[1 + c] * (bb[c] - a[c]);
             }
             for (int m = 0; m < 3; ++m) b[t[m]] -= sum / 6.0;
@@ -245,6 +286,14 @@ cf_status cfi_spin_exactness_init(cf_flow *flow, cfi_spin_state *s)
 cf_status cfi_spin_exactness_columns(cf_flow *flow, cfi_spin_state *s, const double *x, int32_t *col,
                                      double *factor_seconds, double *solve_seconds)
 {
+    s->diag.x0_solve_columns = s->linearized ? 0 : s->harmonic_dim;
     return s->linearized ? exactness_columns_linearized(flow, s, x, col, factor_seconds, solve_seconds)
                          : exactness_columns(flow, s, x, col, factor_seconds, solve_seconds);
+}
+
+cf_status cfi_spin_willmore_set_x0_full_solves(cf_flow *flow, int32_t full)
+{
+    if (!flow || flow->method != &cfi_spin_willmore_method || !flow->impl) return CF_ERR_INVALID_ARG;
+    ((cfi_spin_state *)flow->impl)->x0_full_solves = full != 0;
+    return CF_OK;
 }

@@ -60,6 +60,7 @@ typedef struct cfi_spin_state {
     double *lambda, *qwork;  /* 4 nv */
     double *qrhs;            /* 4 nv, fixed boundary only */
     double *zrhs, *zsol;     /* 4 nv x dim (x 3 dim if linearized) */
+    int32_t x0_full_solves;  /* test hook: the linearized columns' 3 dim X(0) solves, not dim (exactness.c) */
     double *basis;           /* nv x max_cols */
     int32_t max_cols;
     double *edges;           /* 3 ne */

@@ -133,7 +133,13 @@ typedef struct cfi_spin_diagnostics {
     int32_t harmonic_dimension;     /* dim H^1 used by the exactness constraint: 2g, or 2g + b - 1 with a free boundary (0 if off) */
     double mobius_norm;             /* |balancing term|_M added to rhodot */
     double scale_change;            /* max over edges of |log(|lambda_i|^2 / |lambda_j|^2)| of the step */
+    int32_t x0_solve_columns;       /* right-hand sides of the exactness X(0) solve (0: none) */
 } cfi_spin_diagnostics;
+
+/* Nonzero full: the linearised exactness constraint solves X(0) for each of
+ * its 3 x dim columns, as before they shared one solve per harmonic form
+ * (test hook; exactness.c). CF_ERR_INVALID_ARG unless a spin-willmore flow. */
+cf_status cfi_spin_willmore_set_x0_full_solves(cf_flow *flow, int32_t full);
 
 /* CF_ERR_INVALID_ARG unless the flow is a spin-willmore flow. */
 cf_status cfi_spin_willmore_diagnostics(const cf_flow *flow, cfi_spin_diagnostics *out);

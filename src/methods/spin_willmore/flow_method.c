@@ -19,7 +19,8 @@
  *   VI.  transformed edges and the cotan Poisson problem (Eq. (6)), by
  *        default in the metric of the starting surface (input_metric).
  * With `adaptive`, the flow layer's step policy redoes IV-VI with tau
- * halved while W would rise (methods/flow.c, cf_flow_step).
+ * halved while W would rise (methods/flow.c, cf_flow_step); when its last
+ * retry would stall, VI in the current metric is tried first (step_policy.c).
  * The symbolic factorisations of X (block size 4, complex form by default)
  * and L are computed once at creation; each step only refills values and
  * refactorises (X; X(0) for exactness; L only with the current metric).
@@ -137,14 +138,14 @@ static cf_status allocate_arrays(cfi_spin_state *s, int32_t dim)
  * when they keep the current metric; the harmonic forms of the exactness
  * constraint). A fixed boundary makes its vertices known values (Sec.
  * 6.3.2). When no solve needs it (input_metric without a fixed boundary,
- * no exactness), only its Laplacian is kept, for H: its solver's symbolic
- * factor, slots and right-hand sides took ~100 MB at 655k vertices
- * (docs/memory.md). Same Laplacian, same values. */
+ * no exactness, no stall retry), only its Laplacian is kept, for H: its
+ * solver's symbolic factor, slots and right-hand sides took ~100 MB at 655k
+ * vertices (docs/memory.md). Same Laplacian, same values. */
 static cf_status create_current_poisson(cf_flow *flow, cfi_spin_state *s)
 {
     cf_context *ctx = flow->ctx;
     const cf_mesh *mesh = flow->mesh;
-    if (s->opt.input_metric && !s->fixed_boundary && s->harmonic_dim == 0) {
+    if (s->opt.input_metric && !s->fixed_boundary && s->harmonic_dim == 0 && !s->stall_retry) {
         s->lap_slots = CFI_WS_ALLOC(&s->ws, int64_t, cf_cotan_laplacian_slot_count(mesh));
         if (!s->lap_slots) return CF_ERR_NOMEM;
         return cf_cotan_laplacian_with_slots(ctx, mesh, flow->positions, &s->lap, s->lap_slots);
@@ -235,6 +236,9 @@ cf_status cfi_spin_create(cf_flow *flow, const void *options)
      * tau), the linearised condition to first order (elephant 20x at tau
      * 0.01, 87x at 0.002); docs/spin.md. */
     s->linearized = dim > 0 && (s->has_boundary || o->exactness_linearized);
+    /* a stall in the input metric is retried in the current one (docs/spin.md,
+     * "Robustness"): its solver is made now, steps allocate nothing */
+    s->stall_retry = o->input_metric && !s->fixed_boundary && !s->restricted_boundary && cfi_flow_backtracks(flow);
     st = allocate_arrays(s, dim);
     if (st == CF_OK && dim) st = cfi_spin_exactness_init(flow, s);
     if (st == CF_OK) st = create_current_poisson(flow, s);
@@ -359,7 +363,8 @@ cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, in
     cf_solver_timings tm = {0.0, 0.0, 0.0};
     /* for the displacement from x: the recovery's rounding error then scales
      * with the step, not with the coordinates (docs/spin.md, "Stalls") */
-    st = cf_edge_poisson_solve_from(s->poisson_input ? s->poisson_input : s->poisson, x, s->edges,
+    cf_edge_poisson *recovery = s->poisson_input && !s->current_metric_step ? s->poisson_input : s->poisson;
+    st = cf_edge_poisson_solve_from(recovery, x, s->edges,
                                     s->fixed_boundary ? x : NULL, s->newpos, &tm);
     t->factorize += tm.factorize_seconds;
     t->solve += tm.solve_seconds;
@@ -404,6 +409,7 @@ cf_status cfi_spin_begin_step(cf_flow *flow, cf_flow_info *info)
 {
     cfi_spin_state *s = flow->impl;
     s->energy_before = s->energy;
+    s->attempts = 0;
     memset(&s->diag, 0, sizeof s->diag);
     for (int32_t i = 0; i < s->nv; ++i) s->rhodot[i] = -2.0 * s->h[i];
     cf_solver_timings tm = {0.0, 0.0, 0.0};
@@ -426,13 +432,30 @@ cf_status cfi_spin_attempt(cf_flow *flow, double tau, cf_flow_info *info, cfi_st
     cfi_spin_timers t = {0.0, 0.0, 0.0};
     int too_large = 0;
     info->time_step = tau;
+    ++s->attempts;
     cf_status st = cfi_spin_realise_step(flow, s, tau, &too_large, &t);
+    /* The layer's last retry (max_halvings per step): if it fails too, the
+     * run stalls. Before that, the paper's step with the positions in the
+     * current metric (docs/spin.md, "Robustness": where the input metric's
+     * recovery no longer descends, the current one still does). */
+    int stalled = 0;
+    if (st == CF_OK && s->stall_retry && s->attempts > flow->policy.opt.max_halvings &&
+        (too_large || s->energy > s->energy_before)) {
+        double retry_tau = tau;
+        int accepted = 0;
+        st = cfi_spin_stall_retry(flow, s, &retry_tau, &accepted, &t);
+        if (accepted) info->time_step = retry_tau;
+        too_large = 0;
+        stalled = !accepted;
+    }
     info->assemble_seconds += t.assemble;
     info->factorize_seconds += t.factorize;
     info->solve_seconds += t.solve;
     info->energy = s->energy;
     if (!cfi_flow_backtracks(flow)) return st;
-    if (st == CF_OK && too_large) {
+    if (st == CF_OK && stalled) {
+        verdict->rejected = 1; /* at the layer's limit: it stalls at the step's start */
+    } else if (st == CF_OK && too_large) {
         verdict->rejected = 1;
         verdict->shrink = 0.9 * s->opt.max_scale_change / s->diag.scale_change;
     } else if (st == CF_ERR_NUMERICAL || st == CF_ERR_NOT_POSDEF || st == CF_ERR_DEGENERATE_FACE) {

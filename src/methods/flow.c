@@ -821,7 +821,9 @@ static cf_status check_energy_jumps(cf_flow *flow, double before, const cf_flow_
  * saved state with half the step (or less, as the method's verdict asks),
  * up to the limit max_halvings sets; at the limit a failure fails and a
  * rise or the method's rejection is a stall: the run stops as converged at
- * the state before the step. Without backtracking a rise fails (or, with
+ * the state before the step, unless the method's fallback switches to
+ * another variant of its attempt, which then gets the same halvings from
+ * the full step (once per step). Without backtracking a rise fails (or, with
  * rise_stops, stops the run). The accepted step (after the method's
  * end_step) then passes the blow-up and divergence checks or fails
  * (check_energy_jumps). After an accepted step without retries a reduced
@@ -839,7 +841,7 @@ cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info)
     double before = flow->info.energy;
     double start_step = pol->step;
     int32_t halvings = 0;
-    int stalled = 0;
+    int stalled = 0, fell_back = 0;
     cf_status st = CF_OK;
 
     memcpy(flow->saved_positions, flow->positions, 3 * (size_t)nv * sizeof(double));
@@ -917,6 +919,19 @@ cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info)
         }
         st = back_to_start(flow);
         if (st != CF_OK) return fail_method(flow, st, iteration, start_step);
+        if (at_limit && m->fallback && !fell_back) {
+            /* the method's other variant of the step, from the full step */
+            int32_t switched = 0;
+            cf_context_clear_error(ctx);
+            st = m->fallback(flow, &switched);
+            if (st != CF_OK) return fail_method(flow, st, iteration, start_step);
+            fell_back = 1;
+            if (switched) {
+                pol->step = pol->full_step;
+                halvings = 0;
+                continue;
+            }
+        }
         if (at_limit) {
             stalled = 1;
             break;

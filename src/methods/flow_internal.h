@@ -65,6 +65,14 @@ typedef struct cfi_flow_method {
      * positions of the step's start; resynchronise what the attempt changed
      * (NULL: reset). Unlike reset, the flow goes on with the same step. */
     cf_status (*revert)(cf_flow *flow);
+    /* Optional, with attempt: at a stall (no attempt down to the policy's
+     * limit accepted), the method may switch the rest of this step to
+     * another variant of its attempt and set *switched; the layer then
+     * restarts the step's halvings from the full step, once per step. The
+     * method goes back to its first variant in begin_step. The layer has put
+     * back the step's start (revert) before the call. May allocate, on its
+     * first use only (state it keeps for the flow's life). */
+    cf_status (*fallback)(cf_flow *flow, int32_t *switched);
     void (*destroy)(cf_flow *flow);
     /* Which checks of the shared step policy apply (methods/step_policy.h);
      * left out (all zero): none, the method accepts its own steps. */

@@ -196,6 +196,8 @@ static void test_method_opt_outs(void)
         /* a whole step, or the step in parts (spin-willmore) */
         CHECK((m->step != NULL) == !spin);
         CHECK((m->begin_step != NULL) == spin && (m->attempt != NULL) == spin && (m->end_step != NULL) == spin);
+        /* another variant of the attempt at a stall (spin: the current metric's recovery) */
+        CHECK((m->fallback != NULL) == spin);
     }
 }
 

@@ -145,7 +145,7 @@ static cf_status create_current_poisson(cf_flow *flow, cfi_spin_state *s)
 {
     cf_context *ctx = flow->ctx;
     const cf_mesh *mesh = flow->mesh;
-    if (s->opt.input_metric && !s->fixed_boundary && s->harmonic_dim == 0 && !s->stall_retry) {
+    if (s->opt.input_metric && !s->fixed_boundary && s->harmonic_dim == 0) {
         s->lap_slots = CFI_WS_ALLOC(&s->ws, int64_t, cf_cotan_laplacian_slot_count(mesh));
         if (!s->lap_slots) return CF_ERR_NOMEM;
         return cf_cotan_laplacian_with_slots(ctx, mesh, flow->positions, &s->lap, s->lap_slots);
@@ -237,7 +237,7 @@ cf_status cfi_spin_create(cf_flow *flow, const void *options)
      * 0.01, 87x at 0.002); docs/spin.md. */
     s->linearized = dim > 0 && (s->has_boundary || o->exactness_linearized);
     /* a stall in the input metric is retried in the current one (docs/spin.md,
-     * "Robustness"): its solver is made now, steps allocate nothing */
+     * "Robustness"; cfi_spin_fallback) */
     s->stall_retry = o->input_metric && !s->fixed_boundary && !s->restricted_boundary && cfi_flow_backtracks(flow);
     st = allocate_arrays(s, dim);
     if (st == CF_OK && dim) st = cfi_spin_exactness_init(flow, s);
@@ -409,7 +409,7 @@ cf_status cfi_spin_begin_step(cf_flow *flow, cf_flow_info *info)
 {
     cfi_spin_state *s = flow->impl;
     s->energy_before = s->energy;
-    s->attempts = 0;
+    s->current_metric_step = 0; /* the input metric again (cfi_spin_fallback) */
     memset(&s->diag, 0, sizeof s->diag);
     for (int32_t i = 0; i < s->nv; ++i) s->rhodot[i] = -2.0 * s->h[i];
     cf_solver_timings tm = {0.0, 0.0, 0.0};
@@ -432,30 +432,13 @@ cf_status cfi_spin_attempt(cf_flow *flow, double tau, cf_flow_info *info, cfi_st
     cfi_spin_timers t = {0.0, 0.0, 0.0};
     int too_large = 0;
     info->time_step = tau;
-    ++s->attempts;
     cf_status st = cfi_spin_realise_step(flow, s, tau, &too_large, &t);
-    /* The layer's last retry (max_halvings per step): if it fails too, the
-     * run stalls. Before that, the paper's step with the positions in the
-     * current metric (docs/spin.md, "Robustness": where the input metric's
-     * recovery no longer descends, the current one still does). */
-    int stalled = 0;
-    if (st == CF_OK && s->stall_retry && s->attempts > flow->policy.opt.max_halvings &&
-        (too_large || s->energy > s->energy_before)) {
-        double retry_tau = tau;
-        int accepted = 0;
-        st = cfi_spin_stall_retry(flow, s, &retry_tau, &accepted, &t);
-        if (accepted) info->time_step = retry_tau;
-        too_large = 0;
-        stalled = !accepted;
-    }
     info->assemble_seconds += t.assemble;
     info->factorize_seconds += t.factorize;
     info->solve_seconds += t.solve;
     info->energy = s->energy;
     if (!cfi_flow_backtracks(flow)) return st;
-    if (st == CF_OK && stalled) {
-        verdict->rejected = 1; /* at the layer's limit: it stalls at the step's start */
-    } else if (st == CF_OK && too_large) {
+    if (st == CF_OK && too_large) {
         verdict->rejected = 1;
         verdict->shrink = 0.9 * s->opt.max_scale_change / s->diag.scale_change;
     } else if (st == CF_ERR_NUMERICAL || st == CF_ERR_NOT_POSDEF || st == CF_ERR_DEGENERATE_FACE) {
@@ -465,6 +448,29 @@ cf_status cfi_spin_attempt(cf_flow *flow, double tau, cf_flow_info *info, cfi_st
         st = CF_OK;
     }
     return st;
+}
+
+/* The layer's fallback at a stall (every attempt down to its limit raised W
+ * or was rejected): where the input metric's least-squares recovery no
+ * longer descends, the current metric's still does (docs/spin.md,
+ * "Robustness"), so the rest of the step recovers positions in the metric
+ * of the step's start, from the full step again. The current-metric solver
+ * is made here on first use: most flows never stall, and at 655k vertices
+ * it would cost ~100 MB from creation on (docs/memory.md). */
+cf_status cfi_spin_fallback(cf_flow *flow, int32_t *switched)
+{
+    cfi_spin_state *s = flow->impl;
+    *switched = 0;
+    if (!s->stall_retry || s->current_metric_step) return CF_OK;
+    if (!s->poisson) {
+        /* the layer has reverted to the step's start: its metric, and from
+         * now on H from the solver's Laplacian (the same values as s->lap) */
+        cf_status st = cf_edge_poisson_create(flow->ctx, flow->mesh, flow->positions, 0, NULL, &s->poisson);
+        if (st != CF_OK) return st;
+    }
+    s->current_metric_step = 1;
+    *switched = 1;
+    return CF_OK;
 }
 
 /* After the layer restored the positions of the step's start: the geometry

@@ -135,6 +135,7 @@ const cfi_flow_method cfi_spin_willmore_method = {
     .end_step = cfi_spin_end_step,
     .reset = cfi_spin_reset,
     .revert = cfi_spin_revert,
+    .fallback = cfi_spin_fallback,
     .destroy = cfi_spin_destroy,
     /* Under `adaptive` the flow layer redoes IV-VI (attempt) from the same
      * rhodot (begin_step) with a smaller tau while W would rise at all or

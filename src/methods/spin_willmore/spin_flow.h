@@ -39,7 +39,7 @@ typedef struct cfi_spin_state {
     int64_t *lap_slots;      /* its slot map (cf_cotan_laplacian_slot_count entries) */
     cf_edge_poisson *poisson_input; /* input_metric: that of the starting surface, factorised once */
     int32_t stall_retry;     /* input_metric under `adaptive`: a stalled step is retried in the current
-                              * metric (step_policy.c); s->poisson is then kept for it */
+                              * metric (cfi_spin_fallback, which makes s->poisson if there is none) */
     int32_t current_metric_step; /* this attempt recovers positions with s->poisson, not poisson_input */
     cf_spectral_filter *filter; /* sigma > 0: the spectral filter of the input (Sec. 4; curvflow/ops.h) */
     int32_t harmonic_dim;    /* dim H^1 (2g + b - 1 with boundary) if the exactness constraint is active */
@@ -71,7 +71,6 @@ typedef struct cfi_spin_state {
     double *vtmp;            /* nv, Moebius balancing only */
     double energy;
     double energy_before;    /* W at the start of the current step */
-    int32_t attempts;        /* attempts of the current step so far (the layer's retries + 1) */
     cfi_spin_diagnostics diag;
 } cfi_spin_state;
 
@@ -90,6 +89,7 @@ cf_status cfi_spin_create(cf_flow *flow, const void *options);
 cf_status cfi_spin_begin_step(cf_flow *flow, cf_flow_info *info);
 cf_status cfi_spin_attempt(cf_flow *flow, double tau, cf_flow_info *info, cfi_step_verdict *verdict);
 cf_status cfi_spin_revert(cf_flow *flow);
+cf_status cfi_spin_fallback(cf_flow *flow, int32_t *switched);
 cf_status cfi_spin_end_step(cf_flow *flow, cf_flow_info *info);
 cf_status cfi_spin_reset(cf_flow *flow);
 void cfi_spin_destroy(cf_flow *flow);
@@ -138,12 +138,5 @@ cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, in
 double cfi_spin_max_scale_change(const cf_mesh *mesh, const double *lambda);
 /* Relative energy decrease below tolerance (a stall also converges: the flow layer). */
 int32_t cfi_spin_converged(const cfi_spin_state *s, double energy_before);
-/* Called by the step's last attempt (the layer stalls if it is rejected)
- * when its result would not lower W: the same sequence of tau from the
- * full step, with positions recovered in the current metric instead
- * of the input's. 1: a result that lowers W and passes the face check is in
- * flow->positions (time step *tau); 0: none did, flow->positions is the
- * step's start again. Statuses of the geometry of the restored start. */
-cf_status cfi_spin_stall_retry(cf_flow *flow, cfi_spin_state *s, double *tau, int *accepted, cfi_spin_timers *t);
 
 #endif /* CF_METHODS_SPIN_WILLMORE_SPIN_FLOW_H */

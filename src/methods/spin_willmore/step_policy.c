@@ -14,7 +14,8 @@
  *
  * A stall of the input-metric recovery (every retry of the layer raised W)
  * gets one more chance before the layer stops the run: the step again,
- * positions recovered in the current metric (cfi_spin_stall_retry). At a
+ * positions recovered in the current metric (the layer's fallback hook,
+ * cfi_spin_fallback in flow_method.c). At a
  * stalled state the input metric's least-squares fit puts the step's
  * non-integrable part where the flow crowded the mesh, so no tau lowers W
  * (cow_3k after 9 steps: +0.007 W/4pi at tau 5e-4), while the current
@@ -30,7 +31,6 @@
  * tolerance 0, so moving it would change results.
  */
 #include "methods/spin_willmore/spin_flow.h"
-#include "mesh/mesh_internal.h"
 
 #include <math.h>
 #include <string.h>
@@ -54,55 +54,4 @@ int32_t cfi_spin_converged(const cfi_spin_state *s, double energy_before)
 {
     double decrease = energy_before - s->energy;
     return decrease >= 0.0 && decrease <= s->opt.tolerance * energy_before;
-}
-
-/* 1 when every face of x has an area above the mesh check's zero (the
- * layer's check of an accepted step, methods/flow.c). */
-static int faces_pass(const cf_mesh *mesh, const double *x)
-{
-    for (int32_t f = 0; f < mesh->nf; ++f) {
-        const int32_t *tri = mesh->triangles + 3 * (int64_t)f;
-        double longest2 = 0.0;
-        const double *a = x + 3 * (int64_t)tri[0], *b = x + 3 * (int64_t)tri[1], *c = x + 3 * (int64_t)tri[2];
-        double area = cfi_triangle_area(a, b, c, &longest2);
-        if (longest2 < CF_MIN_EDGE_LENGTH * CF_MIN_EDGE_LENGTH || !(area > CFI_ZERO_AREA_RATIO * longest2)) return 0;
-    }
-    return 1;
-}
-
-cf_status cfi_spin_stall_retry(cf_flow *flow, cfi_spin_state *s, double *tau, int *accepted, cfi_spin_timers *t)
-{
-    size_t bytes = 3 * (size_t)s->nv * sizeof(double);
-    double step = flow->policy.full_step;
-    cf_status st = CF_OK;
-    *accepted = 0;
-    s->current_metric_step = 1;
-    /* from the full step (the raw sequence began lower after earlier cuts),
-     * halved, or cut for the scale change, as the layer does */
-    for (int32_t k = 0; k <= flow->policy.opt.max_halvings && !*accepted; ++k) {
-        memcpy(flow->positions, flow->saved_positions, bytes);
-        st = cfi_spin_update_geometry(flow, s, flow->positions); /* also the solver's metric */
-        if (st != CF_OK) break;
-        int too_large = 0;
-        st = cfi_spin_realise_step(flow, s, step, &too_large, t);
-        if (st == CF_OK && !too_large && s->energy <= s->energy_before && faces_pass(flow->mesh, flow->positions)) {
-            *accepted = 1;
-            *tau = step;
-            /* the next step starts from here, not from the layer's last,
-             * 2^-max_halvings smaller, retry (the layer grows the step only
-             * after a step without retries) */
-            flow->policy.step = step;
-        } else if (st == CF_OK || st == CF_ERR_NUMERICAL || st == CF_ERR_NOT_POSDEF || st == CF_ERR_DEGENERATE_FACE) {
-            cf_context_clear_error(flow->ctx);
-            step *= st == CF_OK && too_large ? fmin(0.5, 0.9 * s->opt.max_scale_change / s->diag.scale_change) : 0.5;
-            st = CF_OK;
-        } else {
-            break;
-        }
-    }
-    s->current_metric_step = 0;
-    if (*accepted) return CF_OK;
-    memcpy(flow->positions, flow->saved_positions, bytes);
-    cf_status back = cfi_spin_update_geometry(flow, s, flow->positions);
-    return st != CF_OK ? st : back;
 }

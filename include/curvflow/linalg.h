@@ -352,6 +352,22 @@ CF_API void cf_project_out(int32_t n, int32_t k, const double *basis, const doub
 /* Weighted dot product sum_i w_i a_i b_i (w NULL: plain). */
 CF_API double cf_dot(int32_t n, const double *a, const double *b, const double *w);
 
+/* ---- Small dense least squares (LAPACK) ------------------------------- */
+
+/* Doubles of workspace cf_dense_least_squares needs for an m x n system. */
+CF_API int64_t cf_dense_least_squares_work_size(int32_t m, int32_t n);
+
+/* Minimum-norm least-squares solution of the small dense system a x = b
+ * (a: m x n, column-major, overwritten; b: max(m, n) entries, the m
+ * right-hand side values in, the n solution values out), by LAPACK's
+ * SVD-based dgelss: singular values below rcond times the largest count as
+ * zero. work: cf_dense_least_squares_work_size(m, n) doubles. *rank (may be
+ * NULL) receives the effective rank. Statuses: CF_ERR_INVALID_ARG (bad
+ * sizes, NULL, too little work), CF_ERR_NONFINITE (a or b not finite),
+ * CF_ERR_NUMERICAL (the SVD did not converge). */
+CF_API cf_status cf_dense_least_squares(int32_t m, int32_t n, double *a, double *b, double rcond, double *work,
+                                        int64_t work_size, int32_t *rank);
+
 /* ---- Quadratics with fixed values and linear equalities --------------- */
 
 /* Precompute / solve for

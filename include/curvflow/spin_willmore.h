@@ -107,6 +107,17 @@ typedef struct cf_spin_willmore_options {
                                 * have no periods" (first order in tau); 0 uses App. C.1's Z_i on
                                 * closed surfaces (docs/spin.md). Surfaces with boundary always use
                                 * the linearisation. Default 1 */
+    int32_t period_iterations; /* closed surfaces of genus > 0 with the linearised exactness: at most
+                                * this many Newton corrections of rho per attempt (in the span of the
+                                * exactness columns) that cancel the periods the first-order
+                                * constraint leaves at second order in tau. Default 3; 0: the
+                                * constraint alone (docs/spin.md, "Periods") */
+    double period_tolerance;   /* stop the corrections when the harmonic part of the transformed edges
+                                * is below this fraction of them (*1 norm of the input). Default 3e-3 */
+    double max_integrability_error; /* with adaptive: redo a step (tau halved) whose transformed edges
+                                * are non-integrable by more than this fraction (the `integrability`
+                                * residual). Default 0 = no bound: it trades W for triangle quality
+                                * (docs/spin.md, "Periods") */
     int32_t harmonic_update;   /* with App. C's Z_i (exactness_linearized = 0): re-project the
                                 * input's harmonic 1-forms onto the current surface's every step;
                                 * 0 keeps the input's forms, as the paper. Default 1 */

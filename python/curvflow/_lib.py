@@ -112,7 +112,8 @@ class SpinWillmoreOptions(Structure):
                 ("boundary_axis", c_double * 3), ("power_iterations", c_int32), ("normalize", c_int32),
                 ("tolerance", c_double), ("complex_factorization", c_int32), ("input_metric", c_int32),
                 ("adaptive", c_int32),
-                ("max_scale_change", c_double), ("exactness_linearized", c_int32), ("harmonic_update", c_int32),
+                ("max_scale_change", c_double), ("exactness_linearized", c_int32), ("period_iterations", c_int32),
+                ("period_tolerance", c_double), ("max_integrability_error", c_double), ("harmonic_update", c_int32),
                 ("regularization", c_double),
                 ("boundary_targets", ParamValues)]
 
@@ -161,7 +162,9 @@ _LAYOUT = {
         "tolerance": ("tolerance", 0), "complex_factorization": ("complex_factorization", 0),
         "input_metric": ("input_metric", 0), "adaptive": ("adaptive", 0),
         "max_scale_change": ("max_scale_change", 0),
-        "exactness_linearized": ("exactness_linearized", 0), "regularization": ("regularization", 0),
+        "exactness_linearized": ("exactness_linearized", 0), "period_iterations": ("period_iterations", 0),
+        "period_tolerance": ("period_tolerance", 0), "max_integrability_error": ("max_integrability_error", 0),
+        "regularization": ("regularization", 0),
         "harmonic_update": ("harmonic_update", 0), "boundary_targets": ("boundary_targets", 0)}),
     "stretch-bend-edit": (StretchBendOptions, {
         "energy": ("energy", 0), "lambda": ("lambda_", 0), "max_iterations": ("max_iterations", 0),

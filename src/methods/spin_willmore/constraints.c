@@ -54,12 +54,25 @@ cf_status cfi_spin_apply_constraints(cf_flow *flow, cfi_spin_state *s, const dou
         for (int32_t i = 0; i < nv; ++i) b[i] = 1.0;
         ++ncols;
     }
+    int32_t pre = 0;
     if (s->harmonic_dim > 0) {
+        if (s->period_newton) {
+            /* the columns before the exactness ones orthonormal on their own
+             * first, so that the exactness directions are the last columns of
+             * the final basis, from s->zfirst (periods.c corrects rho along
+             * them; Gram-Schmidt keeps the order) */
+            cf_orthonormalize(nv, ncols, s->basis, s->area, 1e-10, &pre);
+            count += ncols - pre;
+            ncols = pre;
+        }
         st = cfi_spin_exactness_columns(flow, s, x, &ncols, factor_seconds, solve_seconds);
         if (st != CF_OK) return st;
     }
     count += ncols;
-    rank += project(s, ncols);
+    int32_t last = project(s, ncols);
+    rank += last;
+    s->zfirst = pre;
+    s->zcount = s->period_newton ? last - pre : 0;
     s->diag.constraint_count = count;
     s->diag.constraint_rank = rank;
     s->diag.harmonic_dimension = s->harmonic_dim;

@@ -176,6 +176,52 @@ double cfi_dirac_quotient(const cfi_dirac *d, const double *area, const double *
     return den > 0.0 ? num / den : NAN;
 }
 
+void cfi_dirac_rho_derivative(const cf_mesh *mesh, const double *positions, const double *rho, const double *drho,
+                              const double *lambda, double *out)
+{
+    memset(out, 0, 4 * (size_t)mesh->nv * sizeof(double));
+    for (int32_t k = 0; k < mesh->nf; ++k) {
+        const int32_t *tri = mesh->triangles + 3 * k;
+        double e[3][3];
+        for (int m = 0; m < 3; ++m) {
+            const double *a = positions + 3 * tri[(m + 1) % 3];
+            const double *b = positions + 3 * tri[(m + 2) % 3];
+            for (int c = 0; c < 3; ++c) e[m][c] = b[c] - a[c];
+        }
+        double nrm[3] = {e[2][1] * e[0][2] - e[2][2] * e[0][1], e[2][2] * e[0][0] - e[2][0] * e[0][2],
+                         e[2][0] * e[0][1] - e[2][1] * e[0][0]};
+        double area = 0.5 * sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
+        double r[3], dr[3];
+        for (int m = 0; m < 3; ++m) {
+            r[m] = rho ? rho[tri[m]] : 0.0;
+            dr[m] = drho[tri[m]];
+        }
+        for (int m = 0; m < 3; ++m) {
+            double *o = out + 4 * (int64_t)tri[m];
+            for (int n = 0; n < 3; ++n) {
+                /* d/drho of face_quaternion's X_mn along drho */
+                double q0 = area * (dr[m] * r[n] + r[m] * dr[n]) / 9.0;
+                double qv[3];
+                for (int c = 0; c < 3; ++c) qv[c] = (dr[m] * e[n][c] - dr[n] * e[m][c]) / 6.0;
+                /* o += q lambda_n (the block is q's left multiplication) */
+                const double *l = lambda + 4 * (int64_t)tri[n];
+                o[0] += q0 * l[0] - qv[0] * l[1] - qv[1] * l[2] - qv[2] * l[3];
+                o[1] += q0 * l[1] + qv[0] * l[0] + qv[1] * l[3] - qv[2] * l[2];
+                o[2] += q0 * l[2] - qv[0] * l[3] + qv[1] * l[0] + qv[2] * l[1];
+                o[3] += q0 * l[3] + qv[0] * l[2] - qv[1] * l[1] + qv[2] * l[0];
+            }
+        }
+    }
+}
+
+void cfi_dirac_multiply(const cfi_dirac *d, const double *lambda, double *out)
+{
+    if (d->z)
+        cf_quat_sparse_multiply(d->z, lambda, out);
+    else
+        cf_sparse_multiply(d->x, lambda, out);
+}
+
 /* Crane 2013, App. G: the quaternion X_mn of face k's corners m, n
  * (e: the face's ccw edges opposite each corner, r: rho at the corners):
  * X_mn = -e_m e_n / (4A) + (rho_m e_n - rho_n e_m) / 6 + A rho_m rho_n / 9;

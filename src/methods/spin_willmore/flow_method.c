@@ -125,6 +125,17 @@ static cf_status allocate_arrays(cfi_spin_state *s, int32_t dim)
     s->lx = s->newpos;
     s->rho = s->newpos;
     if (s->opt.mobius) WS_ARRAY(s->vtmp, nv);
+    if (s->period_newton) {
+        int64_t nz = 3 * (int64_t)dim;
+        WS_ARRAY(s->period_rho, nv);
+        WS_ARRAY(s->period_dx, 4 * nv * nz);
+        WS_ARRAY(s->period_sol, 4 * nv * nz);
+        WS_ARRAY(s->period_lambda, 4 * nv);
+        WS_ARRAY(s->period_edges, 3 * ne);
+        WS_ARRAY(s->period_matrix, nz * nz);
+        WS_ARRAY(s->period_values, 2 * nz);
+        WS_ARRAY(s->period_work, cf_dense_least_squares_work_size((int32_t)nz, (int32_t)nz));
+    }
     if (s->restricted_boundary) {
         WS_ARRAY(s->frames, 16 * nv);
         WS_ARRAY(s->target, 3 * nv);
@@ -236,6 +247,10 @@ cf_status cfi_spin_create(cf_flow *flow, const void *options)
      * tau), the linearised condition to first order (elephant 20x at tau
      * 0.01, 87x at 0.002); docs/spin.md. */
     s->linearized = dim > 0 && (s->has_boundary || o->exactness_linearized);
+    /* Newton corrections of the periods on closed surfaces only: with a free
+     * boundary they slowed W on the lion, blade and bunny_scan (docs/spin.md,
+     * "Periods") */
+    s->period_newton = s->linearized && !s->has_boundary && o->period_iterations > 0;
     /* a stall in the input metric is retried in the current one (docs/spin.md,
      * "Robustness"; cfi_spin_fallback) */
     s->stall_retry = o->input_metric && !s->fixed_boundary && !s->restricted_boundary && cfi_flow_backtracks(flow);
@@ -279,17 +294,15 @@ fail:
 
 /* ---- step -------------------------------------------------------------- */
 
-cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, int *too_large, cfi_spin_timers *t)
+/* V: lambda from X(s->rho) (fill, factorisation, inverse iteration or the
+ * fixed-boundary solve), and its Rayleigh quotient. */
+static cf_status solve_lambda(cf_flow *flow, cfi_spin_state *s, cfi_spin_timers *t)
 {
     const cf_mesh *mesh = flow->mesh;
     cf_context *ctx = flow->ctx;
     int32_t nv = s->nv;
     double *x = flow->positions;
     cf_status st = CF_OK;
-    /* IV. rho = tau rhodot */
-    for (int32_t i = 0; i < nv; ++i) s->rho[i] = tau * s->rhodot[i];
-
-    /* V. lambda from X(rho) */
     double ta = cfi_now_seconds();
     /* The shift eps M is the regularisation alpha |lambda - 1|^2_M (option
      * `regularization`); it also makes the eigenproblem definite (X(0) 1 = 0).
@@ -345,6 +358,49 @@ cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, in
                 s->lambda[4 * i + r] = q[4 * r] * mu[0] + q[4 * r + 1] * mu[1] + q[4 * r + 2] * mu[2] + q[4 * r + 3] * mu[3];
         }
     }
+    return CF_OK;
+}
+
+/* The Newton corrections of the periods (periods.c) after the first
+ * lambda: at most period_iterations, while the harmonic part of e~ is above
+ * period_tolerance; a correction that does not lower it is undone. */
+static cf_status correct_periods(cf_flow *flow, cfi_spin_state *s, cfi_spin_timers *t)
+{
+    int32_t nv = s->nv;
+    double err = cfi_spin_periods(flow->mesh, s, flow->positions, s->lambda, s->edges, s->period_values);
+    s->diag.period_error_first = s->diag.period_error = err;
+    s->diag.period_iterations = 0;
+    for (int32_t k = 0; k < s->opt.period_iterations && err > s->opt.period_tolerance; ++k) {
+        memcpy(s->period_rho, s->rho, (size_t)nv * sizeof(double));
+        cf_status st = cfi_spin_period_correction(flow, s, s->period_values, t);
+        if (st == CF_OK) st = solve_lambda(flow, s, t);
+        if (st != CF_OK) return st;
+        double next = cfi_spin_periods(flow->mesh, s, flow->positions, s->lambda, s->edges, s->period_values);
+        if (!(next < err)) {
+            memcpy(s->rho, s->period_rho, (size_t)nv * sizeof(double));
+            return solve_lambda(flow, s, t);
+        }
+        err = next;
+        s->diag.period_error = err;
+        s->diag.period_iterations = k + 1;
+    }
+    return CF_OK;
+}
+
+cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, int *too_large, cfi_spin_timers *t)
+{
+    const cf_mesh *mesh = flow->mesh;
+    cf_context *ctx = flow->ctx;
+    int32_t nv = s->nv;
+    double *x = flow->positions;
+    cf_status st = CF_OK;
+    /* IV. rho = tau rhodot */
+    for (int32_t i = 0; i < nv; ++i) s->rho[i] = tau * s->rhodot[i];
+
+    /* V. lambda from X(rho), with the periods corrected on closed genus > 0 */
+    st = solve_lambda(flow, s, t);
+    if (st == CF_OK && s->period_newton && s->zcount > 0) st = correct_periods(flow, s, t);
+    if (st != CF_OK) return st;
 
     /* A lambda whose scale jumps along an edge gives transformed edges that
      * no similar triangle fits (docs/spin.md, "Robustness"): with adaptive
@@ -357,7 +413,7 @@ cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, in
     if (*too_large) return CF_OK;
 
     /* VI. edges and positions */
-    ta = cfi_now_seconds();
+    double ta = cfi_now_seconds();
     cfi_spin_transform_edges(mesh, x, s->lambda, s->edges);
     t->assemble += cfi_now_seconds() - ta;
     cf_solver_timings tm = {0.0, 0.0, 0.0};
@@ -370,6 +426,12 @@ cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, in
     t->solve += tm.solve_seconds;
     if (st != CF_OK) return st;
     s->diag.integrability_error = cf_edge_closure_error(mesh, s->newpos, s->edges);
+    /* the optional bound on the non-integrability (docs/spin.md, "Periods") */
+    if (cfi_flow_backtracks(flow) && !s->restricted_boundary && s->opt.max_integrability_error > 0.0 &&
+        !(s->diag.integrability_error <= s->opt.max_integrability_error)) {
+        *too_large = 2;
+        return CF_OK;
+    }
     if (!s->fixed_boundary) {
         /* fix translation (and the scale, if asked): Willmore energy is invariant under both */
         double c_old[3] = {0, 0, 0}, c_new[3] = {0, 0, 0}, atot = 0.0;
@@ -423,7 +485,8 @@ cf_status cfi_spin_begin_step(cf_flow *flow, cf_flow_info *info)
 /* IV-VI for tau. While the flow layer backtracks (`adaptive`), an attempt
  * whose lambda changes the log scale across an edge by more than
  * max_scale_change is rejected with tau cut in proportion (the scale change
- * grows about linearly with tau; at least halved), and one that fails
+ * grows about linearly with tau; at least halved), one whose edges are less
+ * integrable than max_integrability_error allows with tau halved, and one that fails
  * numerically is rejected too (redone with half the step: the failures of
  * a too large step, docs/spin.md). */
 cf_status cfi_spin_attempt(cf_flow *flow, double tau, cf_flow_info *info, cfi_step_verdict *verdict)
@@ -440,7 +503,7 @@ cf_status cfi_spin_attempt(cf_flow *flow, double tau, cf_flow_info *info, cfi_st
     if (!cfi_flow_backtracks(flow)) return st;
     if (st == CF_OK && too_large) {
         verdict->rejected = 1;
-        verdict->shrink = 0.9 * s->opt.max_scale_change / s->diag.scale_change;
+        verdict->shrink = too_large == 2 ? 0.5 : 0.9 * s->opt.max_scale_change / s->diag.scale_change;
     } else if (st == CF_ERR_NUMERICAL || st == CF_ERR_NOT_POSDEF || st == CF_ERR_DEGENERATE_FACE) {
         verdict->rejected = 1;
         verdict->shrink = 0.5;
@@ -499,6 +562,13 @@ cf_status cfi_spin_end_step(cf_flow *flow, cf_flow_info *info)
     /* slot 3 is left to the flow layer: time_step_halvings under `adaptive` */
     info->residuals[4] = s->diag.scale_change;
     info->residual_names[4] = "scale_change";
+    if (s->period_newton) {
+        /* harmonic part of e~ left after the period corrections, and their count */
+        info->residuals[5] = s->diag.period_error;
+        info->residual_names[5] = "periods";
+        info->residuals[6] = s->diag.period_iterations;
+        info->residual_names[6] = "period_iterations";
+    }
     flow->converged = cfi_spin_converged(s, s->energy_before);
     return CF_OK;
 }

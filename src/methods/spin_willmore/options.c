@@ -32,6 +32,9 @@ void cf_spin_willmore_options_default(cf_spin_willmore_options *o)
     o->complex_factorization = 1;
     o->harmonic_update = 1;
     o->exactness_linearized = 1;
+    o->period_iterations = 3;
+    o->period_tolerance = 3e-3;
+    o->max_integrability_error = 0.0;
     o->adaptive = 1;
     o->max_scale_change = 1.2;
     o->input_metric = 1;
@@ -80,6 +83,14 @@ static const cf_param_desc spin_params[] = {
      "adaptive: largest change of the log conformal scale across an edge in one step (0: no bound)"},
     {"exactness_linearized", CF_PARAM_BOOL, OPT(exactness_linearized), 0, 1, NULL,
      "exactness as the discrete linearisation of 'no periods' (0: App. C's Z_i on closed surfaces)"},
+    {"period_iterations", CF_PARAM_INT, OPT(period_iterations), 0, 20, NULL,
+     "closed genus > 0: Newton corrections of rho per step that cancel the periods of the transformed edges (0: "
+     "first-order exactness only)"},
+    {"period_tolerance", CF_PARAM_DOUBLE, OPT(period_tolerance), 0.0, 1.0, NULL,
+     "stop the period corrections below this harmonic part of the transformed edges (relative)"},
+    {"max_integrability_error", CF_PARAM_DOUBLE, OPT(max_integrability_error), 0.0, 1.0, NULL,
+     "adaptive: redo a step with half tau while its transformed edges are non-integrable by more than this "
+     "(relative; 0: no bound; e.g. 0.04 keeps triangles better at some cost in W)"},
     {"regularization", CF_PARAM_DOUBLE, OPT(regularization), 1e-9, 1e6, NULL,
      "weight of |lambda - 1|^2 in units of 4pi/area: damps near-kernel modes of thin shapes"},
     {"harmonic_update", CF_PARAM_BOOL, OPT(harmonic_update), 0, 1, NULL,

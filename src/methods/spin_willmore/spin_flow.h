@@ -6,6 +6,7 @@
  *   options.c          defaults, parameter table, validation of the options
  *   boundary_frames.c  boundary vectors and frames, prescribed targets (Sec. 6.3.1)
  *   exactness.c        harmonic 1-forms and the exactness columns (App. C; genus > 0, holes)
+ *   periods.c          Newton corrections of the periods left by the linearised exactness (closed genus > 0)
  *   mobius.c           Moebius balancing (App. E.1)
  *   constraints.c      assembling and projecting the constraints (Sec. 6.2)
  *   step_policy.c      the scale-change measure of the adaptive step, blow-up and
@@ -44,6 +45,17 @@ typedef struct cfi_spin_state {
     cf_spectral_filter *filter; /* sigma > 0: the spectral filter of the input (Sec. 4; curvflow/ops.h) */
     int32_t harmonic_dim;    /* dim H^1 (2g + b - 1 with boundary) if the exactness constraint is active */
     int32_t linearized;      /* exactness by the discrete linearisation instead of App. C's Z_i */
+    int32_t period_newton;   /* closed, genus > 0, linearised, period_iterations > 0: the Newton
+                              * corrections of the periods (periods.c) */
+    int32_t zfirst, zcount;  /* the exactness directions within the orthonormal basis (constraints.c) */
+    double *period_rho;      /* nv: rho before a correction (periods.c) */
+    double *period_dx;       /* 4 nv x 3 dim: dX lambda per direction */
+    double *period_sol;      /* 4 nv x 3 dim: X^-1 dX lambda */
+    double *period_lambda;   /* 4 nv: lambda +- its change */
+    double *period_edges;    /* 3 ne */
+    double *period_matrix;   /* 3 dim x 3 dim: the periods' Jacobian */
+    double *period_values;   /* 3 dim (the right-hand side, then the solution) */
+    double *period_work;     /* cf_dense_least_squares_work_size(3 dim, 3 dim) */
     double *hweights;        /* ne: cotan weights of the input (the *1 of the harmonic basis), linearized only */
     int32_t fixed_boundary;
     int32_t restricted_boundary;   /* PRESCRIBED or CMC */
@@ -126,11 +138,24 @@ cf_status cfi_spin_apply_constraints(cf_flow *flow, cfi_spin_state *s, const dou
 typedef struct cfi_spin_timers {
     double assemble, factorize, solve;   /* seconds, accumulated */
 } cfi_spin_timers;
+
+/* ---- periods.c ---- */
+/* Periods of the transformed edges of lambda on x: periods[3 g + c] =
+ * <e~_c, h_g>_*1 (3 dim; edges: 3 ne scratch, left holding e~). Returns the
+ * relative harmonic part |P| / |e~|_*1 (*1 of the input). */
+double cfi_spin_periods(const cf_mesh *mesh, const cfi_spin_state *s, const double *x, const double *lambda,
+                        double *edges, double *periods);
+/* One Newton correction of rho = s->period_rho (lambda, s->chol solved for
+ * it) along the exactness directions, cancelling `periods` at first order:
+ * writes s->rho. Leaves other values in the Dirac matrix (refill it). */
+cf_status cfi_spin_period_correction(cf_flow *flow, cfi_spin_state *s, const double *periods, cfi_spin_timers *t);
 /* Steps IV-VI for the time step tau from the current state (rhodot and its
  * constraints computed): rho, lambda, edges, positions (flow->positions in
- * place) and the geometry of the new surface (s->energy). *too_large: the
- * attempt was stopped before the positions because lambda's scale jumps
- * more than max_scale_change (only while the flow layer backtracks). */
+ * place) and the geometry of the new surface (s->energy). *too_large (only
+ * while the flow layer backtracks): 1 when the attempt was stopped before
+ * the positions because lambda's scale jumps more than max_scale_change, 2
+ * when the recovered positions were not applied because the edges are less
+ * integrable than max_integrability_error allows. */
 cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, int *too_large, cfi_spin_timers *t);
 
 /* ---- step_policy.c ---- */

@@ -61,6 +61,14 @@ cf_status cfi_dirac_factorize(const cfi_dirac *d, cf_cholesky *chol);
  * conjugates of the upper ones where the real form's lower blocks are
  * summed separately: equal up to rounding). work: 4 nv doubles. */
 double cfi_dirac_quotient(const cfi_dirac *d, const double *area, const double *lambda, double *work);
+/* out = X lambda (4 nv each, quaternion per vertex) for the filled X, either form. */
+void cfi_dirac_multiply(const cfi_dirac *d, const double *lambda, double *out);
+/* out = (dX(rho)/drho [drho]) lambda (4 nv): the derivative of App. G's X
+ * along drho applied to lambda, face by face without the matrix (X is
+ * quadratic in rho: (rho_m e_n - rho_n e_m) / 6 + A rho_m rho_n / 9). rho
+ * NULL: rho = 0. Faces of zero area contribute only their linear term. */
+void cfi_dirac_rho_derivative(const cf_mesh *mesh, const double *positions, const double *rho, const double *drho,
+                              const double *lambda, double *out);
 
 /* Fills X(rho) + shift * M (M: barycentric vertex areas) for `positions`.
  * rho may be NULL (rho = 0). Sign: X = (D - P rho)^* A (D - P rho) with
@@ -134,6 +142,9 @@ typedef struct cfi_spin_diagnostics {
     double mobius_norm;             /* |balancing term|_M added to rhodot */
     double scale_change;            /* max over edges of |log(|lambda_i|^2 / |lambda_j|^2)| of the step */
     int32_t x0_solve_columns;       /* right-hand sides of the exactness X(0) solve (0: none) */
+    double period_error_first;      /* harmonic part of e~ / |e~| (*1 of the input) before the period corrections */
+    double period_error;            /* ... after them (closed genus > 0 with period_iterations > 0; else 0) */
+    int32_t period_iterations;      /* corrections made in the accepted attempt */
 } cfi_spin_diagnostics;
 
 /* Nonzero full: the linearised exactness constraint solves X(0) for each of

@@ -6,6 +6,10 @@
  * rho = 0 (the lower blocks then are exact conjugates) and to rounding
  * otherwise, and so does the Rayleigh quotient; and it takes far less
  * memory (docs/memory.md: the reason it exists).
+ * The derivative of X along a change of rho applied to lambda, assembled
+ * face by face (cfi_dirac_rho_derivative, the Jacobian of the period
+ * corrections): against central differences of the filled matrix in both
+ * forms (exact for a quadratic, any step) and one-sided differences.
  */
 #include "test.h"
 
@@ -102,8 +106,72 @@ static void test_forms_agree(void)
     cf_context_destroy(&ctx);
 }
 
+static void test_rho_derivative(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *mesh = NULL;
+    CHECK_OK(ctx, cf_generate_icosphere(ctx, 3, 1.0, &mesh));
+    if (!mesh) return;
+    int32_t nv = mesh->nv, n = 4 * nv;
+    double *x = malloc(3 * (size_t)nv * sizeof *x), *rho = malloc((size_t)nv * sizeof *rho);
+    double *drho = malloc((size_t)nv * sizeof *drho), *trial = malloc((size_t)nv * sizeof *trial);
+    double *lambda = malloc((size_t)n * sizeof *lambda), *direct = malloc((size_t)n * sizeof *direct);
+    double *plus = malloc((size_t)n * sizeof *plus), *minus = malloc((size_t)n * sizeof *minus);
+    for (int32_t i = 0; i < nv; ++i) {
+        const double *p = mesh->positions + 3 * i;
+        double sc = 1.0 + 0.1 * sin(3.0 * p[0]) * cos(2.0 * p[1] + p[2]);
+        for (int c = 0; c < 3; ++c) x[3 * i + c] = sc * p[c];
+        rho[i] = 2.0 * sin(5.0 * p[2]) + 0.3;
+        drho[i] = cos(4.0 * p[0] + p[1]) - 0.2 * p[2];
+        for (int c = 0; c < 4; ++c) lambda[4 * i + c] = (c == 0 ? 1.0 : 0.0) + 0.3 * sin((c + 1.0) * p[c % 3] + i);
+    }
+    cfi_dirac_rho_derivative(mesh, x, rho, drho, lambda, direct);
+    for (int form = 0; form < 2; ++form) {
+        cfi_dirac *d = NULL;
+        CHECK_OK(ctx, cfi_dirac_create_form(ctx, mesh, form, &d));
+        if (!d) continue;
+        /* central differences, step 1 and 1e-3: exact for a quadratic */
+        for (int hs = 0; hs < 2; ++hs) {
+            double h = hs ? 1e-3 : 1.0;
+            for (int32_t i = 0; i < nv; ++i) trial[i] = rho[i] + h * drho[i];
+            CHECK_OK(ctx, cfi_dirac_fill(d, mesh, x, trial, 0.25));
+            cfi_dirac_multiply(d, lambda, plus);
+            for (int32_t i = 0; i < nv; ++i) trial[i] = rho[i] - h * drho[i];
+            CHECK_OK(ctx, cfi_dirac_fill(d, mesh, x, trial, 0.25));
+            cfi_dirac_multiply(d, lambda, minus);
+            for (int32_t k = 0; k < n; ++k) plus[k] = (plus[k] - minus[k]) / (2.0 * h);
+            double r = rel_diff(direct, plus, n);
+            fprintf(stderr, "   %s form, central difference with step %g: relative difference %.2e\n",
+                    form ? "complex" : "real", h, r);
+            CHECK_LE(r, hs ? 1e-9 : 1e-13);
+        }
+        /* one-sided: first order in h, the error halving with h */
+        double err[2];
+        for (int hs = 0; hs < 2; ++hs) {
+            double h = hs ? 5e-4 : 1e-3;
+            CHECK_OK(ctx, cfi_dirac_fill(d, mesh, x, rho, 0.25));
+            cfi_dirac_multiply(d, lambda, minus);
+            for (int32_t i = 0; i < nv; ++i) trial[i] = rho[i] + h * drho[i];
+            CHECK_OK(ctx, cfi_dirac_fill(d, mesh, x, trial, 0.25));
+            cfi_dirac_multiply(d, lambda, plus);
+            for (int32_t k = 0; k < n; ++k) plus[k] = (plus[k] - minus[k]) / h;
+            err[hs] = rel_diff(direct, plus, n);
+        }
+        fprintf(stderr, "   %s form, one-sided differences: %.2e (h 1e-3), %.2e (h 5e-4)\n", form ? "complex" : "real",
+                err[0], err[1]);
+        CHECK(err[0] < 1e-3);
+        CHECK_NEAR(err[1] / err[0], 0.5, 1e-3, 0);
+        cfi_dirac_destroy(ctx, &d);
+    }
+    free(x); free(rho); free(drho); free(trial); free(lambda); free(direct); free(plus); free(minus);
+    cf_mesh_destroy(&mesh);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 int main(void)
 {
     CFT_RUN(test_forms_agree);
+    CFT_RUN(test_rho_derivative);
     return cft_finish();
 }

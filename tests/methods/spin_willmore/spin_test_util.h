@@ -8,8 +8,11 @@
 #ifndef CF_TESTS_SPIN_TEST_UTIL_H
 #define CF_TESTS_SPIN_TEST_UTIL_H
 
+#include "curvflow/flow.h"
 #include "curvflow/mesh.h"
+#include "curvflow/metrics.h"
 #include "curvflow/ops.h"
+#include "test.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -103,6 +106,52 @@ static inline double smallest_angle(const cf_mesh *mesh, const double *x)
     double smallest = 180.0;
     for (int32_t f = 0; f < cf_mesh_face_count(mesh); ++f) smallest = fmin(smallest, face_smallest_angle(mesh, x, f));
     return smallest;
+}
+
+/* What spin_run_steps measured: W/4pi before and after, the largest rise of
+ * W/4pi over one step (<= 0 when monotone), the smallest time step taken,
+ * the steps taken, the area-weighted mean quasi-conformal error against the
+ * input (issue 13's measure) and the mesh check's count of bad faces and
+ * coordinates of the result. */
+typedef struct spin_run {
+    double w0, w, worst_rise, smallest_step, mean_q;
+    int32_t steps, defects;
+} spin_run;
+
+/* Up to `steps` steps (fewer when the flow converges) of a flow with
+ * options o on mesh; w_history (may be NULL; steps + 1 entries) receives
+ * W/4pi at the start and after each step taken. Returns 0 when the flow
+ * could not be made. */
+static inline int spin_run_steps(cf_context *ctx, const cf_mesh *mesh, const cf_flow_options *o, int steps,
+                                 spin_run *r, double *w_history)
+{
+    const double four_pi = 4.0 * 3.14159265358979323846;
+    cf_flow *flow = NULL;
+    CHECK_OK(ctx, cf_flow_create(ctx, mesh, NULL, o, &flow));
+    if (!flow) return 0;
+    memset(r, 0, sizeof *r);
+    r->w0 = r->w = cf_flow_energy(flow) / four_pi;
+    r->worst_rise = -INFINITY;
+    r->smallest_step = INFINITY;
+    if (w_history) w_history[0] = r->w0;
+    while (r->steps < steps && !cf_flow_converged(flow)) {
+        cf_flow_info info;
+        CHECK_OK(ctx, cf_flow_step(flow, &info));
+        double w = cf_flow_energy(flow) / four_pi;
+        r->worst_rise = fmax(r->worst_rise, w - r->w);
+        r->smallest_step = fmin(r->smallest_step, info.time_step);
+        r->w = w;
+        if (w_history) w_history[r->steps + 1] = w;
+        ++r->steps;
+    }
+    cf_stats q = {0};
+    CHECK_OK(ctx, cf_quasi_conformal_error(ctx, mesh, cf_mesh_positions(mesh), cf_flow_positions(flow), NULL, &q));
+    r->mean_q = q.weighted_mean; /* by the input's face areas */
+    cf_mesh_report report;
+    CHECK_OK(ctx, cf_mesh_check_positions(ctx, mesh, cf_flow_positions(flow), &report));
+    r->defects = report.nonfinite_coordinates + report.degenerate_faces;
+    cf_flow_destroy(&flow);
+    return 1;
 }
 
 #endif /* CF_TESTS_SPIN_TEST_UTIL_H */

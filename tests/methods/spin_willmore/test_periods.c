@@ -161,34 +161,6 @@ static void test_integrability_bound(void)
     cf_context_destroy(&ctx);
 }
 
-/* 10 default steps on elk_g1_2k with and without the corrections. */
-static void run_elk(cf_context *ctx, const cf_mesh *mesh, int32_t iterations, double *w0, double *w10,
-                    double *worst_rise, double *mean_q, int32_t *defects)
-{
-    cf_flow_options o;
-    CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o));
-    ((cf_spin_willmore_options *)cf_flow_options_method(&o))->period_iterations = iterations;
-    cf_flow *flow = NULL;
-    CHECK_OK(ctx, cf_flow_create(ctx, mesh, NULL, &o, &flow));
-    if (!flow) return;
-    double before = *w0 = cf_flow_energy(flow) / FOUR_PI;
-    *worst_rise = -INFINITY;
-    for (int step = 0; step < 10 && !cf_flow_converged(flow); ++step) {
-        CHECK_OK(ctx, cf_flow_step(flow, NULL));
-        double w = cf_flow_energy(flow) / FOUR_PI;
-        if (w - before > *worst_rise) *worst_rise = w - before;
-        before = w;
-    }
-    *w10 = before;
-    cf_stats q = {0};
-    CHECK_OK(ctx, cf_quasi_conformal_error(ctx, mesh, cf_mesh_positions(mesh), cf_flow_positions(flow), NULL, &q));
-    *mean_q = q.weighted_mean;
-    cf_mesh_report report;
-    CHECK_OK(ctx, cf_mesh_check_positions(ctx, mesh, cf_flow_positions(flow), &report));
-    *defects = report.nonfinite_coordinates + report.degenerate_faces;
-    cf_flow_destroy(&flow);
-}
-
 static void test_elk(void)
 {
     const char *path = cft_optional_shared_mesh("elk_g1_2k.obj");
@@ -197,18 +169,21 @@ static void test_elk(void)
     cf_mesh *mesh = NULL;
     CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
     if (mesh) {
-        double w0 = 0, w_with = 0, w_without = 0, rise_with = 0, rise_without = 0, q_with = 0, q_without = 0;
-        int32_t defects = -1, defects_without = -1;
-        run_elk(ctx, mesh, 3, &w0, &w_with, &rise_with, &q_with, &defects);
-        run_elk(ctx, mesh, 0, &w0, &w_without, &rise_without, &q_without, &defects_without);
+        /* 10 default steps with and without the corrections */
+        spin_run with = {0}, without = {0};
+        cf_flow_options o;
+        CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o));
+        spin_run_steps(ctx, mesh, &o, 10, &with, NULL);
+        ((cf_spin_willmore_options *)cf_flow_options_method(&o))->period_iterations = 0;
+        spin_run_steps(ctx, mesh, &o, 10, &without, NULL);
         fprintf(stderr,
                 "   elk_g1_2k, 10 default steps: W/4pi %.4f -> %.4f (mean Q %.3f) with the corrections, %.4f (mean Q "
                 "%.3f) without\n",
-                w0, w_with, q_with, w_without, q_without);
-        CHECK_LE(w_with, 0.5 * w0);     /* measured 7.47 of 22.8 */
-        CHECK(w_without > 0.5 * w0);    /* 13.08: what the corrections change */
-        CHECK_LE(rise_with, 0.0);
-        CHECK(defects == 0);
+                with.w0, with.w, with.mean_q, without.w, without.mean_q);
+        CHECK_LE(with.w, 0.5 * with.w0);     /* measured 7.47 of 22.8 */
+        CHECK(without.w > 0.5 * with.w0);    /* 13.08: what the corrections change */
+        CHECK_LE(with.worst_rise, 0.0);
+        CHECK(with.defects == 0);
     }
     cf_mesh_destroy(&mesh);
     CHECK(cf_context_bytes_in_use(ctx) == 0);

@@ -176,6 +176,21 @@ double cfi_dirac_quotient(const cfi_dirac *d, const double *area, const double *
     return den > 0.0 ? num / den : NAN;
 }
 
+/* The edges e[m] of triangle tri (opposite corner m, running
+ * counter-clockwise) and its area: the face data of App. G's X_mn, shared
+ * by the fill and its rho-derivative. */
+static inline double face_edges(const double *positions, const int32_t *tri, double e[3][3])
+{
+    for (int m = 0; m < 3; ++m) {
+        const double *a = positions + 3 * tri[(m + 1) % 3];
+        const double *b = positions + 3 * tri[(m + 2) % 3];
+        for (int c = 0; c < 3; ++c) e[m][c] = b[c] - a[c];
+    }
+    double nrm[3] = {e[2][1] * e[0][2] - e[2][2] * e[0][1], e[2][2] * e[0][0] - e[2][0] * e[0][2],
+                     e[2][0] * e[0][1] - e[2][1] * e[0][0]};
+    return 0.5 * sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
+}
+
 void cfi_dirac_rho_derivative(const cf_mesh *mesh, const double *positions, const double *rho, const double *drho,
                               const double *lambda, double *out)
 {
@@ -183,14 +198,7 @@ void cfi_dirac_rho_derivative(const cf_mesh *mesh, const double *positions, cons
     for (int32_t k = 0; k < mesh->nf; ++k) {
         const int32_t *tri = mesh->triangles + 3 * k;
         double e[3][3];
-        for (int m = 0; m < 3; ++m) {
-            const double *a = positions + 3 * tri[(m + 1) % 3];
-            const double *b = positions + 3 * tri[(m + 2) % 3];
-            for (int c = 0; c < 3; ++c) e[m][c] = b[c] - a[c];
-        }
-        double nrm[3] = {e[2][1] * e[0][2] - e[2][2] * e[0][1], e[2][2] * e[0][0] - e[2][0] * e[0][2],
-                         e[2][0] * e[0][1] - e[2][1] * e[0][0]};
-        double area = 0.5 * sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
+        double area = face_edges(positions, tri, e);
         double r[3], dr[3];
         for (int m = 0; m < 3; ++m) {
             r[m] = rho ? rho[tri[m]] : 0.0;
@@ -246,15 +254,7 @@ cf_status cfi_dirac_fill(cfi_dirac *d, const cf_mesh *mesh, const double *positi
     for (int32_t k = 0; k < mesh->nf; ++k) {
         const int32_t *tri = mesh->triangles + 3 * k;
         double e[3][3];
-        for (int m = 0; m < 3; ++m) {
-            /* edge opposite corner m, running counter-clockwise */
-            const double *a = positions + 3 * tri[(m + 1) % 3];
-            const double *b = positions + 3 * tri[(m + 2) % 3];
-            for (int c = 0; c < 3; ++c) e[m][c] = b[c] - a[c];
-        }
-        double nrm[3] = {e[2][1] * e[0][2] - e[2][2] * e[0][1], e[2][2] * e[0][0] - e[2][0] * e[0][2],
-                         e[2][0] * e[0][1] - e[2][1] * e[0][0]};
-        double area = 0.5 * sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
+        double area = face_edges(positions, tri, e);
         if (!(area > 0.0)) return cfi_error(mesh->ctx, CF_ERR_DEGENERATE_FACE, "face %d: zero area in the Dirac matrix", k);
         double r[3] = {0.0, 0.0, 0.0};
         if (rho)

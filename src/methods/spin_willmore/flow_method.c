@@ -363,7 +363,9 @@ static cf_status solve_lambda(cf_flow *flow, cfi_spin_state *s, cfi_spin_timers 
 
 /* The Newton corrections of the periods (periods.c) after the first
  * lambda: at most period_iterations, while the harmonic part of e~ is above
- * period_tolerance; a correction that does not lower it is undone. */
+ * period_tolerance; a correction that does not lower it is undone (rho,
+ * lambda and its eigenvalue back; X and its factor are not used again in
+ * this attempt, the next one refills them). */
 static cf_status correct_periods(cf_flow *flow, cfi_spin_state *s, cfi_spin_timers *t)
 {
     int32_t nv = s->nv;
@@ -373,12 +375,18 @@ static cf_status correct_periods(cf_flow *flow, cfi_spin_state *s, cfi_spin_time
     for (int32_t k = 0; k < s->opt.period_iterations && err > s->opt.period_tolerance; ++k) {
         memcpy(s->period_rho, s->rho, (size_t)nv * sizeof(double));
         cf_status st = cfi_spin_period_correction(flow, s, s->period_values, t);
-        if (st == CF_OK) st = solve_lambda(flow, s, t);
+        if (st != CF_OK) return st;
+        /* the correction's scratch is free again: it keeps lambda for an undo */
+        memcpy(s->period_lambda, s->lambda, 4 * (size_t)nv * sizeof(double));
+        double eigenvalue = s->diag.eigenvalue;
+        st = solve_lambda(flow, s, t);
         if (st != CF_OK) return st;
         double next = cfi_spin_periods(flow->mesh, s, flow->positions, s->lambda, s->edges, s->period_values);
         if (!(next < err)) {
             memcpy(s->rho, s->period_rho, (size_t)nv * sizeof(double));
-            return solve_lambda(flow, s, t);
+            memcpy(s->lambda, s->period_lambda, 4 * (size_t)nv * sizeof(double));
+            s->diag.eigenvalue = eigenvalue;
+            return CF_OK;
         }
         err = next;
         s->diag.period_error = err;
@@ -387,7 +395,8 @@ static cf_status correct_periods(cf_flow *flow, cfi_spin_state *s, cfi_spin_time
     return CF_OK;
 }
 
-cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, int *too_large, cfi_spin_timers *t)
+cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, cfi_spin_too_large *too_large,
+                                cfi_spin_timers *t)
 {
     const cf_mesh *mesh = flow->mesh;
     cf_context *ctx = flow->ctx;
@@ -409,7 +418,9 @@ cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, in
     s->diag.scale_change = cfi_spin_max_scale_change(mesh, s->lambda);
     /* (prescribed and cmc boundaries turn lambda by design: not bounded) */
     *too_large = cfi_flow_backtracks(flow) && !s->restricted_boundary && s->opt.max_scale_change > 0.0 &&
-                 !(s->diag.scale_change <= s->opt.max_scale_change);
+                         !(s->diag.scale_change <= s->opt.max_scale_change)
+                     ? CFI_SPIN_SCALE_CHANGE
+                     : CFI_SPIN_STEP_OK;
     if (*too_large) return CF_OK;
 
     /* VI. edges and positions */
@@ -429,7 +440,7 @@ cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, in
     /* the optional bound on the non-integrability (docs/spin.md, "Periods") */
     if (cfi_flow_backtracks(flow) && !s->restricted_boundary && s->opt.max_integrability_error > 0.0 &&
         !(s->diag.integrability_error <= s->opt.max_integrability_error)) {
-        *too_large = 2;
+        *too_large = CFI_SPIN_NOT_INTEGRABLE;
         return CF_OK;
     }
     if (!s->fixed_boundary) {
@@ -493,7 +504,7 @@ cf_status cfi_spin_attempt(cf_flow *flow, double tau, cf_flow_info *info, cfi_st
 {
     cfi_spin_state *s = flow->impl;
     cfi_spin_timers t = {0.0, 0.0, 0.0};
-    int too_large = 0;
+    cfi_spin_too_large too_large = CFI_SPIN_STEP_OK;
     info->time_step = tau;
     cf_status st = cfi_spin_realise_step(flow, s, tau, &too_large, &t);
     info->assemble_seconds += t.assemble;
@@ -503,7 +514,7 @@ cf_status cfi_spin_attempt(cf_flow *flow, double tau, cf_flow_info *info, cfi_st
     if (!cfi_flow_backtracks(flow)) return st;
     if (st == CF_OK && too_large) {
         verdict->rejected = 1;
-        verdict->shrink = too_large == 2 ? 0.5 : 0.9 * s->opt.max_scale_change / s->diag.scale_change;
+        verdict->shrink = too_large == CFI_SPIN_NOT_INTEGRABLE ? 0.5 : 0.9 * s->opt.max_scale_change / s->diag.scale_change;
     } else if (st == CF_ERR_NUMERICAL || st == CF_ERR_NOT_POSDEF || st == CF_ERR_DEGENERATE_FACE) {
         verdict->rejected = 1;
         verdict->shrink = 0.5;

@@ -51,7 +51,7 @@ typedef struct cfi_spin_state {
     double *period_rho;      /* nv: rho before a correction (periods.c) */
     double *period_dx;       /* 4 nv x 3 dim: dX lambda per direction */
     double *period_sol;      /* 4 nv x 3 dim: X^-1 dX lambda */
-    double *period_lambda;   /* 4 nv: lambda +- its change */
+    double *period_lambda;   /* 4 nv: lambda +- its change (Jacobian), then the lambda before a correction (undo) */
     double *period_edges;    /* 3 ne */
     double *period_matrix;   /* 3 dim x 3 dim: the periods' Jacobian */
     double *period_values;   /* 3 dim (the right-hand side, then the solution) */
@@ -152,11 +152,15 @@ cf_status cfi_spin_period_correction(cf_flow *flow, cfi_spin_state *s, const dou
 /* Steps IV-VI for the time step tau from the current state (rhodot and its
  * constraints computed): rho, lambda, edges, positions (flow->positions in
  * place) and the geometry of the new surface (s->energy). *too_large (only
- * while the flow layer backtracks): 1 when the attempt was stopped before
- * the positions because lambda's scale jumps more than max_scale_change, 2
- * when the recovered positions were not applied because the edges are less
- * integrable than max_integrability_error allows. */
-cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, int *too_large, cfi_spin_timers *t);
+ * while the flow layer backtracks) says why an attempt was stopped: */
+typedef enum cfi_spin_too_large {
+    CFI_SPIN_STEP_OK = 0,
+    CFI_SPIN_SCALE_CHANGE = 1,   /* before the positions: lambda's scale jumps more than max_scale_change */
+    CFI_SPIN_NOT_INTEGRABLE = 2  /* the recovered positions not applied: the edges are less integrable
+                                  * than max_integrability_error allows */
+} cfi_spin_too_large;
+cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, cfi_spin_too_large *too_large,
+                                cfi_spin_timers *t);
 
 /* ---- step_policy.c ---- */
 /* Largest change of the log conformal scale across an edge, |log(|l_i|^2 / |l_j|^2)|. */

@@ -31,6 +31,18 @@ static double rel_diff(const double *a, const double *b, int64_t n)
     return d / big;
 }
 
+/* A bumpy sphere x from the icosphere and a rho of both signs: no symmetry
+ * to hide behind. */
+static void bumpy_fixture(const cf_mesh *mesh, double *x, double *rho)
+{
+    for (int32_t i = 0; i < mesh->nv; ++i) {
+        const double *p = mesh->positions + 3 * i;
+        double s = 1.0 + 0.1 * sin(3.0 * p[0]) * cos(2.0 * p[1] + p[2]);
+        for (int c = 0; c < 3; ++c) x[3 * i + c] = s * p[c];
+        rho[i] = 2.0 * sin(5.0 * p[2]) + 0.3;
+    }
+}
+
 static void test_forms_agree(void)
 {
     cf_context *ctx = cft_context();
@@ -38,15 +50,9 @@ static void test_forms_agree(void)
     CHECK_OK(ctx, cf_generate_icosphere(ctx, 3, 1.0, &mesh));
     if (!mesh) return;
     int32_t nv = mesh->nv, n = 4 * nv;
-    /* a bumpy sphere and a rho of both signs: no symmetry to hide behind */
     double *x = malloc(3 * (size_t)nv * sizeof *x), *rho = malloc((size_t)nv * sizeof *rho);
     double *area = malloc((size_t)nv * sizeof *area);
-    for (int32_t i = 0; i < nv; ++i) {
-        const double *p = mesh->positions + 3 * i;
-        double s = 1.0 + 0.1 * sin(3.0 * p[0]) * cos(2.0 * p[1] + p[2]);
-        for (int c = 0; c < 3; ++c) x[3 * i + c] = s * p[c];
-        rho[i] = 2.0 * sin(5.0 * p[2]) + 0.3;
-    }
+    bumpy_fixture(mesh, x, rho);
     CHECK_OK(ctx, cf_vertex_areas(ctx, mesh, x, CF_DUAL_AREA_BARYCENTRIC, area));
     size_t base = cf_context_bytes_in_use(ctx);
     cfi_dirac *real = NULL, *cplx = NULL;
@@ -117,11 +123,9 @@ static void test_rho_derivative(void)
     double *drho = malloc((size_t)nv * sizeof *drho), *trial = malloc((size_t)nv * sizeof *trial);
     double *lambda = malloc((size_t)n * sizeof *lambda), *direct = malloc((size_t)n * sizeof *direct);
     double *plus = malloc((size_t)n * sizeof *plus), *minus = malloc((size_t)n * sizeof *minus);
+    bumpy_fixture(mesh, x, rho);
     for (int32_t i = 0; i < nv; ++i) {
         const double *p = mesh->positions + 3 * i;
-        double sc = 1.0 + 0.1 * sin(3.0 * p[0]) * cos(2.0 * p[1] + p[2]);
-        for (int c = 0; c < 3; ++c) x[3 * i + c] = sc * p[c];
-        rho[i] = 2.0 * sin(5.0 * p[2]) + 0.3;
         drho[i] = cos(4.0 * p[0] + p[1]) - 0.2 * p[2];
         for (int c = 0; c < 4; ++c) lambda[4 * i + c] = (c == 0 ? 1.0 : 0.0) + 0.3 * sin((c + 1.0) * p[c % 3] + i);
     }

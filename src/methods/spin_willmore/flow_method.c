@@ -374,7 +374,7 @@ static cf_status correct_periods(cf_flow *flow, cfi_spin_state *s, cfi_spin_time
     s->diag.period_iterations = 0;
     for (int32_t k = 0; k < s->opt.period_iterations && err > s->opt.period_tolerance; ++k) {
         memcpy(s->period_rho, s->rho, (size_t)nv * sizeof(double));
-        cf_status st = cfi_spin_period_correction(flow, s, s->period_values, t);
+        cf_status st = cfi_spin_period_correction(flow, s, t);
         if (st != CF_OK) return st;
         /* the correction's scratch is free again: it keeps lambda for an undo */
         memcpy(s->period_lambda, s->lambda, 4 * (size_t)nv * sizeof(double));

@@ -54,13 +54,15 @@ double cfi_spin_periods(const cf_mesh *mesh, const cfi_spin_state *s, const doub
     return norm2 > 0.0 ? sqrt(p2 / norm2) : 0.0;
 }
 
-cf_status cfi_spin_period_correction(cf_flow *flow, cfi_spin_state *s, const double *periods, cfi_spin_timers *t)
+cf_status cfi_spin_period_correction(cf_flow *flow, cfi_spin_state *s, cfi_spin_timers *t)
 {
     const cf_mesh *mesh = flow->mesh;
     const double *x = flow->positions;
     int32_t nv = s->nv, nz = 3 * s->harmonic_dim, nc = s->zcount;
     int64_t n4 = 4 * (int64_t)nv;
     const double *rho0 = s->period_rho;
+    /* the periods in period_values[0, nz) become the right-hand side, then
+     * the solution; [nz, 2 nz) is scratch */
     double *jac = s->period_matrix, *rhs = s->period_values, *tmp = s->period_values + nz;
     /* dX along each direction, applied to lambda; then all solved at once */
     double ta = cfi_now_seconds();
@@ -83,7 +85,7 @@ cf_status cfi_spin_period_correction(cf_flow *flow, cfi_spin_state *s, const dou
         for (int32_t k = 0; k < nz; ++k) col[k] = 0.5 * (col[k] - tmp[k]);
     }
     t->assemble += cfi_now_seconds() - tc;
-    for (int32_t k = 0; k < nz; ++k) rhs[k] = -periods[k];
+    for (int32_t k = 0; k < nz; ++k) rhs[k] = -rhs[k];
     int32_t rank = 0;
     st = cf_dense_least_squares(nz, nc, jac, rhs, 1e-10, s->period_work,
                                 cf_dense_least_squares_work_size(nz, nz), &rank);

@@ -146,9 +146,10 @@ typedef struct cfi_spin_timers {
 double cfi_spin_periods(const cf_mesh *mesh, const cfi_spin_state *s, const double *x, const double *lambda,
                         double *edges, double *periods);
 /* One Newton correction of rho = s->period_rho (lambda, s->chol solved for
- * it) along the exactness directions, cancelling `periods` at first order:
- * writes s->rho. Leaves other values in the Dirac matrix (refill it). */
-cf_status cfi_spin_period_correction(cf_flow *flow, cfi_spin_state *s, const double *periods, cfi_spin_timers *t);
+ * it) along the exactness directions, cancelling at first order the periods
+ * in s->period_values (as cfi_spin_periods left them; overwritten): writes
+ * s->rho. */
+cf_status cfi_spin_period_correction(cf_flow *flow, cfi_spin_state *s, cfi_spin_timers *t);
 /* Steps IV-VI for the time step tau from the current state (rhodot and its
  * constraints computed): rho, lambda, edges, positions (flow->positions in
  * place) and the geometry of the new surface (s->energy). *too_large (only

@@ -395,6 +395,25 @@ static cf_status correct_periods(cf_flow *flow, cfi_spin_state *s, cfi_spin_time
     return CF_OK;
 }
 
+/* W after the step if its rho were realised exactly: the spin
+ * transformation changes the mean curvature half-density by rho (Eq. (1),
+ * H~ |df~| = (H + rho) |df|), so H~^2 dA~ = (H + rho)^2 dA at every vertex
+ * whatever the conformal factor; the tangential part of L f, which no
+ * curvature change addresses, stays. With rho = tau rhodot, rhodot = -2 P H,
+ * this is W - 4 tau (1 - tau) |P H|^2_M: the curvature-space model of the
+ * step, against which realised_decrease measures the step (docs/spin.md,
+ * "Realised decrease"). Interior vertices only, as W. */
+static double predicted_energy(const cf_mesh *mesh, const cfi_spin_state *s)
+{
+    double w = s->energy_before;
+    for (int32_t i = 0; i < s->nv; ++i) {
+        if (mesh->vertex_on_boundary[i]) continue;
+        double hn = s->h[i] + s->rho[i];
+        w += (hn * hn - s->h[i] * s->h[i]) * s->area[i];
+    }
+    return w;
+}
+
 cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, cfi_spin_too_large *too_large,
                                 cfi_spin_timers *t)
 {
@@ -410,6 +429,7 @@ cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, cf
     st = solve_lambda(flow, s, t);
     if (st == CF_OK && s->period_newton && s->zcount > 0) st = correct_periods(flow, s, t);
     if (st != CF_OK) return st;
+    s->diag.predicted_energy = predicted_energy(flow->mesh, s);
 
     /* A lambda whose scale jumps along an edge gives transformed edges that
      * no similar triangle fits (docs/spin.md, "Robustness"): with adaptive
@@ -580,6 +600,12 @@ cf_status cfi_spin_end_step(cf_flow *flow, cf_flow_info *info)
         info->residuals[6] = s->diag.period_iterations;
         info->residual_names[6] = "period_iterations";
     }
+    /* the fraction of the curvature-space model's decrease of W that the
+     * step realised (1 for an exactly realised rho; docs/spin.md) */
+    double predicted = s->energy_before - s->diag.predicted_energy;
+    s->diag.realised_decrease = predicted > 1e-12 * s->energy_before ? (s->energy_before - s->energy) / predicted : 0.0;
+    info->residuals[7] = s->diag.realised_decrease;
+    info->residual_names[7] = "realised_decrease";
     flow->converged = cfi_spin_converged(s, s->energy_before);
     return CF_OK;
 }

@@ -145,6 +145,8 @@ typedef struct cfi_spin_diagnostics {
     double period_error_first;      /* harmonic part of e~ / |e~| (*1 of the input) before the period corrections */
     double period_error;            /* ... after them (closed genus > 0 with period_iterations > 0; else 0) */
     int32_t period_iterations;      /* corrections made in the accepted attempt */
+    double predicted_energy;        /* W the step's rho would give if realised exactly (Eq. (1)), see realised_decrease */
+    double realised_decrease;       /* (W before - W after) / (W before - predicted_energy); 0 when no decrease is predicted */
 } cfi_spin_diagnostics;
 
 /* Nonzero full: the linearised exactness constraint solves X(0) for each of

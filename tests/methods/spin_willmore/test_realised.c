@@ -50,27 +50,17 @@ static int residual_slot(const cf_flow_info *info)
 static double curvature(cf_context *ctx, const cf_mesh *mesh, const double *x, double *h, double *area)
 {
     int32_t nv = cf_mesh_vertex_count(mesh);
-    cf_sparse *l = NULL;
-    double *lx = malloc(3 * (size_t)nv * sizeof(double)), *coord = malloc((size_t)nv * sizeof(double)),
-           *out = malloc((size_t)nv * sizeof(double)), *normal = malloc(3 * (size_t)nv * sizeof(double));
-    CHECK_OK(ctx, cf_cotan_laplacian(ctx, mesh, x, &l));
+    double *lx = malloc(3 * (size_t)nv * sizeof(double)), *normal = malloc(3 * (size_t)nv * sizeof(double));
+    CHECK_OK(ctx, cf_mean_curvature_normal(ctx, mesh, x, lx));
     CHECK_OK(ctx, cf_vertex_areas(ctx, mesh, x, CF_DUAL_AREA_BARYCENTRIC, area));
     CHECK_OK(ctx, cf_vertex_normals(ctx, mesh, x, normal));
-    for (int c = 0; c < 3; ++c) {
-        for (int32_t i = 0; i < nv; ++i) coord[i] = x[3 * i + c];
-        cf_sparse_multiply(l, coord, out);
-        for (int32_t i = 0; i < nv; ++i) lx[3 * i + c] = out[i];
-    }
     double w = 0.0;
     for (int32_t i = 0; i < nv; ++i) {
         const double *v = lx + 3 * i, *n = normal + 3 * i;
         h[i] = (v[0] * n[0] + v[1] * n[1] + v[2] * n[2]) / (2.0 * area[i]);
         w += (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) / (4.0 * area[i]);
     }
-    cf_sparse_destroy(&l);
     free(lx);
-    free(coord);
-    free(out);
     free(normal);
     return w;
 }
@@ -176,31 +166,18 @@ static void test_spot(void)
 static void constrain(cf_context *ctx, const cf_mesh *mesh, const double *x, const double *area, double norm,
                       double *rho)
 {
-    int32_t nv = cf_mesh_vertex_count(mesh);
+    int32_t nv = cf_mesh_vertex_count(mesh), rank = 0;
     double *basis = malloc(4 * (size_t)nv * sizeof(double)), *normal = malloc(3 * (size_t)nv * sizeof(double));
     CHECK_OK(ctx, cf_vertex_normals(ctx, mesh, x, normal));
     for (int32_t i = 0; i < nv; ++i) {
         basis[i] = 1.0;
         for (int c = 0; c < 3; ++c) basis[(c + 1) * (int64_t)nv + i] = normal[3 * i + c];
     }
-    for (int k = 0; k < 4; ++k) { /* Gram-Schmidt in M, then project rho */
-        double *b = basis + (int64_t)k * nv;
-        for (int j = 0; j < k; ++j) {
-            const double *q = basis + (int64_t)j * nv;
-            double d = 0.0;
-            for (int32_t i = 0; i < nv; ++i) d += b[i] * q[i] * area[i];
-            for (int32_t i = 0; i < nv; ++i) b[i] -= d * q[i];
-        }
-        double n2 = 0.0;
-        for (int32_t i = 0; i < nv; ++i) n2 += b[i] * b[i] * area[i];
-        for (int32_t i = 0; i < nv; ++i) b[i] /= sqrt(n2);
-        double d = 0.0;
-        for (int32_t i = 0; i < nv; ++i) d += rho[i] * b[i] * area[i];
-        for (int32_t i = 0; i < nv; ++i) rho[i] -= d * b[i];
-    }
-    double n2 = 0.0;
-    for (int32_t i = 0; i < nv; ++i) n2 += rho[i] * rho[i] * area[i];
-    for (int32_t i = 0; i < nv; ++i) rho[i] *= norm / sqrt(n2);
+    cf_orthonormalize(nv, 4, basis, area, 1e-10, &rank);
+    CHECK(rank == 4);
+    cf_project_out(nv, rank, basis, area, rho);
+    double scale = norm / sqrt(cf_dot(nv, rho, rho, area));
+    for (int32_t i = 0; i < nv; ++i) rho[i] *= scale;
     free(basis);
     free(normal);
 }

@@ -429,7 +429,7 @@ cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, cf
     st = solve_lambda(flow, s, t);
     if (st == CF_OK && s->period_newton && s->zcount > 0) st = correct_periods(flow, s, t);
     if (st != CF_OK) return st;
-    s->diag.predicted_energy = predicted_energy(flow->mesh, s);
+    s->diag.predicted_energy = predicted_energy(mesh, s);
 
     /* A lambda whose scale jumps along an edge gives transformed edges that
      * no similar triangle fits (docs/spin.md, "Robustness"): with adaptive

@@ -16,7 +16,7 @@
  * the periods P(lambda(rho)) at first order around the current rho:
  *  - X(rho) is quadratic in rho (App. G); its derivative along q applied
  *    to lambda is assembled face by face (cfi_dirac_rho_derivative, checked
- *    against central differences of the filled matrix in test `periods`);
+ *    against central differences of the filled matrix in test `dirac_forms`);
  *  - one inverse iteration lambda ~ X(rho)^-1 M 1 changes by
  *    dlambda = -X(rho)^-1 dX lambda (the normalisation only rescales lambda
  *    and P, which vanishes at the solution);

@@ -176,6 +176,19 @@ double cfi_dirac_quotient(const cfi_dirac *d, const double *area, const double *
     return den > 0.0 ? num / den : NAN;
 }
 
+/* Hamilton product of (w, x, y, z) arrays: cf_quat_mul's arithmetic in the
+ * same order, inline because the edge transform runs 8 products per edge
+ * per step and the rho-derivative 9 per face per direction (the library calls cost +150 % instructions in cfi_spin_transform_edges,
+ * 1-2 ms per step on spot_3k; test spin_transform checks the edges against
+ * cf_quat_conj_sandwich). */
+static inline void qmul(const double *a, const double *b, double *o)
+{
+    o[0] = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3];
+    o[1] = a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2];
+    o[2] = a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1];
+    o[3] = a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0];
+}
+
 /* The edges e[m] of triangle tri (opposite corner m, running
  * counter-clockwise) and its area: the face data of App. G's X_mn, shared
  * by the fill and its rho-derivative. */
@@ -208,15 +221,12 @@ void cfi_dirac_rho_derivative(const cf_mesh *mesh, const double *positions, cons
             double *o = out + 4 * (int64_t)tri[m];
             for (int n = 0; n < 3; ++n) {
                 /* d/drho of face_quaternion's X_mn along drho */
-                double q0 = area * (dr[m] * r[n] + r[m] * dr[n]) / 9.0;
-                double qv[3];
-                for (int c = 0; c < 3; ++c) qv[c] = (dr[m] * e[n][c] - dr[n] * e[m][c]) / 6.0;
+                double q[4] = {area * (dr[m] * r[n] + r[m] * dr[n]) / 9.0, 0.0, 0.0, 0.0};
+                for (int c = 0; c < 3; ++c) q[1 + c] = (dr[m] * e[n][c] - dr[n] * e[m][c]) / 6.0;
                 /* o += q lambda_n (the block is q's left multiplication) */
-                const double *l = lambda + 4 * (int64_t)tri[n];
-                o[0] += q0 * l[0] - qv[0] * l[1] - qv[1] * l[2] - qv[2] * l[3];
-                o[1] += q0 * l[1] + qv[0] * l[0] + qv[1] * l[3] - qv[2] * l[2];
-                o[2] += q0 * l[2] - qv[0] * l[3] + qv[1] * l[0] + qv[2] * l[1];
-                o[3] += q0 * l[3] + qv[0] * l[2] - qv[1] * l[1] + qv[2] * l[0];
+                double ql[4];
+                qmul(q, lambda + 4 * (int64_t)tri[n], ql);
+                for (int c = 0; c < 4; ++c) o[c] += ql[c];
             }
         }
     }
@@ -371,19 +381,6 @@ double cfi_dirac_fixed_quotient(const cfi_dirac *d, const cf_mesh *mesh, const d
         den += area[k / 4] * lambda[k] * lambda[k];
     }
     return den > 0.0 ? num / den : NAN;
-}
-
-/* Hamilton product of (w, x, y, z) arrays: cf_quat_mul's arithmetic in the
- * same order, inline because this loop runs 8 products per edge per step
- * (the library calls cost +150 % instructions in cfi_spin_transform_edges,
- * 1-2 ms per step on spot_3k; test spin_transform checks the edges against
- * cf_quat_conj_sandwich). */
-static inline void qmul(const double *a, const double *b, double *o)
-{
-    o[0] = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3];
-    o[1] = a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2];
-    o[2] = a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1];
-    o[3] = a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0];
 }
 
 /* imaginary part of conj(a) v b for imaginary v (a, b: (w, x, y, z) arrays) */

@@ -125,6 +125,12 @@ typedef struct cf_spin_willmore_options {
                                 * of 4 pi / area (the paper is silent): damps the modes of X whose
                                 * eigenvalue is below alpha. Default 1e-3 (enough to factorise the
                                 * singular X(0)); docs/spin.md, "Option notes" */
+    double growth_ratio;       /* with adaptive: after a step taken at a reduced tau without retries,
+                                * tau grows back (by the step policy's step_growth) only if the step
+                                * realised at least this fraction of the decrease of W its
+                                * curvature-space model predicts (the `realised_decrease` residual):
+                                * a trust region that expands only where the model holds. Default
+                                * 0.75; 0: always grow (docs/spin.md, "Growing tau back") */
     cf_param_values boundary_targets; /* table parameter "boundary_targets" (vertex vectors, boundary
                                 * vertices only). PRESCRIBED: target directions V~ per vertex (count nv,
                                 * values 3 nv doubles, x y z; only boundary vertices' entries are read,

@@ -827,7 +827,8 @@ static cf_status check_energy_jumps(cf_flow *flow, double before, const cf_flow_
  * rise_stops, stops the run). The accepted step (after the method's
  * end_step) then passes the blow-up and divergence checks or fails
  * (check_energy_jumps). After an accepted step without retries a reduced
- * step grows back by step_growth; the convergence tolerance is tested. */
+ * step grows back by step_growth unless the method's verdict holds it
+ * (hold_step); the convergence tolerance is tested. */
 cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info)
 {
     if (!flow) return CF_ERR_INVALID_ARG;
@@ -842,6 +843,7 @@ cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info)
     double start_step = pol->step;
     int32_t halvings = 0;
     int stalled = 0, fell_back = 0;
+    int32_t hold_step = 0;
     cf_status st = CF_OK;
 
     memcpy(flow->saved_positions, flow->positions, 3 * (size_t)nv * sizeof(double));
@@ -858,10 +860,11 @@ cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info)
             memset(&step, 0, sizeof step);
             step.iteration = iteration;
         }
-        cfi_step_verdict verdict = {0, 0.5};
+        cfi_step_verdict verdict = {0, 0.5, 0};
         /* so that a failing method that records no message is noticed */
         cf_context_clear_error(ctx);
         st = m->attempt ? m->attempt(flow, pol->step, &step, &verdict) : m->step(flow, &step);
+        hold_step = verdict.hold_step; /* the accepted attempt's is the one that counts */
         int reason = ACCEPTED;
         if (st != CF_OK) {
             /* a matrix that does not factorise, or a face that degenerates,
@@ -974,7 +977,8 @@ cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info)
             step.residual_names[r] = "time_step_halvings";
             break;
         }
-        if (halvings == 0 && !stalled) pol->step = fmin(pol->full_step, pol->step * pol->opt.step_growth);
+        if (halvings == 0 && !stalled && !hold_step)
+            pol->step = fmin(pol->full_step, pol->step * pol->opt.step_growth);
     }
     if (desc->convergence && cfi_step_policy_converged(before, step.energy, pol->tolerance)) flow->converged = 1;
     step.iteration = iteration;

@@ -98,10 +98,15 @@ typedef struct cfi_step_policy_desc {
 /* How an attempt (cfi_flow_method.attempt) judges its own result, besides
  * the policy's tests: rejected 1 redoes the step from its start with a step
  * of at most min(0.5, shrink) times this one (shrink NaN or >= 0.5: half),
- * e.g. spin-willmore's cut for a scale change above max_scale_change. */
+ * e.g. spin-willmore's cut for a scale change above max_scale_change.
+ * hold_step 1 on an accepted attempt keeps a reduced step where it is
+ * instead of growing it back by step_growth (a trust region that expands
+ * only when the step did what the method's model of it predicted, e.g.
+ * spin-willmore's growth_ratio). */
 typedef struct cfi_step_verdict {
     int32_t rejected;
     double shrink;
+    int32_t hold_step;
 } cfi_step_verdict;
 
 /* The policy's state inside a flow (cf_flow.policy). */

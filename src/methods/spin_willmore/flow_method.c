@@ -414,6 +414,14 @@ static double predicted_energy(const cf_mesh *mesh, const cfi_spin_state *s)
     return w;
 }
 
+/* The fraction of the model's decrease W - predicted_energy that the step
+ * realised; NaN when the model predicts no decrease (tau >= 1). */
+static double realised_decrease(const cfi_spin_state *s)
+{
+    double predicted = s->energy_before - s->diag.predicted_energy;
+    return predicted > 1e-12 * s->energy_before ? (s->energy_before - s->energy) / predicted : NAN;
+}
+
 cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, cfi_spin_too_large *too_large,
                                 cfi_spin_timers *t)
 {
@@ -532,6 +540,12 @@ cf_status cfi_spin_attempt(cf_flow *flow, double tau, cf_flow_info *info, cfi_st
     info->solve_seconds += t.solve;
     info->energy = s->energy;
     if (!cfi_flow_backtracks(flow)) return st;
+    if (st == CF_OK && !too_large) {
+        /* a reduced tau grows back only after a step for which the
+         * curvature-space model held (docs/spin.md, "Growing tau back") */
+        double realised = realised_decrease(s);
+        verdict->hold_step = s->opt.growth_ratio > 0.0 && realised < s->opt.growth_ratio;
+    }
     if (st == CF_OK && too_large) {
         verdict->rejected = 1;
         verdict->shrink = too_large == CFI_SPIN_NOT_INTEGRABLE ? 0.5 : 0.9 * s->opt.max_scale_change / s->diag.scale_change;
@@ -602,8 +616,8 @@ cf_status cfi_spin_end_step(cf_flow *flow, cf_flow_info *info)
     }
     /* the fraction of the curvature-space model's decrease of W that the
      * step realised (1 for an exactly realised rho; docs/spin.md) */
-    double predicted = s->energy_before - s->diag.predicted_energy;
-    s->diag.realised_decrease = predicted > 1e-12 * s->energy_before ? (s->energy_before - s->energy) / predicted : 0.0;
+    double realised = realised_decrease(s);
+    s->diag.realised_decrease = isnan(realised) ? 0.0 : realised;
     info->residuals[7] = s->diag.realised_decrease;
     info->residual_names[7] = "realised_decrease";
     flow->converged = cfi_spin_converged(s, s->energy_before);

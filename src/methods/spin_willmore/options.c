@@ -39,6 +39,7 @@ void cf_spin_willmore_options_default(cf_spin_willmore_options *o)
     o->max_scale_change = 1.2;
     o->input_metric = 1;
     o->regularization = CFI_SPIN_SHIFT;
+    o->growth_ratio = 0.75;
 }
 
 static void options_default(void *options) { cf_spin_willmore_options_default(options); }
@@ -93,6 +94,9 @@ static const cf_param_desc spin_params[] = {
      "(relative; 0: no bound; e.g. 0.04 keeps triangles better at some cost in W)"},
     {"regularization", CF_PARAM_DOUBLE, OPT(regularization), 1e-9, 1e6, NULL,
      "weight of |lambda - 1|^2 in units of 4pi/area: damps near-kernel modes of thin shapes"},
+    {"growth_ratio", CF_PARAM_DOUBLE, OPT(growth_ratio), 0.0, 1.0, NULL,
+     "adaptive: grow a reduced tau back only after a step that realised at least this fraction of its predicted "
+     "decrease of W (realised_decrease; 0: always)"},
     {"harmonic_update", CF_PARAM_BOOL, OPT(harmonic_update), 0, 1, NULL,
      "with App. C's Z_i: re-project the harmonic 1-forms onto the current metric each step"},
     {"boundary_targets", CF_PARAM_VERTEX_VECTORS, OPT(boundary_targets), 0, 1, NULL,

@@ -39,14 +39,6 @@
 #include <time.h>
 #include <unistd.h>
 
-#if defined(__SANITIZE_ADDRESS__)
-#define CFT_UNDER_ASAN 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define CFT_UNDER_ASAN 1
-#endif
-#endif
-
 #define WATCHDOG_SECONDS 60
 
 static double now(void)
@@ -232,7 +224,7 @@ static void test_flows_end_under_limits(void)
 
 int main(void)
 {
-#ifdef CFT_UNDER_ASAN
+#if CFT_UNDER_ASAN
     cft_skip("memory_limit: AddressSanitizer reserves terabytes of address space and cannot run under RLIMIT_AS");
 #endif
     if (cft_cli_setup("memory_limit")) return 1;

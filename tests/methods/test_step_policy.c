@@ -283,10 +283,7 @@ static void test_halving_and_growth(void)
         cf_flow_info info;
         CHECK_OK(ctx, cf_flow_step(flow, &info));
         steps[i] = info.time_step;
-        double logged = -1.0; /* the halvings in the step's residuals (the log) */
-        for (int r = 0; r < CF_FLOW_MAX_RESIDUALS; ++r)
-            if (info.residual_names[r] && strcmp(info.residual_names[r], "time_step_halvings") == 0)
-                logged = info.residuals[r];
+        double logged = cft_flow_residual(&info, "time_step_halvings"); /* the halvings in the log */
         CHECK(logged == (i == 0 ? 9.0 : 0.0));
         fprintf(stderr, "   step %d: time_step %.6g (tau / %.0f), energy %.9g -> %.9g\n", i + 1, info.time_step,
                 tau / info.time_step, e_prev, info.energy);

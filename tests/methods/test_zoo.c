@@ -31,16 +31,7 @@
 #define ZOO_STEPS 10
 #define ZOO_PI 3.14159265358979323846
 
-#if defined(__SANITIZE_ADDRESS__)
-#define ZOO_MAX_VERTICES 3000
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define ZOO_MAX_VERTICES 3000
-#endif
-#endif
-#ifndef ZOO_MAX_VERTICES
-#define ZOO_MAX_VERTICES 300000
-#endif
+#define ZOO_MAX_VERTICES (CFT_UNDER_ASAN ? 3000 : 300000)
 
 /* 1 when positions x on the mesh's connectivity pass the mesh check */
 static int passes_mesh_check(cf_context *ctx, const cf_mesh *mesh, const double *x)

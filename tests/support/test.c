@@ -137,3 +137,10 @@ int cft_near(double a, double b, double rtol, double atol)
     double scale = fabs(a) > fabs(b) ? fabs(a) : fabs(b);
     return fabs(a - b) <= atol + rtol * scale;
 }
+
+double cft_flow_residual(const cf_flow_info *info, const char *name)
+{
+    for (int r = 0; r < CF_FLOW_MAX_RESIDUALS; ++r)
+        if (info->residual_names[r] && strcmp(info->residual_names[r], name) == 0) return info->residuals[r];
+    return NAN;
+}

@@ -14,6 +14,7 @@
 #define CF_TESTS_SUPPORT_TEST_H
 
 #include "curvflow/curvflow.h"
+#include "curvflow/flow.h"
 #include "curvflow/mesh.h"
 
 #include <math.h>
@@ -38,6 +39,22 @@ const char *cft_optional_shared_mesh(const char *name);
 const char *cft_require_shared_mesh(const char *name);
 /* Temporary file path in the build tree (static buffer, unique per call). */
 const char *cft_temp_path(const char *suffix);
+/* The residual a step reported under this name (cf_flow_info.residual_names),
+ * NaN when the step has none of that name. */
+double cft_flow_residual(const cf_flow_info *info, const char *name);
+
+/* 1 in an AddressSanitizer build (the tests that leave out large meshes or
+ * address-space limits there), else 0. */
+#if defined(__SANITIZE_ADDRESS__)
+#define CFT_UNDER_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define CFT_UNDER_ASAN 1
+#endif
+#endif
+#ifndef CFT_UNDER_ASAN
+#define CFT_UNDER_ASAN 0
+#endif
 /* A context that prints library log lines to stderr. */
 cf_context *cft_context(void);
 /* Failure-injection sweep (STYLE.md sec. 4, as CHOLMOD's Tcov/t_memory.c).

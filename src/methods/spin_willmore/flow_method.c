@@ -540,15 +540,14 @@ cf_status cfi_spin_attempt(cf_flow *flow, double tau, cf_flow_info *info, cfi_st
     info->solve_seconds += t.solve;
     info->energy = s->energy;
     if (!cfi_flow_backtracks(flow)) return st;
-    if (st == CF_OK && !too_large) {
+    if (st == CF_OK && too_large) {
+        verdict->rejected = 1;
+        verdict->shrink = too_large == CFI_SPIN_NOT_INTEGRABLE ? 0.5 : 0.9 * s->opt.max_scale_change / s->diag.scale_change;
+    } else if (st == CF_OK) {
         /* a reduced tau grows back only after a step for which the
          * curvature-space model held (docs/spin.md, "Growing tau back") */
         double realised = realised_decrease(s);
         verdict->hold_step = s->opt.growth_ratio > 0.0 && realised < s->opt.growth_ratio;
-    }
-    if (st == CF_OK && too_large) {
-        verdict->rejected = 1;
-        verdict->shrink = too_large == CFI_SPIN_NOT_INTEGRABLE ? 0.5 : 0.9 * s->opt.max_scale_change / s->diag.scale_change;
     } else if (st == CF_ERR_NUMERICAL || st == CF_ERR_NOT_POSDEF || st == CF_ERR_DEGENERATE_FACE) {
         verdict->rejected = 1;
         verdict->shrink = 0.5;

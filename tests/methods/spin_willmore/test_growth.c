@@ -33,17 +33,6 @@
 #define GROWTH_STEPS 10
 #define GROWTH_FOUR_PI (4.0 * 3.14159265358979323846)
 
-#if defined(__SANITIZE_ADDRESS__)
-#define GROWTH_SANITIZED 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define GROWTH_SANITIZED 1
-#endif
-#endif
-#ifndef GROWTH_SANITIZED
-#define GROWTH_SANITIZED 0
-#endif
-
 typedef struct growth_log {
     double w[GROWTH_STEPS + 1];          /* W/4pi at the start and after each step */
     double time_step[GROWTH_STEPS + 1];  /* the accepted step's tau (index 1..) */
@@ -51,13 +40,6 @@ typedef struct growth_log {
     double realised[GROWTH_STEPS + 1];
     int steps;
 } growth_log;
-
-static double residual(const cf_flow_info *info, const char *name)
-{
-    for (int r = 0; r < CF_FLOW_MAX_RESIDUALS; ++r)
-        if (info->residual_names[r] && strcmp(info->residual_names[r], name) == 0) return info->residuals[r];
-    return NAN;
-}
 
 /* 10 steps of spin-willmore with its defaults and growth_ratio g (NAN: the
  * default) on a shared mesh. 0 when the mesh or the flow could not be made. */
@@ -78,8 +60,8 @@ static int run_growth(cf_context *ctx, const cf_mesh *mesh, double g, growth_log
         int k = ++out->steps;
         out->w[k] = cf_flow_energy(flow) / GROWTH_FOUR_PI;
         out->time_step[k] = info.time_step;
-        out->halvings[k] = residual(&info, "time_step_halvings");
-        out->realised[k] = residual(&info, "realised_decrease");
+        out->halvings[k] = cft_flow_residual(&info, "time_step_halvings");
+        out->realised[k] = cft_flow_residual(&info, "realised_decrease");
     }
     cf_flow_destroy(&flow);
     return 1;
@@ -87,7 +69,7 @@ static int run_growth(cf_context *ctx, const cf_mesh *mesh, double g, growth_log
 
 static void test_bull_reaches_target(void)
 {
-    if (GROWTH_SANITIZED) {
+    if (CFT_UNDER_ASAN) {
         fprintf(stderr, "   SKIP bull_6k: 6k vertices, left out of sanitizer builds\n");
         return;
     }

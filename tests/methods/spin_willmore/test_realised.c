@@ -37,14 +37,6 @@
 #include <stdio.h>
 #include <string.h>
 
-/* Slot of the residual in cf_flow_info (-1 if absent). */
-static int residual_slot(const cf_flow_info *info)
-{
-    for (int r = 0; r < CF_FLOW_MAX_RESIDUALS; ++r)
-        if (info->residual_names[r] && strcmp(info->residual_names[r], "realised_decrease") == 0) return r;
-    return -1;
-}
-
 /* Normal mean curvature h = <L x, N> / (2 A) and barycentric areas A at x
  * from the public operators; returns W = sum |L x|^2 / (4 A). */
 static double curvature(cf_context *ctx, const cf_mesh *mesh, const double *x, double *h, double *area)
@@ -103,9 +95,8 @@ static void run(cf_context *ctx, const cf_mesh *mesh, double tau, int adaptive, 
     for (int k = 0; k < steps; ++k) {
         cf_flow_info info;
         CHECK_OK(ctx, cf_flow_step(flow, &info));
-        int slot = residual_slot(&info);
-        CHECK(slot >= 0);
-        frac[k] = slot >= 0 ? info.residuals[slot] : NAN;
+        frac[k] = cft_flow_residual(&info, "realised_decrease");
+        CHECK(!isnan(frac[k])); /* the step reports it */
         if (k == 0) {
             /* the first step from x0 at the full tau: the model from outside */
             const double *rhodot = cfi_spin_willmore_last_rhodot(flow);

@@ -131,6 +131,14 @@ typedef struct cf_spin_willmore_options {
                                 * curvature-space model predicts (the `realised_decrease` residual):
                                 * a trust region that expands only where the model holds. Default
                                 * 0.75; 0: always grow (docs/spin.md, "Growing tau back") */
+    double exactness_refresh;  /* closed surfaces of genus > 0 with the period corrections: the
+                                * factorisation of X(0) behind the exactness directions is kept from an
+                                * earlier step while the steps since it changed the log conformal scale
+                                * by at most this much in sum (the `scale_change` residuals) and the
+                                * previous step's periods before corrections stayed below half of
+                                * period_tolerance; the corrections absorb what the older directions
+                                * miss. Default 0.02; 0: a new factorisation every step
+                                * (docs/spin.md, "Reusing X(0)") */
     cf_param_values boundary_targets; /* table parameter "boundary_targets" (vertex vectors, boundary
                                 * vertices only). PRESCRIBED: target directions V~ per vertex (count nv,
                                 * values 3 nv doubles, x y z; only boundary vertices' entries are read,

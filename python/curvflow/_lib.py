@@ -114,7 +114,7 @@ class SpinWillmoreOptions(Structure):
                 ("adaptive", c_int32),
                 ("max_scale_change", c_double), ("exactness_linearized", c_int32), ("period_iterations", c_int32),
                 ("period_tolerance", c_double), ("max_integrability_error", c_double), ("harmonic_update", c_int32),
-                ("regularization", c_double), ("growth_ratio", c_double),
+                ("regularization", c_double), ("growth_ratio", c_double), ("exactness_refresh", c_double),
                 ("boundary_targets", ParamValues)]
 
 
@@ -165,6 +165,7 @@ _LAYOUT = {
         "exactness_linearized": ("exactness_linearized", 0), "period_iterations": ("period_iterations", 0),
         "period_tolerance": ("period_tolerance", 0), "max_integrability_error": ("max_integrability_error", 0),
         "regularization": ("regularization", 0), "growth_ratio": ("growth_ratio", 0),
+        "exactness_refresh": ("exactness_refresh", 0),
         "harmonic_update": ("harmonic_update", 0), "boundary_targets": ("boundary_targets", 0)}),
     "stretch-bend-edit": (StretchBendOptions, {
         "energy": ("energy", 0), "lambda": ("lambda_", 0), "max_iterations": ("max_iterations", 0),

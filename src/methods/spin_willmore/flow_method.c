@@ -620,6 +620,10 @@ cf_status cfi_spin_end_step(cf_flow *flow, cf_flow_info *info)
     info->residuals[7] = s->diag.realised_decrease;
     info->residual_names[7] = "realised_decrease";
     flow->converged = cfi_spin_converged(s, s->energy_before);
+    /* what the next step's reuse of X(0) is judged by (exactness.c); at a
+     * stall the last rejected attempt's figures, an overestimate */
+    s->x0_scale_since += s->diag.scale_change;
+    s->x0_period_first = s->diag.period_error_first;
     return CF_OK;
 }
 
@@ -628,6 +632,7 @@ cf_status cfi_spin_reset(cf_flow *flow)
     cfi_spin_state *s = flow->impl;
     if (!s) return CF_OK;
     flow->converged = 0;
+    s->x0_factored = 0; /* new positions: X(0) of the old ones is no guide */
     cf_status st = cfi_spin_update_geometry(flow, s, flow->positions);
     /* the flow layer compares the next step's W with this one */
     flow->info.energy = s->energy;

@@ -76,6 +76,9 @@ typedef struct cfi_spin_state {
     double *qrhs;            /* 4 nv, fixed boundary only */
     double *zrhs, *zsol;     /* 4 nv x dim (x 3 dim if linearized) */
     int32_t x0_full_solves;  /* test hook: the linearized columns' 3 dim X(0) solves, not dim (exactness.c) */
+    int32_t x0_factored;     /* chol0 holds X(0) + eps M of an earlier surface of this flow */
+    double x0_scale_since;   /* sum of the accepted steps' scale_change since chol0 was factorised */
+    double x0_period_first;  /* the last accepted step's harmonic part of e~ before corrections */
     double *basis;           /* nv x max_cols */
     int32_t max_cols;
     double *edges;           /* 3 ne */

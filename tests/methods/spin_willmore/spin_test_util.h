@@ -9,6 +9,7 @@
 #define CF_TESTS_SPIN_TEST_UTIL_H
 
 #include "curvflow/flow.h"
+#include "curvflow/generate.h"
 #include "curvflow/mesh.h"
 #include "curvflow/metrics.h"
 #include "curvflow/ops.h"
@@ -33,6 +34,14 @@ static inline double *bumped_torus_positions(const cf_mesh *torus)
         x[3 * i + 2] *= 1.0 + 0.2 * sin(2.0 * a);
     }
     return x;
+}
+
+/* The torus of the spin tests (R 1, r 0.4, 48 x 24) into *mesh, and its
+ * bumped positions (malloc'ed; NULL on failure, the caller frees both). */
+static inline double *bumped_torus_fixture(cf_context *ctx, cf_mesh **mesh)
+{
+    CHECK_OK(ctx, cf_generate_torus(ctx, 1.0, 0.4, 48, 24, mesh));
+    return *mesh ? bumped_torus_positions(*mesh) : NULL;
 }
 
 /* Boundary vectors V = cos(phi) B + sin(phi) N at every boundary vertex of x

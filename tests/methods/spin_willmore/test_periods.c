@@ -93,8 +93,7 @@ static void test_bumped_torus(void)
 {
     cf_context *ctx = cft_context();
     cf_mesh *mesh = NULL;
-    CHECK_OK(ctx, cf_generate_torus(ctx, 1.0, 0.4, 48, 24, &mesh));
-    double *x = mesh ? bumped_torus_positions(mesh) : NULL;
+    double *x = bumped_torus_fixture(ctx, &mesh);
     if (x) {
         /* its periods (2.8e-3 of e~) are below the default tolerance: no
          * correction, the step of period_iterations = 0 to the last bit */

@@ -174,6 +174,29 @@ static cf_status solve_each_column(cfi_spin_state *s, int32_t dim)
     return cf_cholesky_solve(s->chol0, 3 * dim, s->zrhs, s->zsol);
 }
 
+/* Whether this step may take its exactness directions from the factor of
+ * X(0) made at an earlier step (option exactness_refresh). Only with the
+ * period corrections, which measure what older directions miss (the
+ * harmonic part of e~ before them) and cancel it; and only while the
+ * surface has moved little since the factorisation. Measured on bob_5k:
+ * directions from the previous step's X(0) leave 23-58 % of their norm
+ * outside the current span after step 1 (scale change 0.29), 3-10 % after
+ * step 3 (0.014), 1-3 % after step 4 (0.004). With the default bound 0.02
+ * bob reuses in 6 of 10 steps, its periods stay below the tolerance
+ * without corrections and W ends at 1.84940 (1.84941 without reuse); a
+ * bumped torus that moves 0.04-0.06 per step never reuses, and with a
+ * bound of 1 its reused steps leave periods of up to 1.1e-2 (7e-4 with a
+ * new factor) that the corrections do not remove (test x0_reuse);
+ * elephant_g3_3k with a bound of 1 reused after its large second step and
+ * stalled at step 4: the period test alone does not see stale directions.
+ * docs/spin.md, "Reusing X(0)". */
+static int x0_reusable(const cfi_spin_state *s)
+{
+    /* (zcount: the last step had exactness directions, so its periods were measured) */
+    return s->period_newton && s->x0_factored && s->zcount > 0 && s->opt.exactness_refresh > 0.0 &&
+           s->x0_scale_since <= s->opt.exactness_refresh && s->x0_period_first <= 0.5 * s->opt.period_tolerance;
+}
+
 /* Exactness by linearising "no periods" through the discrete step; the
  * default, and the only way on a surface with free boundary: App. C's step "<D Z a,
  * lambda> = <Z a, D lambda>" needs D to be self-adjoint, which fails with
@@ -201,28 +224,6 @@ static cf_status solve_each_column(cfi_spin_state *s, int32_t dim)
  * constant right factor, so X(0)^-1 G_gc = (X(0)^-1 B_g) u_c: one solve per
  * form instead of three (bob_5k: 2 columns instead of 6, the solve's time
  * a third; docs/spin.md, "Measured figures"). */
-/* Whether this step may take its exactness directions from the factor of
- * X(0) made at an earlier step (option exactness_refresh). Only with the
- * period corrections, which measure what older directions miss (the
- * harmonic part of e~ before them) and cancel it; and only while the
- * surface has moved little since the factorisation. Measured on bob_5k:
- * directions from the previous step's X(0) leave 23-58 % of their norm
- * outside the current span after step 1 (scale change 0.29), 3-10 % after
- * step 3 (0.014), 1-3 % after step 4 (0.004). With the default bound 0.02
- * bob reuses in 6 of 10 steps, its periods stay below the tolerance
- * without corrections and W ends at 1.84940 (1.84941 without reuse); a
- * bumped torus that moves 0.04-0.06 per step never reuses, and with a
- * bound of 1 its reused steps leave periods of up to 1.1e-2 (7e-4 with a
- * new factor) that the corrections do not remove (test x0_reuse);
- * elephant_g3_3k with a bound of 1 reused after its large second step and
- * stalled at step 4: the period test alone does not see stale directions.
- * docs/spin.md, "Reusing X(0)". */
-static int x0_reusable(const cfi_spin_state *s)
-{
-    return s->period_newton && s->x0_factored && s->opt.exactness_refresh > 0.0 &&
-           s->x0_scale_since <= s->opt.exactness_refresh && s->x0_period_first <= 0.5 * s->opt.period_tolerance;
-}
-
 static cf_status exactness_columns_linearized(cf_flow *flow, cfi_spin_state *s, const double *x, int32_t *col,
                                               double *factor_seconds, double *solve_seconds)
 {

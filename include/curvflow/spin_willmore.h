@@ -137,8 +137,10 @@ typedef struct cf_spin_willmore_options {
                                 * by at most this much in sum (the `scale_change` residuals) and the
                                 * previous step's periods before corrections stayed below half of
                                 * period_tolerance; the corrections absorb what the older directions
-                                * miss. Default 0.02; 0: a new factorisation every step
-                                * (docs/spin.md, "Reusing X(0)") */
+                                * miss, and an attempt on them whose periods exceed period_tolerance,
+                                * or that is rejected, is made again with a new factorisation.
+                                * Default 0.1; 0: a new factorisation every step (docs/spin.md,
+                                * "Reusing X(0)") */
     cf_param_values boundary_targets; /* table parameter "boundary_targets" (vertex vectors, boundary
                                 * vertices only). PRESCRIBED: target directions V~ per vertex (count nv,
                                 * values 3 nv doubles, x y z; only boundary vertices' entries are read,

@@ -177,18 +177,21 @@ static cf_status solve_each_column(cfi_spin_state *s, int32_t dim)
 /* Whether this step may take its exactness directions from the factor of
  * X(0) made at an earlier step (option exactness_refresh). Only with the
  * period corrections, which measure what older directions miss (the
- * harmonic part of e~ before them) and cancel it; and only while the
- * surface has moved little since the factorisation. Measured on bob_5k:
- * directions from the previous step's X(0) leave 23-58 % of their norm
- * outside the current span after step 1 (scale change 0.29), 3-10 % after
- * step 3 (0.014), 1-3 % after step 4 (0.004). With the default bound 0.02
- * bob reuses in 6 of 10 steps, its periods stay below the tolerance
- * without corrections and W ends at 1.84940 (1.84941 without reuse); a
- * bumped torus that moves 0.04-0.06 per step never reuses, and with a
- * bound of 1 its reused steps leave periods of up to 1.1e-2 (7e-4 with a
- * new factor) that the corrections do not remove (test x0_reuse);
- * elephant_g3_3k with a bound of 1 reused after its large second step and
- * stalled at step 4: the period test alone does not see stale directions.
+ * harmonic part of e~ before them); only while the surface has moved
+ * little since the factorisation, and after a step whose periods were
+ * small. Measured on bob_5k: directions from the previous step's X(0)
+ * leave 23-58 % of their norm outside the current span after step 1
+ * (scale change 0.29), 3-10 % after step 3 (0.014), 1-3 % after step 4
+ * (0.004). An attempt on such directions whose periods exceed
+ * period_tolerance, or that is rejected, is made again with a new factor
+ * (renew_direction, flow_method.c): without that, a bumped torus that moves
+ * 0.04-0.06 per step left periods of up to 1.1e-2 in reused steps (7e-4
+ * with a new factor), and elephant_g3_3k, under a variant that reused while
+ * the last periods were below the whole tolerance with no bound on the
+ * movement, reused after its large second step (0.39) and stalled at step 4
+ * (W/4pi 9.57 against 8.22; with the renewal it renews steps 3-5 and
+ * reaches 8.2153). With the default bound 0.1: bob reuses in steps 4-10,
+ * elephant in 6-9, the torus in 3 steps and renews 2 (test x0_reuse).
  * docs/spin.md, "Reusing X(0)". */
 static int x0_reusable(const cfi_spin_state *s)
 {

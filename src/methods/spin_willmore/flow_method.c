@@ -422,6 +422,30 @@ static double realised_decrease(const cfi_spin_state *s)
     return predicted > 1e-12 * s->energy_before ? (s->energy_before - s->energy) / predicted : NAN;
 }
 
+/* I-III at the step's start: rhodot = -2 H (Sec. 6.1), the spectral
+ * filter (Sec. 4), the constraints (Sec. 6.2). */
+static cf_status step_direction(cf_flow *flow, cfi_spin_state *s, double *factor_seconds, double *solve_seconds)
+{
+    for (int32_t i = 0; i < s->nv; ++i) s->rhodot[i] = -2.0 * s->h[i];
+    cf_solver_timings tm = {0.0, 0.0, 0.0};
+    cf_status st = s->filter ? cf_spectral_filter_apply(s->filter, s->rhodot, &tm) : CF_OK;
+    *solve_seconds += tm.solve_seconds;
+    if (st == CF_OK) st = cfi_spin_apply_constraints(flow, s, flow->positions, factor_seconds, solve_seconds);
+    return st;
+}
+
+/* The direction again with a new factor of X(0), after an attempt whose
+ * exactness directions came from an older one and failed: its periods
+ * above period_tolerance, or the attempt rejected (exactness.c, "Reusing
+ * X(0)"). Positions and geometry are the step's start. */
+static cf_status renew_direction(cf_flow *flow, cfi_spin_state *s, cfi_spin_timers *t)
+{
+    s->x0_factored = 0;
+    s->x0_renew_pending = 0;
+    ++s->diag.x0_renewed;
+    return step_direction(flow, s, &t->factorize, &t->solve);
+}
+
 cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, cfi_spin_too_large *too_large,
                                 cfi_spin_timers *t)
 {
@@ -430,11 +454,23 @@ cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, cf
     int32_t nv = s->nv;
     double *x = flow->positions;
     cf_status st = CF_OK;
+    if (s->x0_renew_pending) {
+        st = renew_direction(flow, s, t);
+        if (st != CF_OK) return st;
+    }
     /* IV. rho = tau rhodot */
     for (int32_t i = 0; i < nv; ++i) s->rho[i] = tau * s->rhodot[i];
 
     /* V. lambda from X(rho), with the periods corrected on closed genus > 0 */
     st = solve_lambda(flow, s, t);
+    if (st == CF_OK && s->diag.x0_reused && s->period_newton && s->zcount > 0 &&
+        !(cfi_spin_periods(mesh, s, x, s->lambda, s->edges, s->period_values) <= s->opt.period_tolerance)) {
+        /* the older exactness directions missed by more than the corrections
+         * are for: this attempt again with a new X(0) */
+        st = renew_direction(flow, s, t);
+        for (int32_t i = 0; st == CF_OK && i < nv; ++i) s->rho[i] = tau * s->rhodot[i];
+        if (st == CF_OK) st = solve_lambda(flow, s, t);
+    }
     if (st == CF_OK && s->period_newton && s->zcount > 0) st = correct_periods(flow, s, t);
     if (st != CF_OK) return st;
     s->diag.predicted_energy = predicted_energy(mesh, s);
@@ -504,21 +540,15 @@ cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, cf
     return st;
 }
 
-/* I-III, shared by every attempt of the step: rhodot = -2 H (Sec. 6.1),
- * the spectral filter (Sec. 4), the constraints (Sec. 6.2). */
+/* I-III, shared by every attempt of the step (step_direction). */
 cf_status cfi_spin_begin_step(cf_flow *flow, cf_flow_info *info)
 {
     cfi_spin_state *s = flow->impl;
     s->energy_before = s->energy;
     s->current_metric_step = 0; /* the input metric again (cfi_spin_fallback) */
+    s->x0_renew_pending = 0;
     memset(&s->diag, 0, sizeof s->diag);
-    for (int32_t i = 0; i < s->nv; ++i) s->rhodot[i] = -2.0 * s->h[i];
-    cf_solver_timings tm = {0.0, 0.0, 0.0};
-    cf_status st = s->filter ? cf_spectral_filter_apply(s->filter, s->rhodot, &tm) : CF_OK;
-    info->solve_seconds += tm.solve_seconds;
-    if (st == CF_OK)
-        st = cfi_spin_apply_constraints(flow, s, flow->positions, &info->factorize_seconds, &info->solve_seconds);
-    return st;
+    return step_direction(flow, s, &info->factorize_seconds, &info->solve_seconds);
 }
 
 /* IV-VI for tau. While the flow layer backtracks (`adaptive`), an attempt
@@ -585,6 +615,8 @@ cf_status cfi_spin_fallback(cf_flow *flow, int32_t *switched)
 cf_status cfi_spin_revert(cf_flow *flow)
 {
     cfi_spin_state *s = flow->impl;
+    /* a rejected attempt on older exactness directions: the next one renews them */
+    if (s->diag.x0_reused) s->x0_renew_pending = 1;
     return cfi_spin_update_geometry(flow, s, flow->positions);
 }
 

@@ -40,7 +40,7 @@ void cf_spin_willmore_options_default(cf_spin_willmore_options *o)
     o->input_metric = 1;
     o->regularization = CFI_SPIN_SHIFT;
     o->growth_ratio = 0.75;
-    o->exactness_refresh = 0.02;
+    o->exactness_refresh = 0.1;
 }
 
 static void options_default(void *options) { cf_spin_willmore_options_default(options); }
@@ -100,8 +100,8 @@ static const cf_param_desc spin_params[] = {
      "decrease of W (realised_decrease; 0: always)"},
     {"exactness_refresh", CF_PARAM_DOUBLE, OPT(exactness_refresh), 0.0, 100.0, NULL,
      "closed genus > 0: keep X(0)'s factorisation (exactness directions) while the steps since it changed the "
-     "log conformal scale by at most this in sum and the periods stay below period_tolerance / 2 (0: refactorise "
-     "every step)"},
+     "log conformal scale by at most this in sum and the periods stay below period_tolerance / 2; an attempt that "
+     "fails on it is redone with a new one (0: refactorise every step)"},
     {"harmonic_update", CF_PARAM_BOOL, OPT(harmonic_update), 0, 1, NULL,
      "with App. C's Z_i: re-project the harmonic 1-forms onto the current metric each step"},
     {"boundary_targets", CF_PARAM_VERTEX_VECTORS, OPT(boundary_targets), 0, 1, NULL,

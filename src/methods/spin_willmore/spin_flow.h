@@ -79,6 +79,7 @@ typedef struct cfi_spin_state {
     int32_t x0_factored;     /* chol0 holds X(0) + eps M of an earlier surface of this flow */
     double x0_scale_since;   /* sum of the accepted steps' scale_change since chol0 was factorised */
     double x0_period_first;  /* the last accepted step's harmonic part of e~ before corrections */
+    int32_t x0_renew_pending; /* an attempt on reused directions was rejected: the next renews them */
     double *basis;           /* nv x max_cols */
     int32_t max_cols;
     double *edges;           /* 3 ne */

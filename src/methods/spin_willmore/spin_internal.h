@@ -143,6 +143,7 @@ typedef struct cfi_spin_diagnostics {
     double scale_change;            /* max over edges of |log(|lambda_i|^2 / |lambda_j|^2)| of the step */
     int32_t x0_solve_columns;       /* right-hand sides of the exactness X(0) solve (0: none) */
     int32_t x0_reused;              /* 1: this step's exactness directions came from X(0) of an earlier step */
+    int32_t x0_renewed;             /* times this step renewed them after a failed attempt (0 or 1) */
     double period_error_first;      /* harmonic part of e~ / |e~| (*1 of the input) before the period corrections */
     double period_error;            /* ... after them (closed genus > 0 with period_iterations > 0; else 0) */
     int32_t period_iterations;      /* corrections made in the accepted attempt */

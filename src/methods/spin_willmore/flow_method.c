@@ -362,14 +362,15 @@ static cf_status solve_lambda(cf_flow *flow, cfi_spin_state *s, cfi_spin_timers 
 }
 
 /* The Newton corrections of the periods (periods.c) after the first
- * lambda: at most period_iterations, while the harmonic part of e~ is above
- * period_tolerance; a correction that does not lower it is undone (rho,
- * lambda and its eigenvalue back; X and its factor are not used again in
- * this attempt, the next one refills them). */
-static cf_status correct_periods(cf_flow *flow, cfi_spin_state *s, cfi_spin_timers *t)
+ * lambda, whose periods err the caller has just measured (cfi_spin_periods,
+ * which also left them in s->period_values): at most period_iterations,
+ * while the harmonic part of e~ is above period_tolerance; a correction that
+ * does not lower it is undone (rho, lambda and its eigenvalue back; X and
+ * its factor are not used again in this attempt, the next one refills
+ * them). */
+static cf_status correct_periods(cf_flow *flow, cfi_spin_state *s, cfi_spin_timers *t, double err)
 {
     int32_t nv = s->nv;
-    double err = cfi_spin_periods(flow->mesh, s, flow->positions, s->lambda, s->edges, s->period_values);
     s->diag.period_error_first = s->diag.period_error = err;
     s->diag.period_iterations = 0;
     for (int32_t k = 0; k < s->opt.period_iterations && err > s->opt.period_tolerance; ++k) {
@@ -463,15 +464,18 @@ cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, cf
 
     /* V. lambda from X(rho), with the periods corrected on closed genus > 0 */
     st = solve_lambda(flow, s, t);
-    if (st == CF_OK && s->diag.x0_reused && s->period_newton && s->zcount > 0 &&
-        !(cfi_spin_periods(mesh, s, x, s->lambda, s->edges, s->period_values) <= s->opt.period_tolerance)) {
-        /* the older exactness directions missed by more than the corrections
-         * are for: this attempt again with a new X(0) */
-        st = renew_direction(flow, s, t);
-        for (int32_t i = 0; st == CF_OK && i < nv; ++i) s->rho[i] = tau * s->rhodot[i];
-        if (st == CF_OK) st = solve_lambda(flow, s, t);
+    if (st == CF_OK && s->period_newton && s->zcount > 0) {
+        double err = cfi_spin_periods(mesh, s, x, s->lambda, s->edges, s->period_values);
+        if (s->diag.x0_reused && !(err <= s->opt.period_tolerance)) {
+            /* the older exactness directions missed by more than the
+             * corrections are for: this attempt again with a new X(0) */
+            st = renew_direction(flow, s, t);
+            for (int32_t i = 0; st == CF_OK && i < nv; ++i) s->rho[i] = tau * s->rhodot[i];
+            if (st == CF_OK) st = solve_lambda(flow, s, t);
+            if (st == CF_OK) err = cfi_spin_periods(mesh, s, x, s->lambda, s->edges, s->period_values);
+        }
+        if (st == CF_OK && s->zcount > 0) st = correct_periods(flow, s, t, err);
     }
-    if (st == CF_OK && s->period_newton && s->zcount > 0) st = correct_periods(flow, s, t);
     if (st != CF_OK) return st;
     s->diag.predicted_energy = predicted_energy(mesh, s);
 

@@ -1,0 +1,238 @@
+#!/usr/bin/env python3
+"""Flows on generated meshes of the kinds issue 13 checks outside ../shared:
+a knotted tube (genus 1), marching-tetrahedra plates of genus 1-5 (slivers down
+to about 0.1 degrees, staircase noise), a sphere with 7 holes and a disk.
+
+    bench_unseen_kinds.py [--curvflow PATH] [--steps N] [--keep DIR] [METHOD ...]
+
+Writes the meshes (to a temporary directory, or DIR), runs every METHOD
+(default: spin-willmore and conformal-mcf) with its defaults for N steps
+(default 10) through the CLI and prints one TSV row per mesh x method: exit
+status, W/4pi before and after, area-weighted mean and max quasi-conformal
+error against the input, smallest angle, whole-process ms per step. Nothing
+is asserted (docs/spin.md, "Meshes of the unseen kinds"). Needs numpy.
+"""
+import argparse
+import json
+import math
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+
+def write_obj(path, vertices, faces):
+    with open(path, "w") as f:
+        for v in vertices:
+            f.write("v %.12g %.12g %.12g\n" % tuple(v))
+        for t in faces:
+            f.write("f %d %d %d\n" % (t[0] + 1, t[1] + 1, t[2] + 1))
+
+
+def knotted_tube(n_along=240, n_around=14):
+    """Trefoil centre line, tube radius 0.35 +- 0.1 (five thick and thin
+    stretches), parallel-transport frame closed up by spreading its holonomy."""
+    t = np.linspace(0.0, 2.0 * np.pi, n_along, endpoint=False)
+    centre = np.stack([np.sin(t) + 2 * np.sin(2 * t), np.cos(t) - 2 * np.cos(2 * t), -np.sin(3 * t)], 1)
+    tangent = np.roll(centre, -1, 0) - np.roll(centre, 1, 0)
+    tangent /= np.linalg.norm(tangent, axis=1)[:, None]
+    normal = np.zeros_like(tangent)
+    seed = np.array([0.3, 0.5, 0.8])
+    normal[0] = seed - tangent[0] * (seed @ tangent[0])
+    normal[0] /= np.linalg.norm(normal[0])
+    for i in range(1, n_along):
+        n = normal[i - 1] - tangent[i] * (normal[i - 1] @ tangent[i])
+        normal[i] = n / np.linalg.norm(n)
+    binormal = np.cross(tangent, normal)
+    last = normal[-1] - tangent[0] * (normal[-1] @ tangent[0])
+    holonomy = math.atan2(last @ binormal[0], last @ normal[0])
+    phi = np.linspace(0.0, 2.0 * np.pi, n_around, endpoint=False)
+    radius = 0.35 + 0.1 * np.sin(5 * t)
+    vertices = []
+    for i in range(n_along):
+        angle = phi - holonomy * i / n_along
+        ring = centre[i] + radius[i] * (np.cos(angle)[:, None] * normal[i] + np.sin(angle)[:, None] * binormal[i])
+        vertices.extend(ring)
+    faces = []
+    for i in range(n_along):
+        i2 = (i + 1) % n_along
+        for j in range(n_around):
+            j2 = (j + 1) % n_around
+            a, b, c, d = i * n_around + j, i * n_around + j2, i2 * n_around + j, i2 * n_around + j2
+            faces += [(a, b, c), (b, d, c)]
+    return np.array(vertices), np.array(faces)
+
+
+def marching_tetrahedra(values, axes):
+    """Zero set of values (> 0 outside) on the grid axes, six tetrahedra per
+    cube; one vertex per crossed grid edge, so the result is closed and
+    manifold when no grid value is zero. Faces point toward positive values."""
+    values = np.where(np.abs(values) < 1e-12, 1e-12, values)
+    corner = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (1, 1, 0), (0, 0, 1), (1, 0, 1), (0, 1, 1), (1, 1, 1)]
+    tets = [(0, 1, 3, 7), (0, 3, 2, 7), (0, 2, 6, 7), (0, 6, 4, 7), (0, 4, 5, 7), (0, 5, 1, 7)]
+    index, vertices, faces = {}, [], []
+
+    def point(p):
+        return np.array([axes[k][p[k]] for k in range(3)])
+
+    def crossing(p, q):
+        key = (p, q) if p < q else (q, p)
+        if key not in index:
+            s = values[p] / (values[p] - values[q])
+            vertices.append(point(p) + s * (point(q) - point(p)))
+            index[key] = len(vertices) - 1
+        return index[key]
+
+    def oriented(tri, toward):
+        a, b, c = (vertices[k] for k in tri)
+        return tri if np.cross(b - a, c - a) @ (toward - a) > 0 else tri[::-1]
+
+    shape = values.shape
+    outside = values > 0
+    for i in range(shape[0] - 1):
+        for j in range(shape[1] - 1):
+            for k in range(shape[2] - 1):
+                cube = [(i + o[0], j + o[1], k + o[2]) for o in corner]
+                flags = [outside[p] for p in cube]
+                if all(flags) or not any(flags):
+                    continue
+                for tet in tets:
+                    p = [cube[m] for m in tet]
+                    out = [m for m in range(4) if outside[p[m]]]
+                    inn = [m for m in range(4) if not outside[p[m]]]
+                    if len(out) in (1, 3):
+                        lone = out[0] if len(out) == 1 else inn[0]
+                        tri = [crossing(p[lone], p[m]) for m in range(4) if m != lone]
+                        # the normal points to the outside corner(s)
+                        target = point(p[lone]) if len(out) == 1 else np.mean([point(p[m]) for m in out], 0)
+                        faces.append(oriented(tri, target))
+                    elif len(out) == 2:
+                        a, b = out
+                        c, d = inn
+                        quad = [crossing(p[a], p[c]), crossing(p[a], p[d]), crossing(p[b], p[d]), crossing(p[b], p[c])]
+                        target = (point(p[a]) + point(p[b])) / 2
+                        first = oriented([quad[0], quad[1], quad[2]], target)
+                        second = oriented([quad[0], quad[2], quad[3]], target)
+                        faces += [first, second]
+    return np.array(vertices), np.array(faces)
+
+
+def holed_plate(genus):
+    """A rounded slab of thickness 0.7 with genus round holes of radius 0.45."""
+    centres = np.linspace(-(genus - 1), genus - 1, genus) if genus > 1 else np.array([0.0])
+    nx = int(22 * (genus + 0.6) / 1.6) + 1
+    axes = [np.linspace(-genus - 0.6, genus + 0.6, nx), np.linspace(-1.6, 1.6, 23), np.linspace(-0.6, 0.6, 10)]
+    x, y, z = np.meshgrid(*axes, indexing="ij")
+    flat = np.hypot(np.maximum(np.abs(x) - genus, 0.0), np.maximum(np.abs(y) - 1.0, 0.0))
+    d = np.hypot(flat, z) - 0.35
+    for c in centres:
+        d = np.maximum(d, 0.45 - np.hypot(x - c, y))
+    return marching_tetrahedra(d, axes)
+
+
+def generated_sphere(curvflow, path):
+    subprocess.run([curvflow, "generate", "bumpy-sphere", "--subdivisions", "4", "--amplitude", "0.1", "-o", path,
+                    "-f"], check=True, capture_output=True)
+    vertices, faces = [], []
+    for line in open(path):
+        if line.startswith("v "):
+            vertices.append([float(x) for x in line.split()[1:4]])
+        elif line.startswith("f "):
+            faces.append([int(x.split("/")[0]) - 1 for x in line.split()[1:4]])
+    return np.array(vertices), np.array(faces)
+
+
+def cut_holes(vertices, faces, count, angular_radius):
+    """Faces whose direction lies within angular_radius of one of count
+    directions spread over the sphere are removed (unused vertices too)."""
+    k = np.arange(count) + 0.5
+    theta = np.arccos(1 - 2 * k / count)
+    phi = np.pi * (1 + 5 ** 0.5) * k
+    centres = np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], 1)
+    direction = vertices[faces].mean(1)
+    direction /= np.linalg.norm(direction, axis=1)[:, None]
+    keep = np.all(direction @ centres.T < math.cos(angular_radius), axis=1)
+    faces = faces[keep]
+    used = np.unique(faces)
+    remap = -np.ones(len(vertices), dtype=int)
+    remap[used] = np.arange(len(used))
+    return vertices[used], remap[faces]
+
+
+def willmore_over_4pi(curvflow, mesh):
+    """W/4pi from `curvflow info` (closed meshes only; None with boundary)."""
+    info = json.loads(subprocess.run([curvflow, "info", mesh, "--json"], capture_output=True, text=True).stdout)
+    return info["willmore_over_4pi"], info["angles"]["min_degrees"]
+
+
+def run(curvflow, mesh, method, steps, out_dir):
+    base = os.path.splitext(os.path.basename(mesh))[0]
+    out = os.path.join(out_dir, "%s.%s.obj" % (base, method))
+    log = os.path.join(out_dir, "%s.%s.jsonl" % (base, method))
+    for path in (out, log):
+        if os.path.exists(path):
+            os.remove(path)
+    start = time.time()
+    proc = subprocess.run([curvflow, "flow", mesh, "-o", out, "--method", method, "--steps", str(steps), "-q", "-f",
+                           "--log", log], capture_output=True, text=True)
+    ms = 1000.0 * (time.time() - start) / steps
+    # W/4pi from the flow's log where the method reports it (boundary
+    # meshes included: interior vertices, as the method's W), else from info
+    logged = []
+    if os.path.exists(log):
+        for line in open(log):
+            terms = json.loads(line).get("terms") or {}
+            if "W/4pi" in terms:
+                logged.append(terms["W/4pi"])
+    w0 = logged[0] if logged else willmore_over_4pi(curvflow, mesh)[0]
+    row = [base, method, str(proc.returncode), "%.3f" % w0 if w0 is not None else "-"]
+    if os.path.exists(out):
+        w1, smallest = willmore_over_4pi(curvflow, out)
+        if logged:
+            w1 = logged[-1]
+        q = json.loads(subprocess.run([curvflow, "compare", mesh, out, "--json"], capture_output=True,
+                                      text=True).stdout)["quasi_conformal_error"]
+        row += ["%.3f" % w1 if w1 is not None else "-", "%.3f" % q["mean"], "%.3g" % q["max"], "%.2f" % smallest]
+    else:
+        row += ["-"] * 4
+    row.append("%.0f" % ms)
+    print("\t".join(row), flush=True)
+
+
+def main():
+    here = os.path.dirname(os.path.abspath(__file__))
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--curvflow", default=os.path.join(here, "..", "build", "curvflow"))
+    parser.add_argument("--steps", type=int, default=10)
+    parser.add_argument("--keep", help="write the meshes and results here (kept)")
+    parser.add_argument("methods", nargs="*", default=["spin-willmore", "conformal-mcf"])
+    args = parser.parse_args()
+    if not os.path.exists(args.curvflow):
+        sys.exit("no curvflow binary at %s (build first, or --curvflow PATH)" % args.curvflow)
+    with tempfile.TemporaryDirectory() as tmp:
+        out_dir = args.keep or tmp
+        os.makedirs(out_dir, exist_ok=True)
+        meshes = []
+
+        def add(name, vertices, faces):
+            path = os.path.join(out_dir, name + ".obj")
+            write_obj(path, vertices, faces)
+            meshes.append(path)
+
+        add("knot", *knotted_tube())
+        for genus in (1, 2, 3, 4, 5):
+            add("plate_genus%d" % genus, *holed_plate(genus))
+        sphere = generated_sphere(args.curvflow, os.path.join(out_dir, "sphere_source.obj"))
+        add("sphere_7_holes", *cut_holes(*sphere, 7, 0.25))
+        add("disk_cap", *cut_holes(*sphere, 1, 1.3))
+        print("mesh\tmethod\texit\tW0/4pi\tW/4pi\tQ_mean\tQ_max\tmin_angle\tms_per_step")
+        for mesh in meshes:
+            for method in args.methods:
+                run(args.curvflow, mesh, method, args.steps, out_dir)
+
+
+if __name__ == "__main__":
+    main()

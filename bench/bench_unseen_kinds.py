@@ -3,19 +3,21 @@
 a knotted tube (genus 1), marching-tetrahedra plates of genus 1-5 (slivers down
 to about 0.1 degrees, staircase noise), a sphere with 7 holes and a disk.
 
-    bench_unseen_kinds.py [--curvflow PATH] [--steps N] [--keep DIR] [METHOD ...]
+    BUILD_DIR=build python3 bench/bench_unseen_kinds.py [--curvflow PATH] [--steps N] [--keep DIR] [METHOD ...]
 
 Writes the meshes (to a temporary directory, or DIR), runs every METHOD
 (default: spin-willmore and conformal-mcf) with its defaults for N steps
 (default 10) through the CLI and prints one TSV row per mesh x method: exit
 status, W/4pi before and after, area-weighted mean and max quasi-conformal
 error against the input, smallest angle, whole-process ms per step. Nothing
-is asserted (docs/spin.md, "Meshes of the unseen kinds"). Needs numpy.
+is asserted (docs/spin.md, "Meshes of the unseen kinds"). Needs numpy and the
+built library (the Python package's load / save / info / compare; BUILD_DIR,
+default build/).
 """
 import argparse
-import json
 import math
 import os
+import pathlib
 import subprocess
 import sys
 import tempfile
@@ -23,13 +25,12 @@ import time
 
 import numpy as np
 
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "python"))
+BUILD = pathlib.Path(os.environ.get("BUILD_DIR") or ROOT / "build").resolve()
+os.environ.setdefault("CURVFLOW_LIB_DIR", str(BUILD))
 
-def write_obj(path, vertices, faces):
-    with open(path, "w") as f:
-        for v in vertices:
-            f.write("v %.12g %.12g %.12g\n" % tuple(v))
-        for t in faces:
-            f.write("f %d %d %d\n" % (t[0] + 1, t[1] + 1, t[2] + 1))
+import curvflow  # noqa: E402
 
 
 def knotted_tube(n_along=240, n_around=14):
@@ -133,16 +134,11 @@ def holed_plate(genus):
     return marching_tetrahedra(d, axes)
 
 
-def generated_sphere(curvflow, path):
-    subprocess.run([curvflow, "generate", "bumpy-sphere", "--subdivisions", "4", "--amplitude", "0.1", "-o", path,
-                    "-f"], check=True, capture_output=True)
-    vertices, faces = [], []
-    for line in open(path):
-        if line.startswith("v "):
-            vertices.append([float(x) for x in line.split()[1:4]])
-        elif line.startswith("f "):
-            faces.append([int(x.split("/")[0]) - 1 for x in line.split()[1:4]])
-    return np.array(vertices), np.array(faces)
+def generated_sphere(cli, path):
+    subprocess.run([cli, "generate", "bumpy-sphere", "--subdivisions", "4", "--amplitude", "0.1", "-o", path, "-f"],
+                   check=True, capture_output=True)
+    vertices, faces, _ = curvflow.load(path)
+    return vertices, faces
 
 
 def cut_holes(vertices, faces, count, angular_radius):
@@ -162,13 +158,7 @@ def cut_holes(vertices, faces, count, angular_radius):
     return vertices[used], remap[faces]
 
 
-def willmore_over_4pi(curvflow, mesh):
-    """W/4pi from `curvflow info` (closed meshes only; None with boundary)."""
-    info = json.loads(subprocess.run([curvflow, "info", mesh, "--json"], capture_output=True, text=True).stdout)
-    return info["willmore_over_4pi"], info["angles"]["min_degrees"]
-
-
-def run(curvflow, mesh, method, steps, out_dir):
+def run(cli, mesh, method, steps, out_dir):
     base = os.path.splitext(os.path.basename(mesh))[0]
     out = os.path.join(out_dir, "%s.%s.obj" % (base, method))
     log = os.path.join(out_dir, "%s.%s.jsonl" % (base, method))
@@ -176,26 +166,24 @@ def run(curvflow, mesh, method, steps, out_dir):
         if os.path.exists(path):
             os.remove(path)
     start = time.time()
-    proc = subprocess.run([curvflow, "flow", mesh, "-o", out, "--method", method, "--steps", str(steps), "-q", "-f",
+    proc = subprocess.run([cli, "flow", mesh, "-o", out, "--method", method, "--steps", str(steps), "-q", "-f",
                            "--log", log], capture_output=True, text=True)
     ms = 1000.0 * (time.time() - start) / steps
     # W/4pi from the flow's log where the method reports it (boundary
-    # meshes included: interior vertices, as the method's W), else from info
-    logged = []
-    if os.path.exists(log):
-        for line in open(log):
-            terms = json.loads(line).get("terms") or {}
-            if "W/4pi" in terms:
-                logged.append(terms["W/4pi"])
-    w0 = logged[0] if logged else willmore_over_4pi(curvflow, mesh)[0]
+    # meshes included: interior vertices, as the method's W), else from
+    # info (closed meshes only)
+    logged = [entry["terms"]["W/4pi"] for entry in curvflow.read_log(log)
+              if "W/4pi" in (entry.get("terms") or {})] if os.path.exists(log) else []
+    w0 = logged[0] if logged else curvflow.info(mesh)["willmore_over_4pi"]
     row = [base, method, str(proc.returncode), "%.3f" % w0 if w0 is not None else "-"]
     if os.path.exists(out):
-        w1, smallest = willmore_over_4pi(curvflow, out)
-        if logged:
-            w1 = logged[-1]
-        q = json.loads(subprocess.run([curvflow, "compare", mesh, out, "--json"], capture_output=True,
-                                      text=True).stdout)["quasi_conformal_error"]
-        row += ["%.3f" % w1 if w1 is not None else "-", "%.3f" % q["mean"], "%.3g" % q["max"], "%.2f" % smallest]
+        after = curvflow.info(out)
+        w1 = logged[-1] if logged else after["willmore_over_4pi"]
+        v0, faces, _ = curvflow.load(mesh)
+        v1, _, _ = curvflow.load(out, validate=False)
+        q = curvflow.compare(v0, v1, faces)["quasi_conformal_error"]
+        row += ["%.3f" % w1 if w1 is not None else "-", "%.3f" % q["mean"], "%.3g" % q["max"],
+                "%.2f" % after["angles"]["min_degrees"]]
     else:
         row += ["-"] * 4
     row.append("%.0f" % ms)
@@ -203,9 +191,8 @@ def run(curvflow, mesh, method, steps, out_dir):
 
 
 def main():
-    here = os.path.dirname(os.path.abspath(__file__))
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--curvflow", default=os.path.join(here, "..", "build", "curvflow"))
+    parser.add_argument("--curvflow", default=str(BUILD / "curvflow"))
     parser.add_argument("--steps", type=int, default=10)
     parser.add_argument("--keep", help="write the meshes and results here (kept)")
     parser.add_argument("methods", nargs="*", default=["spin-willmore", "conformal-mcf"])
@@ -219,7 +206,7 @@ def main():
 
         def add(name, vertices, faces):
             path = os.path.join(out_dir, name + ".obj")
-            write_obj(path, vertices, faces)
+            curvflow.save(path, vertices, faces)
             meshes.append(path)
 
         add("knot", *knotted_tube())

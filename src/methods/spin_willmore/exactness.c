@@ -174,6 +174,29 @@ static cf_status solve_each_column(cfi_spin_state *s, int32_t dim)
     return cf_cholesky_solve(s->chol0, 3 * dim, s->zrhs, s->zsol);
 }
 
+/* zsol = X(0)^-1 B_g for each harmonic form g (or, with the test hook
+ * x0_full_solves, X(0)^-1 (B_g u_c) for every c): B_g = -sum_e w h_g(e) e
+ * at both ends of each edge, at the surface x. */
+static cf_status solve_x0_sources(const cf_mesh *mesh, cfi_spin_state *s, const double *x)
+{
+    int32_t nv = s->nv, dim = s->harmonic_dim;
+    memset(s->zrhs, 0, 4 * (size_t)nv * dim * sizeof(double));
+    for (int32_t e = 0; e < s->ne; ++e) {
+        int32_t i = mesh->edge_vertices[2 * e], j = mesh->edge_vertices[2 * e + 1];
+        double v[3] = {x[3 * j] - x[3 * i], x[3 * j + 1] - x[3 * i + 1], x[3 * j + 2] - x[3 * i + 2]};
+        for (int32_t g = 0; g < dim; ++g) {
+            double wh = s->hweights[e] * s->harmonic[(int64_t)g * s->ne + e];
+            double *r = s->zrhs + (int64_t)g * 4 * nv;
+            for (int c = 0; c < 3; ++c) {
+                r[4 * i + 1 + c] -= wh * v[c]; /* B_g: the imaginary quaternion -w h_g e */
+                r[4 * j + 1 + c] -= wh * v[c];
+            }
+        }
+    }
+    s->diag.x0_solve_columns = s->x0_full_solves ? 3 * dim : dim;
+    return s->x0_full_solves ? solve_each_column(s, dim) : cf_cholesky_solve(s->chol0, dim, s->zrhs, s->zsol);
+}
+
 /* Whether this step may take its exactness directions from the factor of
  * X(0) made at an earlier step (option exactness_refresh). Only with the
  * period corrections, which measure what older directions miss (the
@@ -240,25 +263,22 @@ static cf_status exactness_columns_linearized(cf_flow *flow, cfi_spin_state *s, 
         s->x0_factored = 1;
         s->x0_scale_since = 0.0;
     }
-    cf_status st = CF_OK;
-    double t1 = cfi_now_seconds();
-    memset(s->zrhs, 0, 4 * (size_t)nv * dim * sizeof(double));
-    for (int32_t e = 0; e < s->ne; ++e) {
-        int32_t i = mesh->edge_vertices[2 * e], j = mesh->edge_vertices[2 * e + 1];
-        double v[3] = {x[3 * j] - x[3 * i], x[3 * j + 1] - x[3 * i + 1], x[3 * j + 2] - x[3 * i + 2]};
-        for (int32_t g = 0; g < dim; ++g) {
-            double wh = s->hweights[e] * s->harmonic[(int64_t)g * s->ne + e];
-            double *r = s->zrhs + (int64_t)g * 4 * nv;
-            for (int c = 0; c < 3; ++c) {
-                r[4 * i + 1 + c] -= wh * v[c]; /* B_g: the imaginary quaternion -w h_g e */
-                r[4 * j + 1 + c] -= wh * v[c];
-            }
-        }
+    /* A step that reuses the factor also keeps its solution X(0)^-1 B_g,
+     * made at the positions of the factorising step: B_g moves with the
+     * surface as X(0) does, so the bound on the movement that admits the
+     * factor covers both (K^T below takes the current positions). Measured
+     * on bob_5k, 10 default steps: the reused steps lose their X(0) solve
+     * (2 columns, about 4.5 of their 33 ms); W/4pi 1.84946 -> 1.84934, the
+     * periods before corrections after step 10 5.0e-4 -> 6.0e-4 (tolerance
+     * 3e-3); docs/spin.md, "Reusing X(0)". */
+    if (s->diag.x0_reused) {
+        s->diag.x0_solve_columns = 0;
+    } else {
+        double t1 = cfi_now_seconds();
+        cf_status st = solve_x0_sources(mesh, s, x);
+        *solve_seconds += cfi_now_seconds() - t1;
+        if (st != CF_OK) return st;
     }
-    st = s->x0_full_solves ? solve_each_column(s, dim) : cf_cholesky_solve(s->chol0, dim, s->zrhs, s->zsol);
-    s->diag.x0_solve_columns = s->x0_full_solves ? ncol : dim;
-    *solve_seconds += cfi_now_seconds() - t1;
-    if (st != CF_OK) return st;
     for (int32_t k = 0; k < ncol; ++k) {
         /* X(0)^-1 B_g, times u_c below (the hook: X(0)^-1 (B_g u_c) itself) */
         const double *y = s->zsol + (int64_t)(s->x0_full_solves ? k : k / 3) * 4 * nv;

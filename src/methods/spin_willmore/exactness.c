@@ -255,14 +255,6 @@ static cf_status exactness_columns_linearized(cf_flow *flow, cfi_spin_state *s, 
 {
     const cf_mesh *mesh = flow->mesh;
     int32_t nv = s->nv, dim = s->harmonic_dim, ncol = 3 * dim;
-    s->diag.x0_reused = x0_reusable(s);
-    if (!s->diag.x0_reused) {
-        s->x0_factored = 0; /* until the new factor exists */
-        cf_status stf = factorize_x0(flow, s, x, factor_seconds);
-        if (stf != CF_OK) return stf;
-        s->x0_factored = 1;
-        s->x0_scale_since = 0.0;
-    }
     /* A step that reuses the factor also keeps its solution X(0)^-1 B_g,
      * made at the positions of the factorising step: B_g moves with the
      * surface as X(0) does, so the bound on the movement that admits the
@@ -271,11 +263,17 @@ static cf_status exactness_columns_linearized(cf_flow *flow, cfi_spin_state *s, 
      * (2 columns, about 4.5 of their 33 ms); W/4pi 1.84946 -> 1.84934, the
      * periods before corrections after step 10 5.0e-4 -> 6.0e-4 (tolerance
      * 3e-3); docs/spin.md, "Reusing X(0)". */
+    s->diag.x0_reused = x0_reusable(s);
     if (s->diag.x0_reused) {
         s->diag.x0_solve_columns = 0;
     } else {
+        s->x0_factored = 0; /* until the new factor exists */
+        cf_status st = factorize_x0(flow, s, x, factor_seconds);
+        if (st != CF_OK) return st;
+        s->x0_factored = 1;
+        s->x0_scale_since = 0.0;
         double t1 = cfi_now_seconds();
-        cf_status st = solve_x0_sources(mesh, s, x);
+        st = solve_x0_sources(mesh, s, x);
         *solve_seconds += cfi_now_seconds() - t1;
         if (st != CF_OK) return st;
     }

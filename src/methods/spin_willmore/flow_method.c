@@ -447,6 +447,20 @@ static cf_status renew_direction(cf_flow *flow, cfi_spin_state *s, cfi_spin_time
     return step_direction(flow, s, &t->factorize, &t->solve);
 }
 
+/* IV and the first lambda of V for tau from the current rhodot: rho = tau
+ * rhodot, lambda from X(rho), and on closed genus > 0 with the period
+ * corrections (*measured) the harmonic part err of its transformed edges
+ * (cfi_spin_periods, which also leaves them in s->period_values). */
+static cf_status first_lambda(cf_flow *flow, cfi_spin_state *s, double tau, cfi_spin_timers *t, int32_t *measured,
+                              double *err)
+{
+    for (int32_t i = 0; i < s->nv; ++i) s->rho[i] = tau * s->rhodot[i];
+    cf_status st = solve_lambda(flow, s, t);
+    *measured = st == CF_OK && s->period_newton && s->zcount > 0;
+    if (*measured) *err = cfi_spin_periods(flow->mesh, s, flow->positions, s->lambda, s->edges, s->period_values);
+    return st;
+}
+
 cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, cfi_spin_too_large *too_large,
                                 cfi_spin_timers *t)
 {
@@ -459,23 +473,18 @@ cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, cf
         st = renew_direction(flow, s, t);
         if (st != CF_OK) return st;
     }
-    /* IV. rho = tau rhodot */
-    for (int32_t i = 0; i < nv; ++i) s->rho[i] = tau * s->rhodot[i];
-
-    /* V. lambda from X(rho), with the periods corrected on closed genus > 0 */
-    st = solve_lambda(flow, s, t);
-    if (st == CF_OK && s->period_newton && s->zcount > 0) {
-        double err = cfi_spin_periods(mesh, s, x, s->lambda, s->edges, s->period_values);
-        if (s->diag.x0_reused && !(err <= s->opt.period_tolerance)) {
-            /* the older exactness directions missed by more than the
-             * corrections are for: this attempt again with a new X(0) */
-            st = renew_direction(flow, s, t);
-            for (int32_t i = 0; st == CF_OK && i < nv; ++i) s->rho[i] = tau * s->rhodot[i];
-            if (st == CF_OK) st = solve_lambda(flow, s, t);
-            if (st == CF_OK) err = cfi_spin_periods(mesh, s, x, s->lambda, s->edges, s->period_values);
-        }
-        if (st == CF_OK && s->zcount > 0) st = correct_periods(flow, s, t, err);
+    /* IV-V: rho = tau rhodot, lambda from X(rho), with the periods
+     * corrected on closed genus > 0 */
+    double err = 0.0;
+    int32_t measured = 0;
+    st = first_lambda(flow, s, tau, t, &measured, &err);
+    if (st == CF_OK && measured && s->diag.x0_reused && !(err <= s->opt.period_tolerance)) {
+        /* the older exactness directions missed by more than the
+         * corrections are for: this attempt again with a new X(0) */
+        st = renew_direction(flow, s, t);
+        if (st == CF_OK) st = first_lambda(flow, s, tau, t, &measured, &err);
     }
+    if (st == CF_OK && measured) st = correct_periods(flow, s, t, err);
     if (st != CF_OK) return st;
     s->diag.predicted_energy = predicted_energy(mesh, s);
 

@@ -180,6 +180,33 @@ CF_API cf_status cf_spectral_filter_create(cf_context *ctx, const cf_mesh *mesh,
 CF_API cf_status cf_spectral_filter_apply(cf_spectral_filter *f, double *v, cf_solver_timings *timings);
 CF_API void cf_spectral_filter_destroy(cf_spectral_filter **f);
 
+/* ---- Vertex-scale fairing (src/ops/vertex_fairing.c) ---------------------
+ * One implicit Laplacian step on positions with unit vertex weights and the
+ * cotan Laplacian L0 (positive semi-definite) of the surface given at create:
+ *   out = argmin |x - in|^2 + kappa x^T L0 x,  i.e. (I + kappa L0) out = in,
+ * with the boundary vertices held at their input positions if asked. L0's
+ * weights are scale-free, so kappa is dimensionless and the step is
+ * covariant with scaling, also locally: a part of the surface shrunk by s is
+ * moved s times as far. An eigenvector of L0 with eigenvalue mu is damped by
+ * 1 / (1 + kappa mu): for kappa of order one the modes that change sign from
+ * one vertex to the next (mu of order one) are damped, smooth ones
+ * (mu ~ 1 / nv) are not. The analysis is made once; a new kappa refactorises
+ * (a scalar matrix of L0's pattern). Used by spin-willmore (docs/spin.md,
+ * "Vertex-scale fairing"). */
+typedef struct cf_vertex_fairing cf_vertex_fairing;
+/* positions: 3 nv, the reference surface of L0 (NULL: rest positions);
+ * hold_boundary: nonzero keeps boundary vertices in place. Statuses:
+ * CF_ERR_INVALID_ARG, CF_ERR_DEGENERATE_FACE, CF_ERR_NOMEM, solver errors. */
+CF_API cf_status cf_vertex_fairing_create(cf_context *ctx, const cf_mesh *mesh, const double *positions,
+                                          int32_t hold_boundary, cf_vertex_fairing **out);
+/* out = the faired positions of in (3 nv each, interleaved; out may equal
+ * in). kappa >= 0 (0: a copy). timings (may be NULL) accumulates the
+ * factorise / solve seconds. Statuses: CF_ERR_INVALID_ARG (kappa negative or
+ * not finite), solver errors (CF_ERR_NUMERICAL for non-finite input). */
+CF_API cf_status cf_vertex_fairing_apply(cf_vertex_fairing *f, double kappa, const double *in, double *out,
+                                         cf_solver_timings *timings);
+CF_API void cf_vertex_fairing_destroy(cf_vertex_fairing **f);
+
 typedef enum cf_mass_kind {
     CF_MASS_LUMPED_BARYCENTRIC = 0,
     CF_MASS_LUMPED_VORONOI = 1,

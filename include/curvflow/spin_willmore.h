@@ -147,6 +147,14 @@ typedef struct cf_spin_willmore_options {
                                 * each must be finite and nonzero, and is normalised). Read once by
                                 * cf_flow_create, not kept. {NULL, 0} (default): the boundary_angle /
                                 * boundary_axis rule above */
+    double fairing;            /* vertex-scale fairing per unit tau (the paper is silent): after the
+                                * positions of a step are recovered, x = (I + fairing tau L0)^-1 x (L0
+                                * the input's cotan Laplacian, unit vertex weights, boundary vertices
+                                * held; curvflow/ops.h, cf_vertex_fairing), and the faired positions
+                                * are kept if their W is lower. It removes the vertex-scale part of the
+                                * cotan curvature, which the vertex-based spin transformation sees only
+                                * through face sums. Default 1; 0: the paper's step. Not with
+                                * prescribed / cmc boundaries (docs/spin.md, "Vertex-scale fairing") */
 } cf_spin_willmore_options;
 
 CF_API void cf_spin_willmore_options_default(cf_spin_willmore_options *options);

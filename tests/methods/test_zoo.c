@@ -15,7 +15,7 @@
  * Printed per mesh: issue 13's further targets (W after 10 steps <= W0 / 2
  * where W0/4pi >= 2, mean Q <= 1.5), which the defaults meet on part of the
  * meshes only (docs/spin.md, "Robustness"; the column `targets`); asserted
- * as counts that may not fall (15 and 15 with all 20 meshes).
+ * as counts that may not fall (17 and 17 with all 20 meshes).
  * Meshes above 3 000 vertices are left out of sanitizer builds (CTest time limit).
  */
 #include "test.h"
@@ -160,12 +160,13 @@ static void test_zoo(void)
             totals.runs, totals.spin_w_target_met, totals.spin_w_target, totals.spin_q_met, totals.spin_runs);
     CHECK(totals.spin_runs > 0);
     /* no regression on the issue-13 targets met so far (all 20 shared
-     * meshes, i.e. not in sanitizer builds): W on 15 of 19 since growth_ratio
-     * (bull; elk since the period corrections), mean Q on 15 of 20 (elk in,
-     * triceratops out with growth_ratio) */
+     * meshes, i.e. not in sanitizer builds): W on 17 of 19 and mean Q on 17
+     * of 20 since the vertex-scale fairing (15 and 15 before; the W misses
+     * are bob and the double torus, bounded by their conformal classes, the
+     * Q misses cactus, elk and the double torus; docs/spin.md) */
     if (totals.spin_runs == 20) {
-        CHECK(totals.spin_w_target_met >= 15);
-        CHECK(totals.spin_q_met >= 15);
+        CHECK(totals.spin_w_target_met >= 17);
+        CHECK(totals.spin_q_met >= 17);
     }
     CHECK(cf_context_bytes_in_use(ctx) == 0);
     cf_context_destroy(&ctx);

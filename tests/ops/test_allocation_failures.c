@@ -81,6 +81,16 @@ static cf_status op_harmonic(cf_context *ctx, const cf_mesh *m, const double *x,
     return cf_harmonic_basis(ctx, m, x, &dim, scratch);
 }
 
+static cf_status op_fairing(cf_context *ctx, const cf_mesh *m, const double *x, void *scratch)
+{
+    cf_vertex_fairing *f = NULL;
+    cf_status s = cf_vertex_fairing_create(ctx, m, x, 1, &f);
+    if (s != CF_OK && f) s = CF_ERR_INVALID_ARG; /* output must stay NULL on failure */
+    if (s == CF_OK) s = cf_vertex_fairing_apply(f, 0.5, x, scratch, NULL);
+    cf_vertex_fairing_destroy(&f);
+    return s;
+}
+
 static void quiet(void *user, cf_log_level level, const char *line)
 {
     (void)user;
@@ -102,6 +112,14 @@ static void test_injection(void)
     run(ctx, m, op_dec, NULL, "dec", 0);
     run(ctx, m, op_curvature, scratch, "curvature", 0);
     run(ctx, m, op_harmonic, scratch, "harmonic", 1);
+    run(ctx, m, op_fairing, scratch, "vertex fairing", 1);
+    free(scratch);
+    cf_mesh_destroy(&m);
+    /* the held-boundary path (cf_min_quad) */
+    CHECK_OK(ctx, cf_generate_grid(ctx, 6, 5, 1.0, 1.0, &m));
+    if (!m) return;
+    scratch = malloc(sizeof(double) * 3 * (size_t)cf_mesh_vertex_count(m));
+    run(ctx, m, op_fairing, scratch, "vertex fairing, held boundary", 1);
     free(scratch);
     cf_mesh_destroy(&m);
     CHECK(cf_context_bytes_in_use(ctx) == 0);

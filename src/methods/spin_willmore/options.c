@@ -41,6 +41,7 @@ void cf_spin_willmore_options_default(cf_spin_willmore_options *o)
     o->regularization = CFI_SPIN_SHIFT;
     o->growth_ratio = 0.75;
     o->exactness_refresh = 0.1;
+    o->fairing = 1.0;
 }
 
 static void options_default(void *options) { cf_spin_willmore_options_default(options); }
@@ -102,6 +103,10 @@ static const cf_param_desc spin_params[] = {
      "closed genus > 0: keep X(0)'s factorisation (exactness directions) while the steps since it changed the "
      "log conformal scale by at most this in sum and the periods stay below period_tolerance / 2; an attempt that "
      "fails on it is redone with a new one (0: refactorise every step)"},
+    {"fairing", CF_PARAM_DOUBLE, OPT(fairing), 0.0, 1000.0, NULL,
+     "vertex-scale fairing per unit tau: each step's positions relaxed by (I + fairing tau L0)^-1 (input cotan "
+     "Laplacian, unit vertex weights, boundary held), kept if W is lower (0: off, the paper's step; not with "
+     "prescribed/cmc boundaries)"},
     {"harmonic_update", CF_PARAM_BOOL, OPT(harmonic_update), 0, 1, NULL,
      "with App. C's Z_i: re-project the harmonic 1-forms onto the current metric each step"},
     {"boundary_targets", CF_PARAM_VERTEX_VECTORS, OPT(boundary_targets), 0, 1, NULL,

@@ -149,6 +149,10 @@ typedef struct cfi_spin_diagnostics {
     int32_t period_iterations;      /* corrections made in the accepted attempt */
     double predicted_energy;        /* W the step's rho would give if realised exactly (Eq. (1)), see realised_decrease */
     double realised_decrease;       /* (W before - W after) / (W before - predicted_energy); 0 when no decrease is predicted */
+    double fairing_kappa;           /* kappa = fairing tau of the vertex-scale fairing in the accepted attempt (0: none) */
+    int32_t fairing_kept;           /* 1: the faired positions had the lower W and were kept */
+    double fairing_energy;          /* W of the faired candidate (NaN when it could not be evaluated; 0 without) */
+    double plain_energy;            /* W of the recovered positions without the fairing */
 } cfi_spin_diagnostics;
 
 /* Nonzero full: the linearised exactness constraint solves X(0) for each of

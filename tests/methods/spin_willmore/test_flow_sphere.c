@@ -5,12 +5,13 @@
  * perfectly preserved"). Default tau = 0.5 (rho = -2 tau H, NOTES.md).
  *
  * On the built-in bumpy sphere the issue's bounds hold (W/4pi <= 1.01 in 10
- * steps, area-weighted mean Q <= 1.10). On spot_3k and bunny_2k they do not
- * (docs/spin.md): the shape is a sphere to 0.1-0.2 % RMS after 10 steps but
- * the cotan Willmore energy keeps a vertex-scale residue that the
- * vertex-based spin transformation realises only slowly, and the conformal
- * map to the sphere has large area distortion. Those cases assert the
- * measured behaviour with a margin (regression bounds) and print it.
+ * steps, area-weighted mean Q <= 1.10). On spot_3k W/4pi <= 1.01 holds
+ * since the vertex-scale fairing (test_spot_issue13: the paper's step keeps
+ * a vertex-scale residue of the cotan curvature that the vertex-based spin
+ * transformation realises only slowly); mean Q <= 1.10 holds on neither
+ * spot_3k nor bunny_2k, whose conformal maps to the sphere have large area
+ * distortion. Those cases assert the measured behaviour with a margin
+ * (regression bounds) and print it.
  * test_conformality_reference shows that mean Q <= 1.10 is below what the
  * converged conformalized MCF reaches on the same meshes (1.125 / 1.123),
  * and that the spin flow at small tau matches that reference.
@@ -112,12 +113,12 @@ static void shared_case(const char *name, double w_bound, double q_bound, double
     cf_context_destroy(&ctx);
 }
 
-/* Measured at tau = 0.5 (input metric; current metric in brackets): spot
- * W/4pi 10.65 -> 1.047 (1.049), Q mean 1.163 (1.165), max 1.58 (1.61);
- * bunny 1.195 (1.208), Q mean 1.200 (1.220), max 3.65 (7.08). Bounds =
- * measured + ~2 %. */
-static void test_spot(void) { shared_case("spot_3k.obj", 1.07, 1.19, 1.65, 3e-3); }
-static void test_bunny(void) { shared_case("bunny_2k.obj", 1.22, 1.23, 3.8, 4e-3); }
+/* Measured at tau = 0.5 with the default vertex-scale fairing (input
+ * metric): spot W/4pi 10.65 -> 1.0017, Q mean 1.149, max 1.58; bunny
+ * 1.025, Q mean 1.172, max 2.75 (the paper's step: spot 1.047 / 1.163 /
+ * 1.58, bunny 1.195 / 1.200 / 3.65). Bounds = measured + ~2 %. */
+static void test_spot(void) { shared_case("spot_3k.obj", 1.02, 1.17, 1.62, 3e-3); }
+static void test_bunny(void) { shared_case("bunny_2k.obj", 1.05, 1.20, 2.85, 4e-3); }
 
 /* Mean Q of the fully converged conformalized mean curvature flow (Kazhdan,
  * Solomon, Ben-Chen 2012, area rescaled every step), the usual conformal map
@@ -242,6 +243,57 @@ static void test_three_steps(void)
     cf_context_destroy(&ctx);
 }
 
+/* Issue 13 on spot_3k: W/4pi <= 1.01 within 20 default steps, with mean Q
+ * within 5 % of the converged conformalized MCF map of the same
+ * triangulation. The paper's step alone (fairing 0) does not get there: its
+ * tail is the vertex-scale part of the cotan curvature, which the
+ * vertex-based spin transformation sees only through face sums (1.027 after
+ * 20 steps); the default vertex-scale fairing removes it (measured: 1.0171
+ * after 3 steps, below 1.01 from step 4, 1.0000 after 20, mean Q 1.149 =
+ * 1.021 x the reference's 1.125; docs/spin.md, "Vertex-scale fairing"). */
+static void test_spot_issue13(void)
+{
+    const char *path = cft_optional_shared_mesh("spot_3k.obj");
+    if (!path) return;
+    cf_context *ctx = cft_context();
+    cf_mesh *mesh = NULL;
+    CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
+    if (!mesh) { cf_context_destroy(&ctx); return; }
+    double w_ref = 0.0, q_ref = reference_q(ctx, mesh, &w_ref);
+    for (int faired = 1; faired >= 0; --faired) {
+        cf_flow_options o;
+        CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o));
+        if (!faired) ((cf_spin_willmore_options *)cf_flow_options_method(&o))->fairing = 0.0;
+        cf_flow *flow = NULL;
+        CHECK_OK(ctx, cf_flow_create(ctx, mesh, NULL, &o, &flow));
+        if (!flow) break;
+        int reached = 0, steps = 0;
+        double w = cf_flow_energy(flow) / (4.0 * PI);
+        while (steps < 20 && !cf_flow_converged(flow)) {
+            CHECK_OK(ctx, cf_flow_step(flow, NULL));
+            ++steps;
+            w = cf_flow_energy(flow) / (4.0 * PI);
+            if (!reached && w <= 1.01) reached = steps;
+        }
+        cf_stats q;
+        CHECK_OK(ctx, cf_quasi_conformal_error(ctx, mesh, cf_mesh_positions(mesh), cf_flow_positions(flow), NULL, &q));
+        fprintf(stderr, "   spot_3k, %s: W/4pi %.4f after %d steps (<= 1.01 from step %d), mean Q %.4f (%.3f x the "
+                        "conformalized MCF reference %.4f)\n",
+                faired ? "default" : "fairing 0 (the paper's step)", w, steps, reached, q.weighted_mean,
+                q.weighted_mean / q_ref, q_ref);
+        if (faired) {
+            CHECK(reached > 0 && reached <= 20);
+            CHECK_LE(q.weighted_mean, 1.05 * q_ref);
+        } else {
+            CHECK(reached == 0); /* 1.027 after 20 steps */
+        }
+        cf_flow_destroy(&flow);
+    }
+    cf_mesh_destroy(&mesh);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 static void test_conformality_reference(void)
 {
     reference_case("spot_3k.obj", 1.05);
@@ -356,6 +408,7 @@ int main(void)
     CFT_RUN(test_bunny);
     CFT_RUN(test_three_steps);
     CFT_RUN(test_conformality_reference);
+    CFT_RUN(test_spot_issue13);
     CFT_RUN(test_cactus_reference);
     CFT_RUN(test_params_by_name);
     return cft_finish();

@@ -23,9 +23,10 @@
 
 #include <stdio.h>
 
-/* 10 steps of spin-willmore, defaults but growth_ratio=0, on a shared mesh (spin_run_steps). 0
+/* `steps` steps of spin-willmore, defaults but growth_ratio=0 (and the
+ * convergence tolerance 0 if asked), on a shared mesh (spin_run_steps). 0
  * when the flow could not be made. */
-static int run_default(const char *name, spin_run *r)
+static int run_default(const char *name, int steps, int no_tolerance, spin_run *r)
 {
     const char *path = cft_require_shared_mesh(name); /* exit 77 with a SKIP line when absent */
     cf_context *ctx = cft_context();
@@ -35,7 +36,9 @@ static int run_default(const char *name, spin_run *r)
     CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o));
     cf_spin_willmore_options *spin = cf_flow_options_method_as(&o, CF_FLOW_SPIN_WILLMORE);
     if (spin) spin->growth_ratio = 0.0; /* the rule the stalls were measured with */
-    int ran = mesh && spin_run_steps(ctx, mesh, &o, 10, r, NULL);
+    if (spin) spin->fairing = 0.0;      /* and the step without the vertex-scale fairing */
+    if (spin && no_tolerance) spin->tolerance = 0.0;
+    int ran = mesh && spin_run_steps(ctx, mesh, &o, steps, r, NULL);
     if (ran)
         fprintf(stderr, "   %s: W/4pi %.4f -> %.4f, largest rise %.3g, mean Q %.4f, %d defects\n", name, r->w0, r->w,
                 r->worst_rise, r->mean_q, r->defects);
@@ -48,18 +51,25 @@ static int run_default(const char *name, spin_run *r)
 static void test_triceratops_reaches_target(void)
 {
     spin_run r = {0};
-    if (!run_default("triceratops_needles_3k.obj", &r)) return;
+    if (!run_default("triceratops_needles_3k.obj", 10, 0, &r)) return;
     CHECK_LE(r.w, 0.5 * r.w0);  /* measured 8.44 of 37.46; 35.35 (stalled) without the retry */
     CHECK_LE(r.worst_rise, 0.0);
     CHECK_LE(r.mean_q, 1.5);      /* measured 1.445 */
     CHECK(r.defects == 0);
 }
 
+/* Which step of cow's run stalls in the input metric depends on the
+ * rounding of the machine (step 10 where this was first measured; on
+ * another machine the decrease fell below the convergence tolerance at step
+ * 9 first, W/4pi 24.10629, and the stall came at step 13): with the
+ * tolerance off and 20 steps the stall is reached either way, and the retry
+ * takes the run past it (measured 23.833 in step 13, 23.831 by step 16,
+ * where it stops). */
 static void test_cow_goes_on(void)
 {
     spin_run r = {0};
-    if (!run_default("cow_3k.obj", &r)) return;
-    CHECK_LE(r.w, 23.95);       /* measured 23.832; 24.106 (stalled in step 10) without the retry */
+    if (!run_default("cow_3k.obj", 20, 1, &r)) return;
+    CHECK_LE(r.w, 23.95);       /* measured 23.831; the input metric alone stalls at 24.106 */
     CHECK_LE(r.worst_rise, 0.0);
     CHECK(r.defects == 0);
 }

@@ -4,7 +4,7 @@
  * implicit mean-curvature-flow step (Desbrun et al. 1999) on the same mesh in
  * the same run (the paper reports 3.3-6.4x). TSV on stdout, nothing asserted.
  *
- *   bench_spin_willmore [--real] [--no-reuse] [MESH_DIR_OR_FILE ...]
+ *   bench_spin_willmore [--real] [--no-reuse] [--no-fairing] [MESH_DIR_OR_FILE ...]
  * Without arguments the meshes come from $CURVFLOW_SHARED_DIR/meshes (or
  * ../shared/meshes); missing files are skipped with a note on stderr.
  * --real factorises the real 4 nv x 4 nv form instead of the complex one
@@ -12,6 +12,9 @@
  * --no-reuse factorises X(0) on genus > 0 surfaces every step
  * (exactness_refresh = 0), the step before its reuse (docs/spin.md,
  * "Reusing X(0)"); the column x0 says which.
+ * --no-fairing runs the paper's step without the vertex-scale fairing
+ * (fairing = 0; docs/spin.md, "Vertex-scale fairing"); the column fairing
+ * says which.
  */
 #include "curvflow/flow.h"
 #include "curvflow/io.h"
@@ -27,7 +30,7 @@
 static const char *const default_meshes[] = {"spot_3k.obj", "bunny_2k.obj", "bob_5k.obj", "elephant_g3_3k.obj",
                                              "armadillo_26k.obj"};
 
-static void bench_file(const char *path, int steps, int complex_form, int reuse)
+static void bench_file(const char *path, int steps, int complex_form, int reuse, int fairing)
 {
     cf_context *ctx = NULL;
     if (cf_context_create(&ctx) != CF_OK) return;
@@ -43,6 +46,7 @@ static void bench_file(const char *path, int steps, int complex_form, int reuse)
     ((cf_spin_willmore_options *)cf_flow_options_method(&o))->tolerance = 0.0;
     ((cf_spin_willmore_options *)cf_flow_options_method(&o))->complex_factorization = complex_form;
     if (!reuse) ((cf_spin_willmore_options *)cf_flow_options_method(&o))->exactness_refresh = 0.0;
+    if (!fairing) ((cf_spin_willmore_options *)cf_flow_options_method(&o))->fairing = 0.0;
     /* timing of ten steps: elephant_g3_3k diverges at the default tau (W
      * rises from step 2), which the default check would stop */
     cf_flow_options_policy(&o)->divergence_factor = 0.0;
@@ -95,8 +99,9 @@ static void bench_file(const char *path, int steps, int complex_form, int reuse)
     }
     if (mcf_steps) mcf /= mcf_steps;
     if (done) {
-        printf("spin-willmore\t%s\t%s\t%s\t%d\t%d\t%d\t%.2f\t%.2f\t%.2f\t%.2f\t%.2f\t%.2f\t%.4f\t%.4f\t%.4f\t%.3f\n", name,
-               complex_form ? "complex" : "real", reuse ? "reused" : "every-step", cf_mesh_vertex_count(mesh), cf_mesh_face_count(mesh), done,
+        printf("spin-willmore\t%s\t%s\t%s\t%s\t%d\t%d\t%d\t%.2f\t%.2f\t%.2f\t%.2f\t%.2f\t%.2f\t%.4f\t%.4f\t%.4f\t%.3f\n",
+               name, complex_form ? "complex" : "real", reuse ? "reused" : "every-step", fairing ? "on" : "off",
+               cf_mesh_vertex_count(mesh), cf_mesh_face_count(mesh), done,
                1e3 * asm_s / done, 1e3 * fac_s / done, 1e3 * sol_s / done, 1e3 * tot_s / done, 1e3 * mcf, mcf > 0 ? (tot_s / done) / mcf : 0.0,
                w0 / (4 * PI), w / (4 * PI), qmean, qmax);
         fflush(stdout);
@@ -107,18 +112,21 @@ static void bench_file(const char *path, int steps, int complex_form, int reuse)
 
 int main(int argc, char **argv)
 {
-    int steps = 10, complex_form = 1, reuse = 1;
-    while (argc > 1 && (strcmp(argv[1], "--real") == 0 || strcmp(argv[1], "--no-reuse") == 0)) {
+    int steps = 10, complex_form = 1, reuse = 1, fairing = 1;
+    while (argc > 1 && (strcmp(argv[1], "--real") == 0 || strcmp(argv[1], "--no-reuse") == 0 ||
+                        strcmp(argv[1], "--no-fairing") == 0)) {
         if (strcmp(argv[1], "--real") == 0)
             complex_form = 0;
-        else
+        else if (strcmp(argv[1], "--no-reuse") == 0)
             reuse = 0;
+        else
+            fairing = 0;
         --argc;
         ++argv;
     }
-    printf("method\tmesh\tfactorization\tx0\tV\tF\tsteps\tassemble_ms\tfactorize_ms\tsolve_ms\tstep_ms\timplicit_mcf_ms\tratio\tW0/4pi\tW/4pi\tQ_mean\tQ_max\n");
+    printf("method\tmesh\tfactorization\tx0\tfairing\tV\tF\tsteps\tassemble_ms\tfactorize_ms\tsolve_ms\tstep_ms\timplicit_mcf_ms\tratio\tW0/4pi\tW/4pi\tQ_mean\tQ_max\n");
     if (argc > 1) {
-        for (int i = 1; i < argc; ++i) bench_file(argv[i], steps, complex_form, reuse);
+        for (int i = 1; i < argc; ++i) bench_file(argv[i], steps, complex_form, reuse, fairing);
         return 0;
     }
     const char *dir = getenv("CURVFLOW_SHARED_DIR");
@@ -133,7 +141,7 @@ int main(int argc, char **argv)
             continue;
         }
         fclose(fp);
-        bench_file(path, steps, complex_form, reuse);
+        bench_file(path, steps, complex_form, reuse, fairing);
     }
     return 0;
 }

@@ -190,9 +190,10 @@ CF_API void cf_spectral_filter_destroy(cf_spectral_filter **f);
  * moved s times as far. An eigenvector of L0 with eigenvalue mu is damped by
  * 1 / (1 + kappa mu): for kappa of order one the modes that change sign from
  * one vertex to the next (mu of order one) are damped, smooth ones
- * (mu ~ 1 / nv) are not. The analysis is made once; a new kappa refactorises
- * (a scalar matrix of L0's pattern). Used by spin-willmore (docs/spin.md,
- * "Vertex-scale fairing"). */
+ * (mu ~ 1 / nv) are not. Solved by conjugate gradients preconditioned with
+ * the diagonal, to a relative residual of 1e-12 of the change per
+ * coordinate (no factorisation is kept: any kappa costs the same). Used by
+ * spin-willmore (docs/spin.md, "Vertex-scale fairing"). */
 typedef struct cf_vertex_fairing cf_vertex_fairing;
 /* positions: 3 nv, the reference surface of L0 (NULL: rest positions);
  * hold_boundary: nonzero keeps boundary vertices in place. Statuses:
@@ -200,11 +201,14 @@ typedef struct cf_vertex_fairing cf_vertex_fairing;
 CF_API cf_status cf_vertex_fairing_create(cf_context *ctx, const cf_mesh *mesh, const double *positions,
                                           int32_t hold_boundary, cf_vertex_fairing **out);
 /* out = the faired positions of in (3 nv each, interleaved; out may equal
- * in). kappa >= 0 (0: a copy). timings (may be NULL) accumulates the
- * factorise / solve seconds. Statuses: CF_ERR_INVALID_ARG (kappa negative or
- * not finite), solver errors (CF_ERR_NUMERICAL for non-finite input). */
+ * in). kappa >= 0 (0: a copy). timings (may be NULL) accumulates the solve
+ * seconds. Statuses: CF_ERR_INVALID_ARG (kappa negative or not finite),
+ * CF_ERR_NUMERICAL (a position of in, or of the result, not finite, named),
+ * CF_ERR_NOT_CONVERGED (2000 iterations; not seen on any test mesh). */
 CF_API cf_status cf_vertex_fairing_apply(cf_vertex_fairing *f, double kappa, const double *in, double *out,
                                          cf_solver_timings *timings);
+/* Conjugate-gradient iterations of the last apply (0 for kappa 0). */
+CF_API int32_t cf_vertex_fairing_iterations(const cf_vertex_fairing *f);
 CF_API void cf_vertex_fairing_destroy(cf_vertex_fairing **f);
 
 typedef enum cf_mass_kind {

@@ -10,6 +10,12 @@
  * (mu of order one) are damped and smooth ones (mu ~ 1 / nv) pass. Written
  * for spin-willmore's vertex-scale fairing (docs/spin.md, "Vertex-scale
  * fairing"); conventions: curvflow/ops.h.
+ *
+ * Solved by conjugate gradients with the diagonal as preconditioner, x, y
+ * and z at once: I + kappa L0 is well conditioned for the kappa of a
+ * fairing (the identity dominates every smooth mode), so no factorisation
+ * is kept; a factor would cost as much memory as the position recovery's
+ * (0.4 GB at 655k vertices, docs/memory.md) and a new one for every kappa.
  */
 #include "curvflow/ops.h"
 #include "mesh/mesh_internal.h"
@@ -17,27 +23,20 @@
 #include <math.h>
 #include <string.h>
 
+/* relative residual per coordinate at which the iteration stops, and its bound */
+#define CFI_FAIRING_TOLERANCE 1e-12
+#define CFI_FAIRING_MAX_ITERATIONS 2000
+
 struct cf_vertex_fairing {
     cf_context *ctx;
-    int32_t nv, known_count;
-    cf_sparse *a;          /* I + kappa L0 (L0's pattern, both triangles) */
-    double *l0;            /* L0's values, in a's slots */
-    int64_t *diag_slot;    /* nv */
-    cf_cholesky *chol;     /* nothing held */
-    cf_min_quad *quad;     /* held vertices: the free block */
-    int32_t *known;        /* known_count vertices */
-    double *y;             /* 3 known_count, column-major */
-    double *rhs, *sol;     /* 3 nv each, column-major */
-    double kappa;          /* of the current factorisation (0: none yet) */
+    int32_t nv;
+    cf_sparse *l0;         /* L0 (both triangles) */
+    uint8_t *held;         /* nv: 1 = held at its input position */
+    double *diag;          /* nv: L0's diagonal */
+    double *r, *p, *q;     /* 3 nv each, interleaved like the positions */
+    double *minv;          /* nv: the preconditioner 1 / (1 + kappa L0_ii), 0 where held */
+    int32_t iterations;    /* of the last apply */
 };
-
-/* a = I + kappa L0 */
-static void fill(cf_vertex_fairing *f, double kappa)
-{
-    int64_t nnz = cf_sparse_nnz(f->a);
-    for (int64_t p = 0; p < nnz; ++p) f->a->values[p] = kappa * f->l0[p];
-    for (int32_t i = 0; i < f->nv; ++i) f->a->values[f->diag_slot[i]] += 1.0;
-}
 
 cf_status cf_vertex_fairing_create(cf_context *ctx, const cf_mesh *mesh, const double *positions, int32_t hold_boundary,
                                    cf_vertex_fairing **out)
@@ -50,58 +49,58 @@ cf_status cf_vertex_fairing_create(cf_context *ctx, const cf_mesh *mesh, const d
     if (!f) return CF_ERR_NOMEM;
     f->ctx = ctx;
     f->nv = mesh->nv;
-    int32_t known = 0;
-    if (hold_boundary)
-        for (int32_t i = 0; i < mesh->nv; ++i) known += mesh->vertex_on_boundary[i] != 0;
-    f->known_count = known;
-    cf_status st = cf_cotan_laplacian(ctx, mesh, positions, &f->a);
-    if (st != CF_OK) goto fail;
-    int64_t nnz = cf_sparse_nnz(f->a);
-    f->l0 = CFI_ALLOC(ctx, double, nnz);
-    f->diag_slot = CFI_ALLOC(ctx, int64_t, f->nv);
-    f->rhs = CFI_ALLOC(ctx, double, 3 * (int64_t)f->nv);
-    f->sol = CFI_ALLOC(ctx, double, 3 * (int64_t)f->nv);
-    if (known > 0) {
-        f->known = CFI_ALLOC(ctx, int32_t, known);
-        f->y = CFI_ALLOC(ctx, double, 3 * (int64_t)known);
+    int64_t n3 = 3 * (int64_t)f->nv;
+    f->held = CFI_ALLOC(ctx, uint8_t, f->nv);
+    f->diag = CFI_ALLOC(ctx, double, f->nv);
+    f->r = CFI_ALLOC(ctx, double, n3);
+    f->minv = CFI_ALLOC(ctx, double, f->nv);
+    f->p = CFI_ALLOC(ctx, double, n3);
+    f->q = CFI_ALLOC(ctx, double, n3);
+    cf_status st = CF_ERR_NOMEM;
+    if (f->held && f->diag && f->r && f->minv && f->p && f->q) st = cf_cotan_laplacian(ctx, mesh, positions, &f->l0);
+    if (st != CF_OK) {
+        cf_vertex_fairing_destroy(&f);
+        return st;
     }
-    if (!f->l0 || !f->diag_slot || !f->rhs || !f->sol || (known > 0 && (!f->known || !f->y))) {
-        st = CF_ERR_NOMEM;
-        goto fail;
-    }
-    memcpy(f->l0, f->a->values, (size_t)nnz * sizeof(double));
     for (int32_t i = 0; i < f->nv; ++i) {
-        f->diag_slot[i] = cf_sparse_find(f->a, i, i);
-        if (CF_NEVER(f->diag_slot[i] < 0)) {
-            st = cfi_error(ctx, CF_ERR_NUMERICAL, "vertex_fairing: vertex %d has no diagonal entry", i);
-            goto fail;
-        }
+        f->held[i] = hold_boundary && mesh->vertex_on_boundary[i];
+        f->diag[i] = 0.0;
     }
-    known = 0;
-    if (f->known)
-        for (int32_t i = 0; i < mesh->nv; ++i)
-            if (mesh->vertex_on_boundary[i]) f->known[known++] = i;
-    if (f->known_count == f->nv) {
-        /* nothing is free: apply copies */
-    } else if (f->known_count == 0) {
-        cf_cholesky_options co;
-        cf_cholesky_options_default(&co);
-        st = cf_cholesky_create(ctx, f->a, &co, &f->chol);
-    } else {
-        /* cf_min_quad analyses and factorises at once: with kappa = 1 */
-        fill(f, 1.0);
-        cf_min_quad_options mo;
-        cf_min_quad_options_default(&mo);
-        mo.max_rhs = 3;
-        st = cf_min_quad_create(ctx, f->a, f->known_count, f->known, NULL, &mo, &f->quad);
-        if (st == CF_OK) f->kappa = 1.0;
-    }
-    if (st != CF_OK) goto fail;
+    const cf_sparse *l = f->l0;
+    for (int32_t j = 0; j < l->ncols; ++j)
+        for (int32_t k = l->colptr[j]; k < l->colptr[j + 1]; ++k)
+            if (l->rowind[k] == j) f->diag[j] += l->values[k];
     *out = f;
     return CF_OK;
-fail:
-    cf_vertex_fairing_destroy(&f);
-    return st;
+}
+
+/* q = (I + kappa L0) p on the free vertices (p's held entries are 0 and
+ * stay 0; q's are set to 0), and pq[c] = p . q per coordinate. L0 is
+ * symmetric, so column i of its CSC form is row i. */
+static void multiply(const cf_vertex_fairing *f, double kappa, const double *p, double *q, double pq[3])
+{
+    const cf_sparse *l = f->l0;
+    pq[0] = pq[1] = pq[2] = 0.0;
+    for (int32_t i = 0; i < f->nv; ++i) {
+        double *qi = q + 3 * (int64_t)i;
+        if (f->held[i]) {
+            qi[0] = qi[1] = qi[2] = 0.0;
+            continue;
+        }
+        double s[3] = {0.0, 0.0, 0.0};
+        for (int32_t k = l->colptr[i]; k < l->colptr[i + 1]; ++k) {
+            const double *pk = p + 3 * (int64_t)l->rowind[k];
+            double a = l->values[k];
+            s[0] += a * pk[0];
+            s[1] += a * pk[1];
+            s[2] += a * pk[2];
+        }
+        const double *pi = p + 3 * (int64_t)i;
+        for (int c = 0; c < 3; ++c) {
+            qi[c] = pi[c] + kappa * s[c];
+            pq[c] += pi[c] * qi[c];
+        }
+    }
 }
 
 cf_status cf_vertex_fairing_apply(cf_vertex_fairing *f, double kappa, const double *in, double *out,
@@ -111,54 +110,96 @@ cf_status cf_vertex_fairing_apply(cf_vertex_fairing *f, double kappa, const doub
     if (!(kappa >= 0.0) || !isfinite(kappa))
         return cfi_error(f->ctx, CF_ERR_INVALID_ARG, "vertex_fairing: kappa must be finite and >= 0, got %g", kappa);
     int32_t nv = f->nv;
-    if (kappa == 0.0 || f->known_count == nv) {
-        if (out != in) memmove(out, in, 3 * (size_t)nv * sizeof(double));
+    int64_t n3 = 3 * (int64_t)nv;
+    f->iterations = 0;
+    for (int64_t i = 0; i < n3; ++i)
+        if (!isfinite(in[i]))
+            return cfi_error(f->ctx, CF_ERR_NUMERICAL, "vertex_fairing: vertex %lld: position is not finite",
+                             (long long)(i / 3));
+    if (kappa == 0.0) {
+        if (out != in) memmove(out, in, (size_t)n3 * sizeof(double));
         return CF_OK;
     }
-    cf_status st = CF_OK;
-    if (kappa != f->kappa) {
-        double t0 = cfi_now_seconds();
-        f->kappa = 0.0; /* until the factorisation succeeds */
-        fill(f, kappa);
-        st = f->quad ? cf_min_quad_factorize(f->quad, f->a, NULL) : cf_cholesky_factorize(f->chol, f->a);
-        if (timings) timings->factorize_seconds += cfi_now_seconds() - t0;
-        if (st != CF_OK) return st;
-        f->kappa = kappa;
-    }
-    for (int c = 0; c < 3; ++c)
-        for (int32_t i = 0; i < nv; ++i) f->rhs[(int64_t)c * nv + i] = in[3 * (int64_t)i + c];
     double t0 = cfi_now_seconds();
-    if (f->quad) {
-        /* min 1/2 x^T (I + kappa L0) x - f^T x with the held values */
-        for (int32_t k = 0; k < f->known_count; ++k)
-            for (int c = 0; c < 3; ++c) f->y[(int64_t)c * f->known_count + k] = f->rhs[(int64_t)c * nv + f->known[k]];
-        for (int64_t i = 0; i < 3 * (int64_t)nv; ++i) f->rhs[i] = -f->rhs[i];
-        st = cf_min_quad_solve(f->quad, 3, f->rhs, f->y, NULL, f->sol);
-    } else {
-        st = cf_cholesky_solve(f->chol, 3, f->rhs, f->sol);
+    /* The unknown is the change d = out - in, with (I + kappa L0) d =
+     * -kappa L0 in on the free vertices (held ones do not move), so that the
+     * tolerance is relative to the change, whatever the coordinates'
+     * offset. Preconditioner: the diagonal 1 + kappa L0_ii. */
+    double *r = f->r, *p = f->p, *q = f->q, *minv = f->minv;
+    double bnorm[3] = {0, 0, 0}, rz[3] = {0, 0, 0};
+    multiply(f, kappa, in, r, bnorm); /* r = (I + kappa L0) in, then r - in below */
+    for (int32_t i = 0; i < nv; ++i) {
+        minv[i] = f->held[i] ? 0.0 : 1.0 / (1.0 + kappa * f->diag[i]);
+        for (int c = 0; c < 3; ++c) {
+            double ri = f->held[i] ? 0.0 : in[3 * i + c] - r[3 * i + c];
+            r[3 * i + c] = ri;
+            p[3 * i + c] = minv[i] * ri;
+            rz[c] += ri * p[3 * i + c];
+        }
     }
+    for (int c = 0; c < 3; ++c) bnorm[c] = 0.0;
+    for (int64_t i = 0; i < n3; i += 3)
+        for (int c = 0; c < 3; ++c) bnorm[c] += r[i + c] * r[i + c];
+    if (out != in) memmove(out, in, (size_t)n3 * sizeof(double));
+    int done[3];
+    for (int c = 0; c < 3; ++c) done[c] = !(bnorm[c] > 0.0);
+    int32_t it = 0;
+    while (!(done[0] && done[1] && done[2])) {
+        if (it >= CFI_FAIRING_MAX_ITERATIONS) {
+            f->iterations = it;
+            if (timings) timings->solve_seconds += cfi_now_seconds() - t0;
+            return cfi_error(f->ctx, CF_ERR_NOT_CONVERGED,
+                             "vertex_fairing: conjugate gradients did not converge in %d iterations (kappa %g)", it,
+                             kappa);
+        }
+        ++it;
+        double pq[3], alpha[3], rr[3] = {0, 0, 0}, rz_new[3] = {0, 0, 0};
+        multiply(f, kappa, p, q, pq);
+        for (int c = 0; c < 3; ++c) alpha[c] = done[c] || !(pq[c] > 0.0) ? 0.0 : rz[c] / pq[c];
+        for (int32_t i = 0; i < nv; ++i)
+            for (int c = 0; c < 3; ++c) {
+                int64_t k = 3 * (int64_t)i + c;
+                out[k] += alpha[c] * p[k];
+                r[k] -= alpha[c] * q[k];
+                rr[c] += r[k] * r[k];
+                rz_new[c] += r[k] * r[k] * minv[i];
+            }
+        double beta[3];
+        for (int c = 0; c < 3; ++c) {
+            if (!(rr[c] > CFI_FAIRING_TOLERANCE * CFI_FAIRING_TOLERANCE * bnorm[c])) done[c] = 1;
+            beta[c] = rz[c] > 0.0 ? rz_new[c] / rz[c] : 0.0;
+            rz[c] = rz_new[c];
+        }
+        for (int32_t i = 0; i < nv; ++i)
+            for (int c = 0; c < 3; ++c) {
+                int64_t k = 3 * (int64_t)i + c;
+                p[k] = minv[i] * r[k] + beta[c] * p[k];
+            }
+    }
+    f->iterations = it;
     if (timings) timings->solve_seconds += cfi_now_seconds() - t0;
-    if (st != CF_OK) return st;
-    for (int c = 0; c < 3; ++c)
-        for (int32_t i = 0; i < nv; ++i) out[3 * (int64_t)i + c] = f->sol[(int64_t)c * nv + i];
+    for (int64_t i = 0; i < n3; ++i)
+        if (!isfinite(out[i]))
+            return cfi_error(f->ctx, CF_ERR_NUMERICAL, "vertex_fairing: vertex %lld: result is not finite",
+                             (long long)(i / 3));
     return CF_OK;
 }
+
+int32_t cf_vertex_fairing_iterations(const cf_vertex_fairing *f) { return f ? f->iterations : 0; }
 
 void cf_vertex_fairing_destroy(cf_vertex_fairing **fp)
 {
     if (!fp || !*fp) return;
     cf_vertex_fairing *f = *fp;
     cf_context *ctx = f->ctx;
-    int64_t nnz = f->a ? cf_sparse_nnz(f->a) : 0;
-    cf_sparse_destroy(&f->a);
-    cf_cholesky_destroy(&f->chol);
-    cf_min_quad_destroy(&f->quad);
-    if (f->l0) CFI_FREE(ctx, f->l0, nnz);
-    if (f->diag_slot) CFI_FREE(ctx, f->diag_slot, f->nv);
-    if (f->rhs) CFI_FREE(ctx, f->rhs, 3 * (int64_t)f->nv);
-    if (f->sol) CFI_FREE(ctx, f->sol, 3 * (int64_t)f->nv);
-    if (f->known) CFI_FREE(ctx, f->known, f->known_count);
-    if (f->y) CFI_FREE(ctx, f->y, 3 * (int64_t)f->known_count);
+    int64_t n3 = 3 * (int64_t)f->nv;
+    cf_sparse_destroy(&f->l0);
+    if (f->held) CFI_FREE(ctx, f->held, f->nv);
+    if (f->diag) CFI_FREE(ctx, f->diag, f->nv);
+    if (f->r) CFI_FREE(ctx, f->r, n3);
+    if (f->minv) CFI_FREE(ctx, f->minv, f->nv);
+    if (f->p) CFI_FREE(ctx, f->p, n3);
+    if (f->q) CFI_FREE(ctx, f->q, n3);
     CFI_FREE(ctx, f, 1);
     *fp = NULL;
 }

@@ -519,28 +519,52 @@ static cf_status place(cf_flow *flow, const cfi_spin_state *s, const placement *
     return CF_OK;
 }
 
-/* After the geometry of the recovered positions x (s->energy is their W):
- * the faired candidate (s->faired) replaces them if its W is lower; a
- * candidate that is not finite or has a degenerate face is not taken. The
- * geometry in s is that of the positions kept. */
+/* W of candidate positions p into *w (NAN when they are not finite or have
+ * a degenerate face: such a candidate is not taken); *touched: s's geometry
+ * was refilled (for p, or partly when that failed). */
+static cf_status candidate_energy(cf_flow *flow, cfi_spin_state *s, const double *p, double *w, int *touched)
+{
+    *w = NAN;
+    *touched = 0;
+    for (int32_t i = 0; i < 3 * flow->mesh->nv; ++i)
+        if (!isfinite(p[i])) return CF_OK;
+    *touched = 1;
+    cf_status st = cfi_spin_update_geometry(flow, s, p);
+    if (st == CF_OK) *w = s->energy;
+    else if (st == CF_ERR_DEGENERATE_FACE || st == CF_ERR_NUMERICAL) cf_context_clear_error(flow->ctx);
+    else return st;
+    return CF_OK;
+}
+
+/* The recovered positions x or the faired candidate (s->faired), whichever
+ * has the lower W, into x, with s's geometry that of the positions kept.
+ * The one that won the previous attempt is evaluated last, so that the
+ * geometry need not be made a third time when it wins again. A failure of
+ * x's own geometry fails the attempt, as without the fairing. */
 static cf_status keep_lower(cf_flow *flow, cfi_spin_state *s, double *x)
 {
     int32_t nv = flow->mesh->nv;
-    s->diag.plain_energy = s->energy;
-    s->diag.fairing_energy = NAN;
-    for (int32_t i = 0; i < 3 * nv; ++i)
-        if (!isfinite(s->faired[i])) return CF_OK;
-    cf_status st = cfi_spin_update_geometry(flow, s, s->faired);
-    if (st == CF_OK) s->diag.fairing_energy = s->energy;
-    else if (st == CF_ERR_DEGENERATE_FACE || st == CF_ERR_NUMERICAL) cf_context_clear_error(flow->ctx);
-    else return st;
-    if (st == CF_OK && s->energy < s->diag.plain_energy) {
-        memcpy(x, s->faired, 3 * (size_t)nv * sizeof(double));
-        s->diag.fairing_kept = 1;
-        return CF_OK;
+    double w_faired = NAN;
+    int touched = 0, geometry_is_faired = 0;
+    cf_status st = CF_OK;
+    if (s->faired_won) {
+        st = cfi_spin_update_geometry(flow, s, x);
+        s->diag.plain_energy = s->energy;
+        if (st == CF_OK) st = candidate_energy(flow, s, s->faired, &w_faired, &touched);
+        geometry_is_faired = touched;
+    } else {
+        st = candidate_energy(flow, s, s->faired, &w_faired, &touched);
+        if (st == CF_OK) st = cfi_spin_update_geometry(flow, s, x);
+        s->diag.plain_energy = s->energy;
     }
-    s->diag.fairing_kept = 0;
-    return cfi_spin_update_geometry(flow, s, x);
+    if (st != CF_OK) return st;
+    s->diag.fairing_energy = w_faired;
+    s->diag.fairing_kept = s->faired_won = w_faired < s->diag.plain_energy;
+    if (s->diag.fairing_kept) {
+        memcpy(x, s->faired, 3 * (size_t)nv * sizeof(double));
+        return geometry_is_faired ? CF_OK : cfi_spin_update_geometry(flow, s, x);
+    }
+    return geometry_is_faired ? cfi_spin_update_geometry(flow, s, x) : CF_OK;
 }
 
 cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, cfi_spin_too_large *too_large,
@@ -606,14 +630,19 @@ cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, cf
      * fairing"): kappa in proportion to tau, so that a step still tends to
      * the identity as tau -> 0 */
     double kappa = s->fairing ? s->opt.fairing * tau : 0.0;
-    s->diag.fairing_kappa = kappa;
     if (kappa > 0.0) {
         cf_solver_timings ft = {0.0, 0.0, 0.0};
         st = cf_vertex_fairing_apply(s->fairing, kappa, s->newpos, s->faired, &ft);
-        t->factorize += ft.factorize_seconds;
         t->solve += ft.solve_seconds;
+        if (st == CF_ERR_NOT_CONVERGED) {
+            /* no candidate this attempt (never seen on a test mesh) */
+            cf_context_clear_error(ctx);
+            kappa = 0.0;
+            st = CF_OK;
+        }
         if (st != CF_OK) return st;
     }
+    s->diag.fairing_kappa = kappa;
     /* fix translation (and the scale, if asked): Willmore energy is invariant under both */
     placement pl;
     st = start_placement(flow, s, x, &pl);
@@ -624,8 +653,7 @@ cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, cf
         if (!isfinite(x[i])) return cfi_error(ctx, CF_ERR_NUMERICAL, "vertex %d: position is not finite", i / 3);
 
     ta = cfi_now_seconds();
-    st = cfi_spin_update_geometry(flow, s, x);
-    if (st == CF_OK && kappa > 0.0) st = keep_lower(flow, s, x);
+    st = kappa > 0.0 ? keep_lower(flow, s, x) : cfi_spin_update_geometry(flow, s, x);
     t->assemble += cfi_now_seconds() - ta;
     return st;
 }

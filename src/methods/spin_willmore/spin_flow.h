@@ -45,6 +45,7 @@ typedef struct cfi_spin_state {
     cf_spectral_filter *filter; /* sigma > 0: the spectral filter of the input (Sec. 4; curvflow/ops.h) */
     cf_vertex_fairing *fairing; /* fairing > 0 (not prescribed / cmc): the vertex-scale fairing (curvflow/ops.h) */
     double *faired;          /* 3 nv: the faired candidate of an attempt (fairing only) */
+    int32_t faired_won;      /* the faired candidate had the lower W in the last attempt */
     int32_t harmonic_dim;    /* dim H^1 (2g + b - 1 with boundary) if the exactness constraint is active */
     int32_t linearized;      /* exactness by the discrete linearisation instead of App. C's Z_i */
     int32_t period_newton;   /* closed, genus > 0, linearised, period_iterations > 0: the Newton

@@ -481,16 +481,15 @@ typedef struct placement {
     double total;       /* sum of s->area */
 } placement;
 
-static cf_status start_placement(const cf_flow *flow, const cfi_spin_state *s, const double *x, placement *pl)
+static void start_placement(const cf_flow *flow, const cfi_spin_state *s, const double *x, placement *pl)
 {
     memset(pl, 0, sizeof *pl);
-    if (s->fixed_boundary) return CF_OK;
+    if (s->fixed_boundary) return;
     for (int32_t i = 0; i < flow->mesh->nv; ++i) {
         pl->total += s->area[i];
         for (int c = 0; c < 3; ++c) pl->centroid[c] += s->area[i] * x[3 * i + c];
     }
     for (int c = 0; c < 3; ++c) pl->centroid[c] /= pl->total;
-    return CF_OK;
 }
 
 /* dst = src moved to the start's centroid (weights s->area) and scaled to
@@ -645,8 +644,8 @@ cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, cf
     s->diag.fairing_kappa = kappa;
     /* fix translation (and the scale, if asked): Willmore energy is invariant under both */
     placement pl;
-    st = start_placement(flow, s, x, &pl);
-    if (st == CF_OK) st = place(flow, s, &pl, s->newpos, x);
+    start_placement(flow, s, x, &pl);
+    st = place(flow, s, &pl, s->newpos, x);
     if (st == CF_OK && kappa > 0.0) st = place(flow, s, &pl, s->faired, s->faired);
     if (st != CF_OK) return st;
     for (int32_t i = 0; i < 3 * nv; ++i)

@@ -17,7 +17,10 @@
  *        (Sec. 6.3.1), or the Dirichlet solve of Sec. 6.3.2 for a fixed
  *        boundary;
  *   VI.  transformed edges and the cotan Poisson problem (Eq. (6)), by
- *        default in the metric of the starting surface (input_metric).
+ *        default in the metric of the starting surface (input_metric); then
+ *        the vertex-scale fairing's candidate (I + fairing tau L0)^-1 x,
+ *        kept when its W is lower (option `fairing`; the paper is silent:
+ *        docs/spin.md, "Vertex-scale fairing").
  * With `adaptive`, the flow layer's step policy redoes IV-VI with tau
  * halved while W would rise (methods/flow.c, cf_flow_step); when its last
  * retry would stall, VI in the current metric is tried first (step_policy.c).
@@ -641,12 +644,15 @@ cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, cf
         }
         if (st != CF_OK) return st;
     }
-    s->diag.fairing_kappa = kappa;
     /* fix translation (and the scale, if asked): Willmore energy is invariant under both */
     placement pl;
     start_placement(flow, s, x, &pl);
+    if (kappa > 0.0 && place(flow, s, &pl, s->faired, s->faired) != CF_OK) {
+        cf_context_clear_error(ctx); /* a candidate of no area is no candidate */
+        kappa = 0.0;
+    }
+    s->diag.fairing_kappa = kappa;
     st = place(flow, s, &pl, s->newpos, x);
-    if (st == CF_OK && kappa > 0.0) st = place(flow, s, &pl, s->faired, s->faired);
     if (st != CF_OK) return st;
     for (int32_t i = 0; i < 3 * nv; ++i)
         if (!isfinite(x[i])) return cfi_error(ctx, CF_ERR_NUMERICAL, "vertex %d: position is not finite", i / 3);

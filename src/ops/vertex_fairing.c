@@ -64,19 +64,16 @@ cf_status cf_vertex_fairing_create(cf_context *ctx, const cf_mesh *mesh, const d
     }
     for (int32_t i = 0; i < f->nv; ++i) {
         f->held[i] = hold_boundary && mesh->vertex_on_boundary[i];
-        f->diag[i] = 0.0;
+        int64_t slot = cf_sparse_find(f->l0, i, i);
+        f->diag[i] = slot >= 0 ? f->l0->values[slot] : 0.0;
     }
-    const cf_sparse *l = f->l0;
-    for (int32_t j = 0; j < l->ncols; ++j)
-        for (int32_t k = l->colptr[j]; k < l->colptr[j + 1]; ++k)
-            if (l->rowind[k] == j) f->diag[j] += l->values[k];
     *out = f;
     return CF_OK;
 }
 
-/* q = (I + kappa L0) p on the free vertices (p's held entries are 0 and
- * stay 0; q's are set to 0), and pq[c] = p . q per coordinate. L0 is
- * symmetric, so column i of its CSC form is row i. */
+/* q = (I + kappa L0) p on the free vertices (q's held entries set to 0;
+ * in the iteration p's held entries are 0 and stay 0), and pq[c] = p . q
+ * per coordinate. L0 is symmetric, so column i of its CSC form is row i. */
 static void multiply(const cf_vertex_fairing *f, double kappa, const double *p, double *q, double pq[3])
 {
     const cf_sparse *l = f->l0;
@@ -126,8 +123,10 @@ cf_status cf_vertex_fairing_apply(cf_vertex_fairing *f, double kappa, const doub
      * tolerance is relative to the change, whatever the coordinates'
      * offset. Preconditioner: the diagonal 1 + kappa L0_ii. */
     double *r = f->r, *p = f->p, *q = f->q, *minv = f->minv;
-    double bnorm[3] = {0, 0, 0}, rz[3] = {0, 0, 0};
-    multiply(f, kappa, in, r, bnorm); /* r = (I + kappa L0) in, then r - in below */
+    double bnorm[3] = {0, 0, 0}, rz[3] = {0, 0, 0}, unused[3];
+    /* r = (I + kappa L0) in on the free rows, then in - r below; in's held
+     * entries couple into the free rows, as they must (they stay put) */
+    multiply(f, kappa, in, r, unused);
     for (int32_t i = 0; i < nv; ++i) {
         minv[i] = f->held[i] ? 0.0 : 1.0 / (1.0 + kappa * f->diag[i]);
         for (int c = 0; c < 3; ++c) {
@@ -135,11 +134,9 @@ cf_status cf_vertex_fairing_apply(cf_vertex_fairing *f, double kappa, const doub
             r[3 * i + c] = ri;
             p[3 * i + c] = minv[i] * ri;
             rz[c] += ri * p[3 * i + c];
+            bnorm[c] += ri * ri;
         }
     }
-    for (int c = 0; c < 3; ++c) bnorm[c] = 0.0;
-    for (int64_t i = 0; i < n3; i += 3)
-        for (int c = 0; c < 3; ++c) bnorm[c] += r[i + c] * r[i + c];
     if (out != in) memmove(out, in, (size_t)n3 * sizeof(double));
     int done[3];
     for (int c = 0; c < 3; ++c) done[c] = !(bnorm[c] > 0.0);

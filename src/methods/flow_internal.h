@@ -68,11 +68,13 @@ typedef struct cfi_flow_method {
     /* Optional, with attempt: at a stall (no attempt down to the policy's
      * limit accepted), the method may switch the rest of this step to
      * another variant of its attempt and set *switched; the layer then
-     * restarts the step's halvings from the full step, once per step. The
-     * method goes back to its first variant in begin_step. The layer has put
-     * back the step's start (revert) before the call. May allocate, on its
-     * first use only (state it keeps for the flow's life). */
-    cf_status (*fallback)(cf_flow *flow, int32_t *switched);
+     * restarts the step's halvings, once per step, from *restart_step
+     * (set to the full step before the call; the method may lower it, e.g.
+     * to where the variant's last step was accepted). The method goes back
+     * to its first variant in begin_step. The layer has put back the step's
+     * start (revert) before the call. May allocate, on its first use only
+     * (state it keeps for the flow's life). */
+    cf_status (*fallback)(cf_flow *flow, int32_t *switched, double *restart_step);
     void (*destroy)(cf_flow *flow);
     /* Which checks of the shared step policy apply (methods/step_policy.h);
      * left out (all zero): none, the method accepts its own steps. */

@@ -714,14 +714,20 @@ cf_status cfi_spin_attempt(cf_flow *flow, double tau, cf_flow_info *info, cfi_st
  * or was rejected): where the input metric's least-squares recovery no
  * longer descends, the current metric's still does (docs/spin.md,
  * "Robustness"), so the rest of the step recovers positions in the metric
- * of the step's start, from the full step again. The current-metric solver
+ * of the step's start, from the full step again, or from four times the
+ * tau of the last step if that step needed this metric too. The current-metric solver
  * is made here on first use: most flows never stall, and at 655k vertices
  * it would cost ~100 MB from creation on (docs/memory.md). */
-cf_status cfi_spin_fallback(cf_flow *flow, int32_t *switched)
+cf_status cfi_spin_fallback(cf_flow *flow, int32_t *switched, double *restart_step)
 {
     cfi_spin_state *s = flow->impl;
     *switched = 0;
     if (!s->stall_retry || s->current_metric_step) return CF_OK;
+    /* where the last step already needed this metric, its tau is the
+     * better guess than the full step: restart two doublings above it
+     * (bull_6k, steps 6-9: 2-3 retries instead of 8-9; docs/spin.md,
+     * "Stalls of the input-metric recovery") */
+    if (s->fallback_step > 0.0) *restart_step = 4.0 * s->fallback_step;
     if (!s->poisson) {
         /* the layer has reverted to the step's start: its metric, and from
          * now on H from the solver's Laplacian (the same values as s->lap) */
@@ -779,6 +785,8 @@ cf_status cfi_spin_end_step(cf_flow *flow, cf_flow_info *info)
      * stall the last rejected attempt's figures, an overestimate */
     s->x0_scale_since += s->diag.scale_change;
     s->x0_period_first = s->diag.period_error_first;
+    s->diag.current_metric = s->current_metric_step;
+    s->fallback_step = s->current_metric_step && !flow->converged ? info->time_step : 0.0;
     return CF_OK;
 }
 
@@ -788,6 +796,7 @@ cf_status cfi_spin_reset(cf_flow *flow)
     if (!s) return CF_OK;
     flow->converged = 0;
     s->x0_factored = 0; /* new positions: X(0) of the old ones is no guide */
+    s->fallback_step = 0.0;
     cf_status st = cfi_spin_update_geometry(flow, s, flow->positions);
     /* the flow layer compares the next step's W with this one */
     flow->info.energy = s->energy;

@@ -41,6 +41,7 @@ typedef struct cfi_spin_state {
     cf_edge_poisson *poisson_input; /* input_metric: that of the starting surface, factorised once */
     int32_t stall_retry;     /* input_metric under `adaptive`: a stalled step is retried in the current
                               * metric (cfi_spin_fallback, which makes s->poisson if there is none) */
+    double fallback_step;        /* tau of the last step if it was accepted in the current metric, else 0 */
     int32_t current_metric_step; /* this attempt recovers positions with s->poisson, not poisson_input */
     cf_spectral_filter *filter; /* sigma > 0: the spectral filter of the input (Sec. 4; curvflow/ops.h) */
     cf_vertex_fairing *fairing; /* fairing > 0 (not prescribed / cmc): the vertex-scale fairing (curvflow/ops.h) */
@@ -108,7 +109,7 @@ cf_status cfi_spin_create(cf_flow *flow, const void *options);
 cf_status cfi_spin_begin_step(cf_flow *flow, cf_flow_info *info);
 cf_status cfi_spin_attempt(cf_flow *flow, double tau, cf_flow_info *info, cfi_step_verdict *verdict);
 cf_status cfi_spin_revert(cf_flow *flow);
-cf_status cfi_spin_fallback(cf_flow *flow, int32_t *switched);
+cf_status cfi_spin_fallback(cf_flow *flow, int32_t *switched, double *restart_step);
 cf_status cfi_spin_end_step(cf_flow *flow, cf_flow_info *info);
 cf_status cfi_spin_reset(cf_flow *flow);
 void cfi_spin_destroy(cf_flow *flow);

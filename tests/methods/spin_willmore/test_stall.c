@@ -23,9 +23,7 @@
 #include "methods/spin_willmore/spin_internal.h"
 #include "spin_test_util.h"
 
-#include <math.h>
 #include <stdio.h>
-#include <string.h>
 
 /* `steps` steps of spin-willmore, defaults but growth_ratio=0 (and the
  * convergence tolerance 0 if asked), on a shared mesh (spin_run_steps). 0
@@ -78,14 +76,6 @@ static void test_cow_goes_on(void)
     CHECK(r.defects == 0);
 }
 
-/* A residual of the step's report by name (NaN when absent). */
-static double residual(const cf_flow_info *info, const char *name)
-{
-    for (int r = 0; r < CF_FLOW_MAX_RESIDUALS; ++r)
-        if (info->residual_names[r] && strcmp(info->residual_names[r], name) == 0) return info->residuals[r];
-    return NAN;
-}
-
 /* bull_6k with the defaults creeps from step 5 on (its needles, docs/spin.md),
  * every step in the current metric: the retry of a step whose predecessor
  * already needed the current metric restarts at four times that step's tau
@@ -109,7 +99,7 @@ static void test_bull_retry_restarts_near_last_step(void)
             CHECK_OK(ctx, cf_flow_step(flow, &info));
             cfi_spin_diagnostics d;
             CHECK_OK(ctx, cfi_spin_willmore_diagnostics(flow, &d));
-            double halvings = residual(&info, "time_step_halvings");
+            double halvings = cft_flow_residual(&info, "time_step_halvings");
             fprintf(stderr, "   step %d: tau %.4g, halvings %.0f, current metric %d, W/4pi %.4f\n", k, info.time_step,
                     halvings, d.current_metric, cf_flow_energy(flow) / (4.0 * 3.14159265358979323846));
             CHECK_LE(cf_flow_energy(flow), before);

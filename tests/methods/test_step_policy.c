@@ -541,11 +541,10 @@ static void test_m1_flat_sheet(void)
  * divergence is still caught: test_blowup (elephant_g3_3k, +8 %). */
 static void test_m1_spot_tiny_steps(void)
 {
-    const char *path = cft_optional_shared_mesh("spot_3k.obj");
-    if (!path) return;
-    cf_context *ctx = cft_context();
-    cf_mesh *mesh = NULL;
-    CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
+    cft_shared_case shared;
+    if (!cft_shared_case_open(&shared, "spot_3k.obj", 0)) return;
+    cf_context *ctx = shared.ctx;
+    cf_mesh *mesh = shared.mesh;
     if (!mesh) { cf_context_destroy(&ctx); return; }
     const double taus[] = {1e-9, 1e-8};
     for (int t = 0; t < 2; ++t) {
@@ -569,9 +568,7 @@ static void test_m1_spot_tiny_steps(void)
         CHECK_NEAR(cf_flow_energy(flow), w0, 1e-6, 0.0);
         cf_flow_destroy(&flow);
     }
-    cf_mesh_destroy(&mesh);
-    CHECK(cf_context_bytes_in_use(ctx) == 0);
-    cf_context_destroy(&ctx);
+    cft_shared_case_close(&shared);
 }
 
 /* spin-willmore's adaptive step takes its halvings per step and growth

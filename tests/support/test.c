@@ -1,5 +1,7 @@
 #include "test.h"
 
+#include "curvflow/io.h"
+
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
@@ -95,6 +97,27 @@ cf_context *cft_context(void)
     }
     cf_context_set_log(ctx, log_to_stderr, NULL, CF_LOG_WARNING);
     return ctx;
+}
+
+int cft_shared_case_open(cft_shared_case *c, const char *name, int required)
+{
+    c->ctx = NULL;
+    c->mesh = NULL;
+    const char *path = required ? cft_require_shared_mesh(name) : cft_optional_shared_mesh(name);
+    if (!path) return 0;
+    c->ctx = cft_context();
+    CHECK_OK(c->ctx, cf_load_mesh(c->ctx, path, &c->mesh));
+    if (c->mesh) return 1;
+    cft_shared_case_close(c);
+    return 0;
+}
+
+void cft_shared_case_close(cft_shared_case *c)
+{
+    cf_mesh_destroy(&c->mesh);
+    if (!c->ctx) return;
+    CHECK(cf_context_bytes_in_use(c->ctx) == 0);
+    cf_context_destroy(&c->ctx);
 }
 
 int64_t cft_allocation_sweep(cf_context *ctx, const char *name, cft_alloc_call call, void *user, int may_recover)

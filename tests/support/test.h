@@ -57,6 +57,18 @@ double cft_flow_residual(const cf_flow_info *info, const char *name);
 #endif
 /* A context that prints library log lines to stderr. */
 cf_context *cft_context(void);
+/* A test case on one mesh of ../shared/meshes: a new context (cft_context)
+ * with the mesh loaded. cft_shared_case_open returns 0, with nothing left to
+ * close, when the mesh is absent (with `required` the whole program skips,
+ * else a SKIP line is printed) or did not load (a failed check);
+ * cft_shared_case_close destroys the mesh, checks that the context holds no
+ * bytes any more and destroys it. */
+typedef struct cft_shared_case {
+    cf_context *ctx;
+    cf_mesh *mesh;
+} cft_shared_case;
+int cft_shared_case_open(cft_shared_case *c, const char *name, int required);
+void cft_shared_case_close(cft_shared_case *c);
 /* Failure-injection sweep (STYLE.md sec. 4, as CHOLMOD's Tcov/t_memory.c).
  * `call` must free everything it creates and return the library's status
  * (and turn "failed but left an output object" into an error of its own).

@@ -20,10 +20,10 @@
 
 static void test_blowup_is_rejected(void)
 {
-    const char *path = cft_require_shared_mesh("elephant_g3_3k.obj");
-    cf_context *ctx = cft_context();
-    cf_mesh *mesh = NULL;
-    CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
+    cft_shared_case shared;
+    if (!cft_shared_case_open(&shared, "elephant_g3_3k.obj", 1)) return;
+    cf_context *ctx = shared.ctx;
+    cf_mesh *mesh = shared.mesh;
     cf_flow_options o;
     cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o);
     cf_spin_willmore_options *so = cf_flow_options_method(&o);
@@ -57,9 +57,7 @@ static void test_blowup_is_rejected(void)
     CHECK_NEAR(cf_flow_energy(flow), good_energy, 1e-12, 0.0);
     free(good);
     cf_flow_destroy(&flow);
-    cf_mesh_destroy(&mesh);
-    CHECK(cf_context_bytes_in_use(ctx) == 0);
-    cf_context_destroy(&ctx);
+    cft_shared_case_close(&shared);
 }
 
 /* A Willmore descent that creeps above its starting energy has diverged
@@ -71,11 +69,10 @@ static void test_blowup_is_rejected(void)
  * alarm. */
 static void test_divergence_is_rejected(void)
 {
-    const char *path = cft_optional_shared_mesh("elephant_g3_3k.obj");
-    if (!path) return;
-    cf_context *ctx = cft_context();
-    cf_mesh *mesh = NULL;
-    CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
+    cft_shared_case shared;
+    if (!cft_shared_case_open(&shared, "elephant_g3_3k.obj", 0)) return;
+    cf_context *ctx = shared.ctx;
+    cf_mesh *mesh = shared.mesh;
     if (!mesh) { cf_context_destroy(&ctx); return; }
     cf_flow_options o;
     cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o);
@@ -117,9 +114,7 @@ static void test_divergence_is_rejected(void)
         CHECK(cf_flow_last_info(flow)->iteration == 10);
         cf_flow_destroy(&flow);
     }
-    cf_mesh_destroy(&mesh);
-    CHECK(cf_context_bytes_in_use(ctx) == 0);
-    cf_context_destroy(&ctx);
+    cft_shared_case_close(&shared);
 }
 
 int main(void)

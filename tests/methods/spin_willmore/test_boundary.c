@@ -71,11 +71,10 @@ static void test_bumpy_plane(void)
  * 3.9e-6 at tau 1e-6 (before: 8.0e-3 at both). */
 static void test_fixed_boundary_consistent(void)
 {
-    const char *path = cft_optional_shared_mesh("mushroom_cap_2k.obj");
-    if (!path) return;
-    cf_context *ctx = cft_context();
-    cf_mesh *mesh = NULL;
-    CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
+    cft_shared_case shared;
+    if (!cft_shared_case_open(&shared, "mushroom_cap_2k.obj", 0)) return;
+    cf_context *ctx = shared.ctx;
+    cf_mesh *mesh = shared.mesh;
     double drift[2];
     const double taus[2] = {1e-5, 1e-6};
     for (int k = 0; k < 2; ++k) {
@@ -94,25 +93,20 @@ static void test_fixed_boundary_consistent(void)
     fprintf(stderr, "   fixed boundary, one step: |area drift| %.2e at tau 1e-5, %.2e at tau 1e-6\n", drift[0], drift[1]);
     CHECK_LE(drift[0], 2e-4);
     CHECK_LE(drift[1], 0.2 * drift[0]);   /* O(tau) */
-    cf_mesh_destroy(&mesh);
-    CHECK(cf_context_bytes_in_use(ctx) == 0);
-    cf_context_destroy(&ctx);
+    cft_shared_case_close(&shared);
 }
 
 static void test_mushroom_cap(void)
 {
-    const char *path = cft_optional_shared_mesh("mushroom_cap_2k.obj");
-    if (!path) return;
-    cf_context *ctx = cft_context();
-    cf_mesh *mesh = NULL;
-    CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
+    cft_shared_case shared;
+    if (!cft_shared_case_open(&shared, "mushroom_cap_2k.obj", 0)) return;
+    cf_context *ctx = shared.ctx;
+    cf_mesh *mesh = shared.mesh;
     double w0 = 0, w = 0;
     check_fixed(ctx, mesh, 5, &w0, &w);
     fprintf(stderr, "   mushroom cap: W/4pi %.4g -> %.4g\n", w0 / (4 * 3.14159265358979323846), w / (4 * 3.14159265358979323846));
     CHECK_LE(w, 0.1 * w0);   /* measured 5.52 -> 0.035 */
-    cf_mesh_destroy(&mesh);
-    CHECK(cf_context_bytes_in_use(ctx) == 0);
-    cf_context_destroy(&ctx);
+    cft_shared_case_close(&shared);
 }
 
 /* Mean unit binormal direction of boundary loop b (B = T x N as in the flow). */
@@ -425,11 +419,10 @@ static double h_spread(cf_context *ctx, const cf_mesh *mesh, const double *x)
  * constant-mean-curvature surface: the spread of H drops. */
 static void test_cmc(void)
 {
-    const char *path = cft_optional_shared_mesh("mushroom_cap_2k.obj");
-    if (!path) return;
-    cf_context *ctx = cft_context();
-    cf_mesh *mesh = NULL;
-    CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
+    cft_shared_case shared;
+    if (!cft_shared_case_open(&shared, "mushroom_cap_2k.obj", 0)) return;
+    cf_context *ctx = shared.ctx;
+    cf_mesh *mesh = shared.mesh;
     cf_flow_options o;
     CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o));
     CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "boundary", "cmc"));
@@ -445,9 +438,7 @@ static void test_cmc(void)
     fprintf(stderr, "  (start %.4f)\n", s0);
     CHECK_LE(s1, 0.2 * s0);   /* measured 3.69 -> 0.43 */
     cf_flow_destroy(&flow);
-    cf_mesh_destroy(&mesh);
-    CHECK(cf_context_bytes_in_use(ctx) == 0);
-    cf_context_destroy(&ctx);
+    cft_shared_case_close(&shared);
 }
 
 /* Free (natural) boundary on the mushroom cap: W decreases monotonically for
@@ -455,11 +446,10 @@ static void test_cmc(void)
  * this needs the eigenproblem shift of spin_internal.h. */
 static void test_free_disk(void)
 {
-    const char *path = cft_optional_shared_mesh("mushroom_cap_2k.obj");
-    if (!path) return;
-    cf_context *ctx = cft_context();
-    cf_mesh *mesh = NULL;
-    CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
+    cft_shared_case shared;
+    if (!cft_shared_case_open(&shared, "mushroom_cap_2k.obj", 0)) return;
+    cf_context *ctx = shared.ctx;
+    cf_mesh *mesh = shared.mesh;
     cf_flow_options o;
     CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o));
     cf_flow *flow = NULL;
@@ -474,9 +464,7 @@ static void test_free_disk(void)
     fprintf(stderr, "   free disk: W/4pi %.4g -> %.4g\n", w0 / (4 * 3.14159265358979323846), w / (4 * 3.14159265358979323846));
     CHECK_LE(w, 0.05 * w0);   /* measured 5.52 -> 0.139 */
     cf_flow_destroy(&flow);
-    cf_mesh_destroy(&mesh);
-    CHECK(cf_context_bytes_in_use(ctx) == 0);
-    cf_context_destroy(&ctx);
+    cft_shared_case_close(&shared);
 }
 
 int main(void)

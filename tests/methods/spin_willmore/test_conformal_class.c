@@ -102,19 +102,16 @@ static void test_cylinder_modulus(void)
 
 static void test_blade_class_beyond_double_precision(void)
 {
-    const char *path = cft_optional_shared_mesh("blade_slivers_8k.obj");
-    if (!path) return;
-    cf_context *ctx = cft_context();
-    cf_mesh *mesh = NULL;
-    CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
-    if (mesh) {
-        double ratio = annulus_log_radius_ratio(ctx, mesh);
-        double flat = 2.0 * ratio, catenoid = 2.0 * log(cosh(0.5 * ratio)), beyond = -log(DBL_EPSILON);
-        fprintf(stderr, "   blade: ln(R/r) %.3f; log area ratio of W = 0: flat %.1f, catenoid %.1f; -ln eps %.1f\n",
-                ratio, flat, catenoid, beyond);
-        CHECK_NEAR(ratio, 39.45, 0.0, 0.01); /* measured 39.4536 */
-        CHECK(catenoid > beyond);
-    }
+    cft_shared_case shared;
+    if (!cft_shared_case_open(&shared, "blade_slivers_8k.obj", 0)) return;
+    cf_context *ctx = shared.ctx;
+    const cf_mesh *mesh = shared.mesh;
+    double ratio = annulus_log_radius_ratio(ctx, mesh);
+    double flat = 2.0 * ratio, catenoid = 2.0 * log(cosh(0.5 * ratio)), beyond = -log(DBL_EPSILON);
+    fprintf(stderr, "   blade: ln(R/r) %.3f; log area ratio of W = 0: flat %.1f, catenoid %.1f; -ln eps %.1f\n", ratio,
+            flat, catenoid, beyond);
+    CHECK_NEAR(ratio, 39.45, 0.0, 0.01); /* measured 39.4536 */
+    CHECK(catenoid > beyond);
     cf_flow_options o;
     CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o));
     cf_spin_willmore_options *spin = cf_flow_options_method_as(&o, CF_FLOW_SPIN_WILLMORE);
@@ -123,7 +120,7 @@ static void test_blade_class_beyond_double_precision(void)
         spin->time_step = 0.9;
     }
     cf_flow *flow = NULL;
-    if (mesh) CHECK_OK(ctx, cf_flow_create(ctx, mesh, NULL, &o, &flow));
+    CHECK_OK(ctx, cf_flow_create(ctx, mesh, NULL, &o, &flow));
     if (flow) {
         double w[3] = {cf_flow_energy(flow), 0.0, 0.0};
         for (int k = 1; k <= 2; ++k) {
@@ -141,23 +138,18 @@ static void test_blade_class_beyond_double_precision(void)
         cf_context_clear_error(ctx);
         cf_flow_destroy(&flow);
     }
-    cf_mesh_destroy(&mesh);
-    CHECK(cf_context_bytes_in_use(ctx) == 0);
-    cf_context_destroy(&ctx);
+    cft_shared_case_close(&shared);
 }
 
 static void test_bob_plateau(void)
 {
-    const char *path = cft_optional_shared_mesh("bob_5k.obj");
-    if (!path) return;
-    cf_context *ctx = cft_context();
-    cf_mesh *mesh = NULL;
-    CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
+    cft_shared_case shared;
+    if (!cft_shared_case_open(&shared, "bob_5k.obj", 0)) return;
     cf_flow_options o;
-    CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o));
+    CHECK_OK(shared.ctx, cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o));
     spin_run r = {0};
     double w[31];
-    if (mesh && spin_run_steps(ctx, mesh, &o, 30, &r, w)) {
+    if (spin_run_steps(shared.ctx, shared.mesh, &o, 30, &r, w)) {
         CHECK(r.steps == 30);
         fprintf(stderr,
                 "   bob_5k: W/4pi %.4f -> %.4f (10 steps) -> %.4f (30 steps), smallest time step %g; target W0/2 = "
@@ -169,9 +161,7 @@ static void test_bob_plateau(void)
         CHECK_LE(w[10] - r.w, 0.005 * w[10]);  /* ... on a plateau, not a stall: */
         CHECK_NEAR(r.smallest_step, 0.5, 0, 0); /* full steps throughout, from step 1 */
     }
-    cf_mesh_destroy(&mesh);
-    CHECK(cf_context_bytes_in_use(ctx) == 0);
-    cf_context_destroy(&ctx);
+    cft_shared_case_close(&shared);
 }
 
 int main(void)

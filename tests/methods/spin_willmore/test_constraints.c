@@ -85,10 +85,10 @@ static double total_curvature(cf_context *ctx, const cf_mesh *mesh, const double
 
 static void test_residuals_and_total_curvature(void)
 {
-    const char *path = cft_require_shared_mesh("spot_3k.obj");
-    cf_context *ctx = cft_context();
-    cf_mesh *mesh = NULL;
-    CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
+    cft_shared_case shared;
+    if (!cft_shared_case_open(&shared, "spot_3k.obj", 1)) return;
+    cf_context *ctx = shared.ctx;
+    cf_mesh *mesh = shared.mesh;
     int32_t nv = cf_mesh_vertex_count(mesh);
     double *x0 = malloc(3 * (size_t)nv * sizeof(double)), *a = malloc((size_t)nv * sizeof(double));
     double *n = malloc(3 * (size_t)nv * sizeof(double));
@@ -137,9 +137,7 @@ static void test_residuals_and_total_curvature(void)
     free(x0);
     free(a);
     free(n);
-    cf_mesh_destroy(&mesh);
-    CHECK(cf_context_bytes_in_use(ctx) == 0);
-    cf_context_destroy(&ctx);
+    cft_shared_case_close(&shared);
 }
 
 /* App. B: what a step conserves is the total of the curvature half-density,
@@ -167,11 +165,10 @@ static double half_density_total(cf_context *ctx, const cf_mesh *mesh, const dou
 
 static void test_total_curvature_half_density(void)
 {
-    const char *path = cft_optional_shared_mesh("spot_3k.obj");
-    if (!path) return;
-    cf_context *ctx = cft_context();
-    cf_mesh *mesh = NULL;
-    CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
+    cft_shared_case shared;
+    if (!cft_shared_case_open(&shared, "spot_3k.obj", 0)) return;
+    cf_context *ctx = shared.ctx;
+    cf_mesh *mesh = shared.mesh;
     const double *x0 = cf_mesh_positions(mesh);
     double half[2], plain[2];
     const double taus[2] = {0.02, 0.01};
@@ -190,18 +187,16 @@ static void test_total_curvature_half_density(void)
     CHECK_LE(half[0], 0.1 * plain[0]);
     CHECK_LE(half[1], 0.6 * half[0]);
     CHECK_LE(half[0], 3e-3);
-    cf_mesh_destroy(&mesh);
-    CHECK(cf_context_bytes_in_use(ctx) == 0);
-    cf_context_destroy(&ctx);
+    cft_shared_case_close(&shared);
 }
 
 /* Fig. 12: genus 1 (bob_5k). */
 static void test_exactness_genus_one(void)
 {
-    const char *path = cft_require_shared_mesh("bob_5k.obj");
-    cf_context *ctx = cft_context();
-    cf_mesh *mesh = NULL;
-    CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
+    cft_shared_case shared;
+    if (!cft_shared_case_open(&shared, "bob_5k.obj", 1)) return;
+    cf_context *ctx = shared.ctx;
+    cf_mesh *mesh = shared.mesh;
     CHECK(cf_mesh_genus(mesh) == 1);
     double integ[2], period[2];
     for (int ex = 1; ex >= 0; --ex) {
@@ -241,9 +236,7 @@ static void test_exactness_genus_one(void)
     free(fa);
     free(fa0);
     cf_flow_destroy(&flow);
-    cf_mesh_destroy(&mesh);
-    CHECK(cf_context_bytes_in_use(ctx) == 0);
-    cf_context_destroy(&ctx);
+    cft_shared_case_close(&shared);
 }
 
 /* One step on a bumped cylinder (32 x 12, radius 1, height 1; the bump
@@ -317,10 +310,10 @@ static void test_exactness_annulus(void)
 /* Fig. 13: Moebius balancing reduces area distortion on spot. */
 static void test_mobius_balancing(void)
 {
-    const char *path = cft_require_shared_mesh("spot_3k.obj");
-    cf_context *ctx = cft_context();
-    cf_mesh *mesh = NULL;
-    CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
+    cft_shared_case shared;
+    if (!cft_shared_case_open(&shared, "spot_3k.obj", 1)) return;
+    cf_context *ctx = shared.ctx;
+    cf_mesh *mesh = shared.mesh;
     double spread[2];
     for (int mob = 0; mob <= 1; ++mob) {
         cf_flow *flow = make_flow(ctx, mesh, 0.5, 1, 1, 1, mob);
@@ -333,9 +326,7 @@ static void test_mobius_balancing(void)
     fprintf(stderr, "   spot 10 steps: std of log area distortion %.3f without, %.3f with Moebius balancing\n",
             spread[0], spread[1]);
     CHECK_LE(spread[1], 0.93 * spread[0]);   /* measured 1.97 vs 2.22 */
-    cf_mesh_destroy(&mesh);
-    CHECK(cf_context_bytes_in_use(ctx) == 0);
-    cf_context_destroy(&ctx);
+    cft_shared_case_close(&shared);
 }
 
 /* Harmonic (period) part of the transformed edges e~ (3 ne, interleaved)
@@ -389,11 +380,10 @@ static double period_part(cf_context *ctx, const cf_mesh *mesh, const double *x,
  * and falls only ~2x (docs/spin.md). */
 static void test_exactness_genus_three(void)
 {
-    const char *path = cft_optional_shared_mesh("elephant_g3_3k.obj");
-    if (!path) return;
-    cf_context *ctx = cft_context();
-    cf_mesh *mesh = NULL;
-    CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
+    cft_shared_case shared;
+    if (!cft_shared_case_open(&shared, "elephant_g3_3k.obj", 0)) return;
+    cf_context *ctx = shared.ctx;
+    cf_mesh *mesh = shared.mesh;
     CHECK(cf_mesh_genus(mesh) == 3);
     /* mode 0: no exactness, 1: linearised (default), 2: App. C's Z_i */
     double period[3] = {0, 0, 0}, integ[3] = {0, 0, 0};
@@ -456,9 +446,7 @@ static void test_exactness_genus_three(void)
         CHECK(angle > 10.0);
         cf_flow_destroy(&flow);
     }
-    cf_mesh_destroy(&mesh);
-    CHECK(cf_context_bytes_in_use(ctx) == 0);
-    cf_context_destroy(&ctx);
+    cft_shared_case_close(&shared);
 }
 
 /* Part of the forms (ne x dim) outside the span of basis (ne x dim), in the

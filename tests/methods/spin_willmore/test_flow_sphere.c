@@ -89,11 +89,10 @@ static void test_bumpy_sphere(void)
 
 static void shared_case(const char *name, double w_bound, double q_bound, double qmax_bound, double rms_bound)
 {
-    const char *path = cft_optional_shared_mesh(name);
-    if (!path) return;
-    cf_context *ctx = cft_context();
-    cf_mesh *mesh = NULL;
-    CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
+    cft_shared_case shared;
+    if (!cft_shared_case_open(&shared, name, 0)) return;
+    cf_context *ctx = shared.ctx;
+    cf_mesh *mesh = shared.mesh;
     result r, rc;
     run(ctx, mesh, 10, &r);
     run_metric(ctx, mesh, 10, 0, &rc);
@@ -108,9 +107,7 @@ static void shared_case(const char *name, double w_bound, double q_bound, double
      * current one */
     CHECK_LE(r.q_mean, rc.q_mean);
     CHECK_LE(r.q_max, rc.q_max);
-    cf_mesh_destroy(&mesh);
-    CHECK(cf_context_bytes_in_use(ctx) == 0);
-    cf_context_destroy(&ctx);
+    cft_shared_case_close(&shared);
 }
 
 /* Measured at tau = 0.5 with the default vertex-scale fairing (input
@@ -174,11 +171,10 @@ static double spin_q(cf_context *ctx, const cf_mesh *mesh, double tau, int steps
  * and 1.200 (the price of reaching the sphere in 10 steps). */
 static void reference_case(const char *name, double small_tau_ratio_bound)
 {
-    const char *path = cft_optional_shared_mesh(name);
-    if (!path) return;
-    cf_context *ctx = cft_context();
-    cf_mesh *mesh = NULL;
-    CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
+    cft_shared_case shared;
+    if (!cft_shared_case_open(&shared, name, 0)) return;
+    cf_context *ctx = shared.ctx;
+    cf_mesh *mesh = shared.mesh;
     if (!mesh) { cf_context_destroy(&ctx); return; }
     double w_ref = 0.0, w_small = 0.0, w_default = 0.0;
     double q_ref = reference_q(ctx, mesh, &w_ref);
@@ -193,9 +189,7 @@ static void reference_case(const char *name, double small_tau_ratio_bound)
     CHECK(q_ref > 1.11);       /* ... and its floor is above the issue's 1.10 */
     CHECK_LE(q_small - 1.0, small_tau_ratio_bound * (q_ref - 1.0));
     CHECK_LE(q_small, q_default); /* distortion grows with tau */
-    cf_mesh_destroy(&mesh);
-    CHECK(cf_context_bytes_in_use(ctx) == 0);
-    cf_context_destroy(&ctx);
+    cft_shared_case_close(&shared);
 }
 
 /* Fig. 1: "flows to a round sphere in only three large, explicit time
@@ -206,11 +200,10 @@ static void reference_case(const char *name, double small_tau_ratio_bound)
  * 10.2). */
 static void test_three_steps(void)
 {
-    const char *path = cft_optional_shared_mesh("spot_3k.obj");
-    if (!path) return;
-    cf_context *ctx = cft_context();
-    cf_mesh *mesh = NULL;
-    CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
+    cft_shared_case shared;
+    if (!cft_shared_case_open(&shared, "spot_3k.obj", 0)) return;
+    cf_context *ctx = shared.ctx;
+    cf_mesh *mesh = shared.mesh;
     if (!mesh) { cf_context_destroy(&ctx); return; }
     int32_t nv = cf_mesh_vertex_count(mesh);
     double c[3], rad, rms0 = 0.0, rms = 0.0;
@@ -238,9 +231,7 @@ static void test_three_steps(void)
     CHECK_LE(q.weighted_mean, 1.2);
     CHECK(a >= 0.9 * a0); /* degrees: 9.8 after, 10.2 before */
     cf_flow_destroy(&flow);
-    cf_mesh_destroy(&mesh);
-    CHECK(cf_context_bytes_in_use(ctx) == 0);
-    cf_context_destroy(&ctx);
+    cft_shared_case_close(&shared);
 }
 
 /* Issue 13 on spot_3k: W/4pi <= 1.01 within 20 default steps, with mean Q
@@ -253,11 +244,10 @@ static void test_three_steps(void)
  * 1.021 x the reference's 1.125; docs/spin.md, "Vertex-scale fairing"). */
 static void test_spot_issue13(void)
 {
-    const char *path = cft_optional_shared_mesh("spot_3k.obj");
-    if (!path) return;
-    cf_context *ctx = cft_context();
-    cf_mesh *mesh = NULL;
-    CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
+    cft_shared_case shared;
+    if (!cft_shared_case_open(&shared, "spot_3k.obj", 0)) return;
+    cf_context *ctx = shared.ctx;
+    cf_mesh *mesh = shared.mesh;
     if (!mesh) { cf_context_destroy(&ctx); return; }
     double w_ref = 0.0, q_ref = reference_q(ctx, mesh, &w_ref);
     for (int faired = 1; faired >= 0; --faired) {
@@ -289,9 +279,7 @@ static void test_spot_issue13(void)
         }
         cf_flow_destroy(&flow);
     }
-    cf_mesh_destroy(&mesh);
-    CHECK(cf_context_bytes_in_use(ctx) == 0);
-    cf_context_destroy(&ctx);
+    cft_shared_case_close(&shared);
 }
 
 static void test_conformality_reference(void)
@@ -307,11 +295,10 @@ static void test_conformality_reference(void)
  * 1.10) is within 5 % of it, the criterion the issue sets for spot_3k. */
 static void test_cactus_reference(void)
 {
-    const char *path = cft_optional_shared_mesh("cactus_620.obj");
-    if (!path) return;
-    cf_context *ctx = cft_context();
-    cf_mesh *mesh = NULL;
-    CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
+    cft_shared_case shared;
+    if (!cft_shared_case_open(&shared, "cactus_620.obj", 0)) return;
+    cf_context *ctx = shared.ctx;
+    cf_mesh *mesh = shared.mesh;
     if (!mesh) { cf_context_destroy(&ctx); return; }
     double w_ref = 0.0, w_default = 0.0, w0 = 0.0;
     CHECK_OK(ctx, cf_willmore_energy(ctx, mesh, cf_mesh_positions(mesh), &w0));
@@ -326,9 +313,7 @@ static void test_cactus_reference(void)
     CHECK(q_ref > 1.5);               /* its floor is above the issue's absolute bound */
     CHECK_LE(q_default, 1.05 * q_ref); /* within 5 % of it */
     CHECK_LE(w_default, 0.5 * w0);
-    cf_mesh_destroy(&mesh);
-    CHECK(cf_context_bytes_in_use(ctx) == 0);
-    cf_context_destroy(&ctx);
+    cft_shared_case_close(&shared);
 }
 
 /* Parameters by name through the common interface (curvflow flow --param). */

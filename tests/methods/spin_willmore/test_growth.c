@@ -77,10 +77,10 @@ static void test_bull_reaches_target(void)
         fprintf(stderr, "   SKIP bull_6k: 6k vertices, left out of sanitizer builds\n");
         return;
     }
-    const char *path = cft_require_shared_mesh("bull_6k.obj"); /* exit 77 with a SKIP line when absent */
-    cf_context *ctx = cft_context();
-    cf_mesh *mesh = NULL;
-    CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
+    cft_shared_case shared;
+    if (!cft_shared_case_open(&shared, "bull_6k.obj", 1)) return; /* exit 77 with a SKIP line when absent */
+    cf_context *ctx = shared.ctx;
+    cf_mesh *mesh = shared.mesh;
     growth_log held, doubled;
     if (mesh && run_growth(ctx, mesh, NAN, &held) && run_growth(ctx, mesh, 0.0, &doubled)) {
         fprintf(stderr, "   bull_6k W/4pi %.4f -> %.4f (default), %.4f (growth_ratio=0); target %.4f\n", held.w[0],
@@ -108,17 +108,15 @@ static void test_bull_reaches_target(void)
         CHECK(held_count >= 3); /* measured: steps 2-6 held, 7 grown */
         CHECK(grown_count >= 1);
     }
-    cf_mesh_destroy(&mesh);
-    CHECK(cf_context_bytes_in_use(ctx) == 0);
-    cf_context_destroy(&ctx);
+    cft_shared_case_close(&shared);
 }
 
 static void test_cow_keeps_descending(void)
 {
-    const char *path = cft_require_shared_mesh("cow_3k.obj");
-    cf_context *ctx = cft_context();
-    cf_mesh *mesh = NULL;
-    CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
+    cft_shared_case shared;
+    if (!cft_shared_case_open(&shared, "cow_3k.obj", 1)) return;
+    cf_context *ctx = shared.ctx;
+    cf_mesh *mesh = shared.mesh;
     growth_log r;
     if (mesh && run_growth(ctx, mesh, NAN, &r)) {
         fprintf(stderr, "   cow_3k W/4pi %.4f -> %.4f, tau %.4f .. %.4f\n", r.w[0], r.w[r.steps], r.time_step[1],
@@ -130,9 +128,7 @@ static void test_cow_keeps_descending(void)
         }
         CHECK_LE(r.w[r.steps], 24.6); /* measured 24.49 */
     }
-    cf_mesh_destroy(&mesh);
-    CHECK(cf_context_bytes_in_use(ctx) == 0);
-    cf_context_destroy(&ctx);
+    cft_shared_case_close(&shared);
 }
 
 int main(void)

@@ -162,11 +162,10 @@ static void test_integrability_bound(void)
 
 static void test_elk(void)
 {
-    const char *path = cft_optional_shared_mesh("elk_g1_2k.obj");
-    if (!path) return;
-    cf_context *ctx = cft_context();
-    cf_mesh *mesh = NULL;
-    CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
+    cft_shared_case shared;
+    if (!cft_shared_case_open(&shared, "elk_g1_2k.obj", 0)) return;
+    cf_context *ctx = shared.ctx;
+    cf_mesh *mesh = shared.mesh;
     if (mesh) {
         /* 10 default steps with and without the corrections */
         spin_run with = {0}, without = {0};
@@ -184,9 +183,7 @@ static void test_elk(void)
         CHECK_LE(with.worst_rise, 0.0);
         CHECK(with.defects == 0);
     }
-    cf_mesh_destroy(&mesh);
-    CHECK(cf_context_bytes_in_use(ctx) == 0);
-    cf_context_destroy(&ctx);
+    cft_shared_case_close(&shared);
 }
 
 int main(void)

@@ -131,11 +131,10 @@ static void test_bumpy_sphere(void)
 
 static void test_spot(void)
 {
-    const char *path = cft_optional_shared_mesh("spot_3k.obj");
-    if (!path) return;
-    cf_context *ctx = cft_context();
-    cf_mesh *mesh = NULL;
-    CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
+    cft_shared_case shared;
+    if (!cft_shared_case_open(&shared, "spot_3k.obj", 0)) return;
+    cf_context *ctx = shared.ctx;
+    cf_mesh *mesh = shared.mesh;
     if (mesh) {
         double frac[10];
         run(ctx, mesh, 0.5, 1, 10, frac);
@@ -147,9 +146,7 @@ static void test_spot(void)
         CHECK(frac[9] > 0.0 && frac[9] < 0.15);
         for (int k = 1; k < 10; ++k) CHECK(frac[k] < frac[k - 1] + 0.05); /* it decays */
     }
-    cf_mesh_destroy(&mesh);
-    CHECK(cf_context_bytes_in_use(ctx) == 0);
-    cf_context_destroy(&ctx);
+    cft_shared_case_close(&shared);
 }
 
 /* rho M-orthogonal to the constants and the normal components (what the
@@ -206,11 +203,10 @@ static double realised_along(cf_context *ctx, const cf_mesh *mesh, const double 
  * remove, the directions this discretisation realises least. */
 static void test_spot_what_is_left(void)
 {
-    const char *path = cft_optional_shared_mesh("spot_3k.obj");
-    if (!path) return;
-    cf_context *ctx = cft_context();
-    cf_mesh *mesh = NULL;
-    CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
+    cft_shared_case shared;
+    if (!cft_shared_case_open(&shared, "spot_3k.obj", 0)) return;
+    cf_context *ctx = shared.ctx;
+    cf_mesh *mesh = shared.mesh;
     cf_flow *flow = NULL;
     cf_flow_options o;
     CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o));
@@ -258,9 +254,7 @@ static void test_spot_what_is_left(void)
         free(rho);
     }
     cf_flow_destroy(&flow);
-    cf_mesh_destroy(&mesh);
-    CHECK(cf_context_bytes_in_use(ctx) == 0);
-    cf_context_destroy(&ctx);
+    cft_shared_case_close(&shared);
 }
 
 int main(void)

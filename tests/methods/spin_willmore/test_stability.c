@@ -130,11 +130,10 @@ static int energy_increases_default(cf_context *ctx, const cf_mesh *mesh, double
  * near-kernel needs (the default diverges there: asserted too). */
 static void test_threshold_blade(void)
 {
-    const char *path = cft_optional_shared_mesh("blade_slivers_8k.obj");
-    if (!path) return;
-    cf_context *ctx = cft_context();
-    cf_mesh *mesh = NULL;
-    CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
+    cft_shared_case shared;
+    if (!cft_shared_case_open(&shared, "blade_slivers_8k.obj", 0)) return;
+    cf_context *ctx = shared.ctx;
+    cf_mesh *mesh = shared.mesh;
     if (!mesh) return;
     /* the mesh is what Fig. 18 asks for: every triangle has an angle < 10 degrees */
     int32_t nf = cf_mesh_face_count(mesh), slivers = 0;
@@ -168,18 +167,15 @@ static void test_threshold_blade(void)
     CHECK_LE(w_faired, 6.0);
     CHECK(energy_increases_faired(ctx, mesh, 1.3, 20, 100.0, CF_SPIN_BOUNDARY_FREE, FAIRING_DEFAULT, NULL, NULL) > 0);
     CHECK(energy_increases_faired(ctx, mesh, 0.01, 10, 0.0, CF_SPIN_BOUNDARY_FREE, FAIRING_DEFAULT, NULL, NULL) > 0);
-    cf_mesh_destroy(&mesh);
-    CHECK(cf_context_bytes_in_use(ctx) == 0);
-    cf_context_destroy(&ctx);
+    cft_shared_case_close(&shared);
 }
 
 static void test_threshold(void)
 {
-    const char *path = cft_optional_shared_mesh("spot_3k.obj");
-    if (!path) return;
-    cf_context *ctx = cft_context();
-    cf_mesh *mesh = NULL;
-    CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
+    cft_shared_case shared;
+    if (!cft_shared_case_open(&shared, "spot_3k.obj", 0)) return;
+    cf_context *ctx = shared.ctx;
+    cf_mesh *mesh = shared.mesh;
     CHECK(energy_increases(ctx, mesh, 0.9, 20) == 0);
     CHECK(energy_increases(ctx, mesh, 1.1, 8) > 0);
     CHECK(energy_increases(ctx, mesh, 1.3, 8) > 0);
@@ -188,9 +184,7 @@ static void test_threshold(void)
     CHECK(energy_increases_default(ctx, mesh, 0.9, 20) == 0);
     CHECK(energy_increases_default(ctx, mesh, 1.1, 8) > 0);
     CHECK(energy_increases_default(ctx, mesh, 1.3, 8) > 0);
-    cf_mesh_destroy(&mesh);
-    CHECK(cf_context_bytes_in_use(ctx) == 0);
-    cf_context_destroy(&ctx);
+    cft_shared_case_close(&shared);
 }
 
 /* Sec. 4: "setting tau just below 1 produces a stable flow, independent of
@@ -221,11 +215,10 @@ static void test_threshold_resolution(void)
 
 static void test_time_step_convergence(void)
 {
-    const char *path = cft_optional_shared_mesh("spot_3k.obj");
-    if (!path) return;
-    cf_context *ctx = cft_context();
-    cf_mesh *mesh = NULL;
-    CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
+    cft_shared_case shared;
+    if (!cft_shared_case_open(&shared, "spot_3k.obj", 0)) return;
+    cf_context *ctx = shared.ctx;
+    cf_mesh *mesh = shared.mesh;
     double duration = 0.8, q[4];
     double tau = 0.4;
     for (int k = 0; k < 4; ++k, tau *= 0.5) {
@@ -243,9 +236,7 @@ static void test_time_step_convergence(void)
         fprintf(stderr, "   order from taus %d..%d: %.3f\n", k, k + 2, order);
         CHECK(order > 0.7 && order < 1.3);
     }
-    cf_mesh_destroy(&mesh);
-    CHECK(cf_context_bytes_in_use(ctx) == 0);
-    cf_context_destroy(&ctx);
+    cft_shared_case_close(&shared);
 }
 
 /* Generated, so it runs without ../shared: a 64 x 16 tube of height 1.6

@@ -30,23 +30,20 @@
  * when the flow could not be made. */
 static int run_default(const char *name, int steps, int no_tolerance, spin_run *r)
 {
-    const char *path = cft_require_shared_mesh(name); /* exit 77 with a SKIP line when absent */
-    cf_context *ctx = cft_context();
-    cf_mesh *mesh = NULL;
-    CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
+    cft_shared_case shared;
+    if (!cft_shared_case_open(&shared, name, 1)) return 0; /* exit 77 with a SKIP line when absent */
+    cf_context *ctx = shared.ctx;
     cf_flow_options o;
     CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o));
     cf_spin_willmore_options *spin = cf_flow_options_method_as(&o, CF_FLOW_SPIN_WILLMORE);
     if (spin) spin->growth_ratio = 0.0; /* the rule the stalls were measured with */
     if (spin) spin->fairing = 0.0;      /* and the step without the vertex-scale fairing */
     if (spin && no_tolerance) spin->tolerance = 0.0;
-    int ran = mesh && spin_run_steps(ctx, mesh, &o, steps, r, NULL);
+    int ran = shared.mesh && spin_run_steps(ctx, shared.mesh, &o, steps, r, NULL);
     if (ran)
         fprintf(stderr, "   %s: W/4pi %.4f -> %.4f, largest rise %.3g, mean Q %.4f, %d defects\n", name, r->w0, r->w,
                 r->worst_rise, r->mean_q, r->defects);
-    cf_mesh_destroy(&mesh);
-    CHECK(cf_context_bytes_in_use(ctx) == 0);
-    cf_context_destroy(&ctx);
+    cft_shared_case_close(&shared);
     return ran;
 }
 
@@ -83,14 +80,13 @@ static void test_cow_goes_on(void)
  * 5.0 -> 3.4-4.2 s), and W goes on falling as before (61.2240 -> 61.2210). */
 static void test_bull_retry_restarts_near_last_step(void)
 {
-    const char *path = cft_require_shared_mesh("bull_6k.obj");
-    cf_context *ctx = cft_context();
-    cf_mesh *mesh = NULL;
-    CHECK_OK(ctx, cf_load_mesh(ctx, path, &mesh));
+    cft_shared_case shared;
+    if (!cft_shared_case_open(&shared, "bull_6k.obj", 1)) return;
+    cf_context *ctx = shared.ctx;
     cf_flow_options o;
     CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o));
     cf_flow *flow = NULL;
-    if (mesh) CHECK_OK(ctx, cf_flow_create(ctx, mesh, NULL, &o, &flow));
+    if (shared.mesh) CHECK_OK(ctx, cf_flow_create(ctx, shared.mesh, NULL, &o, &flow));
     if (flow) {
         double w0 = cf_flow_energy(flow), before = w0;
         int previous_current = 0, pairs = 0;
@@ -114,9 +110,7 @@ static void test_bull_retry_restarts_near_last_step(void)
         CHECK_LE(cf_flow_energy(flow), 0.5 * w0); /* issue 13's target; measured 61.221 of 125.74 */
         cf_flow_destroy(&flow);
     }
-    cf_mesh_destroy(&mesh);
-    CHECK(cf_context_bytes_in_use(ctx) == 0);
-    cf_context_destroy(&ctx);
+    cft_shared_case_close(&shared);
 }
 
 int main(void)

@@ -823,8 +823,8 @@ static cf_status check_energy_jumps(cf_flow *flow, double before, const cf_flow_
  * rise or the method's rejection is a stall: the run stops as converged at
  * the state before the step, unless the method's fallback switches to
  * another variant of its attempt, which then gets the same halvings from
- * the full step or the smaller step the method asks for (once per step). Without backtracking a rise fails (or, with
- * rise_stops, stops the run). The accepted step (after the method's
+ * the full step or the smaller step the method asks for (once per step).
+ * Without backtracking a rise fails (or, with rise_stops, stops the run). The accepted step (after the method's
  * end_step) then passes the blow-up and divergence checks or fails
  * (check_energy_jumps). After an accepted step without retries a reduced
  * step grows back by step_growth unless the method's verdict holds it

@@ -715,9 +715,10 @@ cf_status cfi_spin_attempt(cf_flow *flow, double tau, cf_flow_info *info, cfi_st
  * longer descends, the current metric's still does (docs/spin.md,
  * "Robustness"), so the rest of the step recovers positions in the metric
  * of the step's start, from the full step again, or from four times the
- * tau of the last step if that step needed this metric too. The current-metric solver
- * is made here on first use: most flows never stall, and at 655k vertices
- * it would cost ~100 MB from creation on (docs/memory.md). */
+ * tau of the last step if that step needed this metric too. The
+ * current-metric solver is made here on first use: most flows never stall,
+ * and at 655k vertices it would cost ~100 MB from creation on
+ * (docs/memory.md). */
 cf_status cfi_spin_fallback(cf_flow *flow, int32_t *switched, double *restart_step)
 {
     cfi_spin_state *s = flow->impl;

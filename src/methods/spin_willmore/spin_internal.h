@@ -154,7 +154,8 @@ typedef struct cfi_spin_diagnostics {
     double fairing_energy;          /* W of the faired candidate (NaN when it could not be evaluated; 0 without) */
     double plain_energy;            /* W of the recovered positions without the fairing */
     int32_t current_metric;         /* 1: the accepted attempt recovered positions in the current metric (the
-                                       layer's fallback at a stall of the input metric's) */
+                                       layer's fallback at a stall of the input metric's); at a stall, the
+                                       last attempt's */
 } cfi_spin_diagnostics;
 
 /* Nonzero full: the linearised exactness constraint solves X(0) for each of

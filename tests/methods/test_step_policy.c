@@ -545,7 +545,6 @@ static void test_m1_spot_tiny_steps(void)
     if (!cft_shared_case_open(&shared, "spot_3k.obj", 0)) return;
     cf_context *ctx = shared.ctx;
     cf_mesh *mesh = shared.mesh;
-    if (!mesh) { cf_context_destroy(&ctx); return; }
     const double taus[] = {1e-9, 1e-8};
     for (int t = 0; t < 2; ++t) {
         cf_flow_options o;

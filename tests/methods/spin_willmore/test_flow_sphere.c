@@ -175,7 +175,6 @@ static void reference_case(const char *name, double small_tau_ratio_bound)
     if (!cft_shared_case_open(&shared, name, 0)) return;
     cf_context *ctx = shared.ctx;
     cf_mesh *mesh = shared.mesh;
-    if (!mesh) { cf_context_destroy(&ctx); return; }
     double w_ref = 0.0, w_small = 0.0, w_default = 0.0;
     double q_ref = reference_q(ctx, mesh, &w_ref);
     double q_small = spin_q(ctx, mesh, 0.05, 100, &w_small);
@@ -204,7 +203,6 @@ static void test_three_steps(void)
     if (!cft_shared_case_open(&shared, "spot_3k.obj", 0)) return;
     cf_context *ctx = shared.ctx;
     cf_mesh *mesh = shared.mesh;
-    if (!mesh) { cf_context_destroy(&ctx); return; }
     int32_t nv = cf_mesh_vertex_count(mesh);
     double c[3], rad, rms0 = 0.0, rms = 0.0;
     CHECK_OK(ctx, cf_fit_sphere(ctx, nv, cf_mesh_positions(mesh), c, &rad, NULL, &rms0));
@@ -212,7 +210,10 @@ static void test_three_steps(void)
     CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o));
     cf_flow *flow = NULL;
     CHECK_OK(ctx, cf_flow_create(ctx, mesh, NULL, &o, &flow));
-    if (!flow) { cf_mesh_destroy(&mesh); cf_context_destroy(&ctx); return; }
+    if (!flow) {
+        cft_shared_case_close(&shared);
+        return;
+    }
     double w0 = cf_flow_energy(flow) / (4.0 * PI);
     CHECK_OK(ctx, cf_flow_run(flow, 3, NULL));
     double w = cf_flow_energy(flow) / (4.0 * PI);
@@ -248,7 +249,6 @@ static void test_spot_issue13(void)
     if (!cft_shared_case_open(&shared, "spot_3k.obj", 0)) return;
     cf_context *ctx = shared.ctx;
     cf_mesh *mesh = shared.mesh;
-    if (!mesh) { cf_context_destroy(&ctx); return; }
     double w_ref = 0.0, q_ref = reference_q(ctx, mesh, &w_ref);
     for (int faired = 1; faired >= 0; --faired) {
         cf_flow_options o;
@@ -299,7 +299,6 @@ static void test_cactus_reference(void)
     if (!cft_shared_case_open(&shared, "cactus_620.obj", 0)) return;
     cf_context *ctx = shared.ctx;
     cf_mesh *mesh = shared.mesh;
-    if (!mesh) { cf_context_destroy(&ctx); return; }
     double w_ref = 0.0, w_default = 0.0, w0 = 0.0;
     CHECK_OK(ctx, cf_willmore_energy(ctx, mesh, cf_mesh_positions(mesh), &w0));
     w0 /= 4.0 * PI;

@@ -10,6 +10,14 @@
  *   explicit-bilaplacian   x <- x - tau M^-1 L M^-1 L x           energy: (1/2) x^T L M^-1 L x
  *   implicit-bilaplacian   (M + tau L M^-1 L) x' = M x            energy: (1/2) x^T L M^-1 L x
  *
+ * With boundary=fixed (the bi-Laplacian flows' default; see
+ * cf_baseline_boundary) the boundary vertices B are held and the others I
+ * move: explicit steps update x_I only, with the bi-Laplacian's inner
+ * M^-1 L x restricted to I (the gradient of its interior energy), and the
+ * implicit ones solve for x_I with x_B on the right-hand side:
+ *   MCF           (M_II + tau L_II) x_I' = M_II x_I - tau L_IB x_B
+ *   bi-Laplacian  (M_II + tau L_II M_II^-1 L_II) x_I' = M_II x_I - tau L_II M_II^-1 L_IB x_B
+ *
  * L is the positive semi-definite cotan Laplacian and M the lumped mass
  * matrix (curvflow/ops.h), both of the current positions unless stated.
  * The bi-Laplacian energy is the squared L2 norm of the discrete
@@ -57,7 +65,27 @@ typedef struct cf_baseline_options {
     /* The flow reports convergence when the relative energy decrease of a
      * step is below this (0: never). Parameter "tolerance". */
     double tolerance;
+    /* What happens at the boundary of a mesh with boundary (a
+     * cf_baseline_boundary value; parameter "boundary" = free | fixed). */
+    int32_t boundary;
 } cf_baseline_options;
+
+/* Boundary conditions of the baseline flows.
+ *  - FREE: the natural boundary condition of the energy: boundary vertices
+ *    move like the others (MCF shrinks the boundary curve along with the
+ *    surface). The default of the three MCF flows.
+ *  - FIXED: boundary vertices are held where they start (Dirichlet), and the
+ *    bi-Laplacian energy sums over the interior vertices only,
+ *    (1/2) sum_{i interior} |(L x)_i|^2 / m_i: the fairing problem of a
+ *    patch with its border given. The default of the two bi-Laplacian
+ *    flows: with a free boundary their step is not a descent of their
+ *    energy at a boundary (a flat sheet's energy, all of it in the boundary
+ *    rows of L x, rises at first order in the step: plane_841 failed step
+ *    1 at every step size). On closed meshes both are the same. */
+typedef enum cf_baseline_boundary {
+    CF_BASELINE_BOUNDARY_FREE = 0,
+    CF_BASELINE_BOUNDARY_FIXED = 1
+} cf_baseline_boundary;
 
 /* Defaults of one baseline kind (explicit/implicit MCF, conformal MCF,
  * explicit/implicit bi-Laplacian): chosen stable and visibly smoothing in

@@ -69,9 +69,11 @@ static void test_s3(void)
     char args[2048];
     double e[64];
     /* generated: a bumpy plane at the defaults (before: 130.8 -> 13 552 ->
-     * 5.7e6, then "not positive definite", exit 3 at step 4) */
+     * 5.7e6, then "not positive definite", exit 3 at step 4). With the free
+     * boundary every step raises the energy, and the run stops at step 1
+     * with the start kept */
     EXPECT("generate bumpy-plane -o plane.obj", 0, NULL);
-    EXPECT("flow plane.obj -o plane_out.obj --method implicit-bilaplacian -n 15 -l plane.jsonl", 0,
+    EXPECT("flow plane.obj -o plane_out.obj --method implicit-bilaplacian -p boundary=free -n 15 -l plane.jsonl", 0,
            "iteration 1: implicit-bilaplacian: stopped: the energy rises (130.830321 -> ");
     CHECK(cft_err_has("the last state that lowered it is kept"));
     CHECK(cft_exists("plane_out.obj"));
@@ -79,9 +81,20 @@ static void test_s3(void)
     CHECK(n == 1);
     EXPECT("info plane_out.obj", 0, NULL);
     CHECK(strstr(cft_out, "validation:    ok") != NULL);
+    /* the default holds the boundary (boundary=fixed): 15 steps that fair
+     * the bumps, the energy never rising */
+    EXPECT("flow plane.obj -o plane_fixed.obj --method implicit-bilaplacian -n 15 -q -l fixed.jsonl", 0, NULL);
+    n = log_energies("fixed.jsonl", e, 64);
+    fprintf(stderr, "   bumpy plane, boundary=fixed: %d states, energy %.6g -> %.6g\n", n, e[0], n > 0 ? e[n - 1] : 0.0);
+    CHECK(n == 16);
+    CHECK(never_rises(e, n));
+    CHECK(n == 16 && e[15] < 0.15 * e[0]); /* 2.849 -> 0.320 */
+    EXPECT("info plane_fixed.obj", 0, NULL);
+    CHECK(strstr(cft_out, "validation:    ok") != NULL);
     /* the former behaviour on request */
-    EXPECT("flow plane.obj -o plane_raw.obj --method implicit-bilaplacian -n 2 -p energy_check=false -l raw.jsonl", 0,
-           NULL);
+    EXPECT("flow plane.obj -o plane_raw.obj --method implicit-bilaplacian -p boundary=free -n 2 -p energy_check=false "
+           "-l raw.jsonl",
+           0, NULL);
     n = log_energies("raw.jsonl", e, 64);
     CHECK(n == 3 && e[2] > e[0]);
 

@@ -421,9 +421,10 @@ static void test_rejection_restores_and_user_opt_out(void)
 
 /* Issue 15 S3 on a generated mesh: a flat sheet (bumpy plane) under the
  * implicit bi-Laplacian flow at its default step raised its energy 130.8
- * -> 13 552 -> 5.7e6 and then failed to factorise; the free boundary makes
- * every step raise it. Now the run stops at once as converged (the start
- * kept, a warning) and no energy above the start is ever reported. */
+ * -> 13 552 -> 5.7e6 and then failed to factorise; the free boundary
+ * (boundary=free, the default until session 20) makes every step raise
+ * it. Now the run stops at once as converged (the start kept, a warning)
+ * and no energy above the start is ever reported. */
 static void test_s3_generated(void)
 {
     cf_context *ctx = policy_context();
@@ -432,6 +433,7 @@ static void test_s3_generated(void)
     if (!mesh) { cf_context_destroy(&ctx); return; }
     cf_flow_options o;
     CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_IMPLICIT_BILAPLACIAN, &o));
+    CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "boundary", "free"));
     cf_flow *flow = NULL;
     CHECK_OK(ctx, cf_flow_create(ctx, mesh, NULL, &o, &flow));
     if (flow) {
@@ -864,8 +866,8 @@ static void test_blowup_baseline(void)
 }
 
 /* The divergence check in the flow layer for a baseline: the bumpy plane's
- * raw implicit bi-Laplacian steps (energy_check=false, cli.cli_policy S3)
- * go 130.83 -> 588.21 -> 13 551.6. divergence_factor 1 fails step 1
+ * raw implicit bi-Laplacian steps with a free boundary (boundary=free,
+ * energy_check=false, cli.cli_policy S3) go 130.83 -> 588.21 -> 13 551.6. divergence_factor 1 fails step 1
  * (state and iteration 0 kept); 30 fails step 2 (above 30 x 130.83); after
  * cf_flow_set_positions the start is the new state (30 x 588.21 is not
  * exceeded), and at the default (0) both steps pass. */
@@ -886,6 +888,7 @@ static void test_divergence_baseline(void)
         cf_flow_options o;
         CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_IMPLICIT_BILAPLACIAN, &o));
         CHECK(cf_flow_options_policy(&o)->divergence_factor == 0.0);
+        CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "boundary", "free"));
         CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "energy_check", "false"));
         CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "divergence_factor", cases[c].factor));
         cf_flow *flow = NULL;

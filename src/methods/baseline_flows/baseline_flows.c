@@ -64,9 +64,12 @@ typedef struct baseline_state {
     double *r;              /* 3 nv residual / interleaved work */
     double *y;              /* 3 nv interleaved work */
     double centroid0[3];
+    const uint8_t *held;    /* boundary=fixed on a mesh with boundary: the held vertices; else NULL */
+    double *held_positions; /* 3 nv: the held vertices' positions (written back after each solve) */
 } baseline_state;
 
 static const char *const mass_choices[] = {"barycentric", "voronoi", NULL};
+static const char *const boundary_choices[] = {"free", "fixed", NULL};
 
 static const cf_param_desc baseline_params[] = {
     {"time_step", CF_PARAM_DOUBLE, offsetof(cf_baseline_options, time_step), 0.0, 1e6, NULL,
@@ -80,6 +83,10 @@ static const cf_param_desc baseline_params[] = {
      "keep total area and centroid of the start shape after each step (Kazhdan 2012)"},
     {"tolerance", CF_PARAM_DOUBLE, offsetof(cf_baseline_options, tolerance), 0, 1, NULL,
      "converged when a step lowers the energy by less than this fraction (0: never)"},
+    {"boundary", CF_PARAM_CHOICE, offsetof(cf_baseline_options, boundary), 0, 1, boundary_choices,
+     "free: boundary vertices move (natural boundary; MCF default); fixed: they are held and the bi-Laplacian "
+     "energy counts interior vertices only (bi-Laplacian default: with a free boundary its step raises its "
+     "energy on flat or nearly flat open meshes)"},
 };
 #define BASELINE_PARAM_COUNT ((int32_t)(sizeof baseline_params / sizeof baseline_params[0]))
 
@@ -98,6 +105,10 @@ cf_status cf_baseline_options_default(cf_flow_kind kind, cf_baseline_options *o)
     case CF_FLOW_IMPLICIT_BILAPLACIAN: o->time_step = 1e-5; break;
     default: return CF_ERR_INVALID_ARG;
     }
+    /* the bi-Laplacian's free boundary is no descent of its energy (header) */
+    o->boundary = kind == CF_FLOW_EXPLICIT_BILAPLACIAN || kind == CF_FLOW_IMPLICIT_BILAPLACIAN
+                      ? CF_BASELINE_BOUNDARY_FIXED
+                      : CF_BASELINE_BOUNDARY_FREE;
     return CF_OK;
 }
 
@@ -136,8 +147,10 @@ static cf_status assemble(cf_flow *flow, baseline_state *s)
     return assemble_mass(flow, s);
 }
 
-/* (1/2) sum_i |(L x)_i|^2 / m_i with L, M already assembled at x; leaves
- * L x (interleaved) in s->y. */
+/* (1/2) sum_i |(L x)_i|^2 / m_i with L, M already assembled at x, over the
+ * vertices that move (all, or the interior with boundary=fixed); leaves
+ * L x (interleaved) in s->y, with the held rows set to 0: the explicit
+ * step's L M^-1 (P L x) is then the gradient of this sum. */
 static double bilaplacian_energy(const cf_flow *flow, baseline_state *s)
 {
     int32_t nv = s->nv;
@@ -148,8 +161,9 @@ static double bilaplacian_energy(const cf_flow *flow, baseline_state *s)
     double e = 0.0;
     for (int32_t i = 0; i < nv; ++i) {
         double q = 0.0;
+        int held = s->held && s->held[i];
         for (int c = 0; c < 3; ++c) {
-            double v = s->r[(size_t)c * nv + i];
+            double v = held ? 0.0 : s->r[(size_t)c * nv + i];
             s->y[3 * (size_t)i + c] = v;
             q += v * v;
         }
@@ -204,9 +218,10 @@ static cf_status rescale(cf_flow *flow, baseline_state *s)
     return CF_OK;
 }
 
-/* A = tau * L D^-1 L (pattern of L L) + D, D = diag(mass); L and mass
- * assembled. Row-by-column product with a dense position workspace, no
- * allocation. */
+/* A = tau * L P D^-1 L (pattern of L L) + D, D = diag(mass), P the
+ * projection on the vertices that move (identity with a free boundary);
+ * L and mass assembled. Row-by-column product with a dense position
+ * workspace, no allocation. */
 static void fill_bilaplacian_system(baseline_state *s, double tau)
 {
     const cf_sparse *l = s->l;
@@ -217,6 +232,7 @@ static void fill_bilaplacian_system(baseline_state *s, double tau)
         for (int32_t p = a->colptr[j]; p < a->colptr[j + 1]; ++p) s->pos[a->rowind[p]] = p;
         for (int32_t p = l->colptr[j]; p < l->colptr[j + 1]; ++p) {
             int32_t k = l->rowind[p];
+            if (s->held && s->held[k]) continue;
             double lkj = l->values[p] / s->mass[k];
             for (int32_t q = l->colptr[k]; q < l->colptr[k + 1]; ++q) {
                 int64_t slot = s->pos[l->rowind[q]];
@@ -227,6 +243,31 @@ static void fill_bilaplacian_system(baseline_state *s, double tau)
         for (int32_t p = a->colptr[j]; p < a->colptr[j + 1]; ++p) s->pos[a->rowind[p]] = -1;
     }
     for (int32_t i = 0; i < s->nv; ++i) a->values[s->a_diag[i]] += s->mass[i];
+}
+
+/* boundary=fixed in an implicit system A x' = b (A symmetric, both
+ * triangles stored, b = M x in three columns): the held columns move to
+ * the right-hand side, b_I -= A_IB x_B, and the held rows and columns
+ * become m_i on the diagonal with b_i = m_i x_i, so A stays symmetric
+ * positive definite and x_B comes back (exactly, after the solve's
+ * write-back in implicit_step). */
+static void hold_boundary(baseline_state *s, const double *positions)
+{
+    cf_sparse *a = s->a;
+    int32_t nv = s->nv;
+    for (int32_t j = 0; j < nv; ++j) {
+        int held_col = s->held[j];
+        for (int32_t p = a->colptr[j]; p < a->colptr[j + 1]; ++p) {
+            int32_t i = a->rowind[p];
+            if (i == j) {
+                if (held_col) a->values[p] = s->mass[j];
+                continue;
+            }
+            if (held_col && !s->held[i])
+                for (int c = 0; c < 3; ++c) s->b[(size_t)c * nv + i] -= a->values[p] * positions[3 * (size_t)j + c];
+            if (held_col || s->held[i]) a->values[p] = 0.0;
+        }
+    }
 }
 
 /* ---- create / destroy --------------------------------------------------- */
@@ -267,6 +308,16 @@ static cf_status baseline_create(cf_flow *flow, const void *options)
         return cfi_error(ctx, CF_ERR_UNSUPPORTED, "parameter 'mass': only lumped (barycentric, voronoi) is supported");
     if (!(opt->tolerance >= 0.0))
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter 'tolerance': must be >= 0, got %g", opt->tolerance);
+    if (opt->boundary != CF_BASELINE_BOUNDARY_FREE && opt->boundary != CF_BASELINE_BOUNDARY_FIXED)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter 'boundary': must be free (0) or fixed (1), got %d",
+                         (int)opt->boundary);
+    int has_boundary = 0;
+    for (int32_t i = 0; i < mesh->nv && !has_boundary; ++i) has_boundary = mesh->vertex_on_boundary[i] != 0;
+    int hold = has_boundary && opt->boundary == CF_BASELINE_BOUNDARY_FIXED;
+    if (hold && opt->rescale)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG,
+                         "parameters 'rescale' and 'boundary': rescale=true would move the held boundary of this mesh; "
+                         "use boundary=free with rescale=true");
 
     baseline_state *s = CFI_ALLOC(ctx, baseline_state, 1);
     if (!s) return CF_ERR_NOMEM;
@@ -285,6 +336,12 @@ static cf_status baseline_create(cf_flow *flow, const void *options)
     s->r = CFI_WS_ALLOC(&s->ws, double, 3 * nv);
     s->y = CFI_WS_ALLOC(&s->ws, double, 3 * nv);
     if (!s->slot_map || !s->l_diag || !s->a_diag || !s->mass || !s->x || !s->b || !s->r || !s->y) return CF_ERR_NOMEM;
+    if (hold) {
+        s->held = mesh->vertex_on_boundary;
+        s->held_positions = CFI_WS_ALLOC(&s->ws, double, 3 * nv);
+        if (!s->held_positions) return CF_ERR_NOMEM;
+        memcpy(s->held_positions, flow->positions, 3 * nv * sizeof(double));
+    }
 
     /* rescale's reference centroid, with the barycentric masses it uses */
     cf_status st = cf_vertex_areas(ctx, mesh, flow->positions, CF_DUAL_AREA_BARYCENTRIC, s->mass);
@@ -360,6 +417,8 @@ static cf_status baseline_create(cf_flow *flow, const void *options)
 static cf_status baseline_reset(cf_flow *flow)
 {
     baseline_state *s = flow->impl;
+    /* new positions (cf_flow_set_positions): the boundary is held there */
+    if (s->held) memcpy(s->held_positions, flow->positions, 3 * (size_t)s->nv * sizeof(double));
     double energy = 0.0;
     cf_status st = current_energy(flow, s, &energy, NULL);
     if (st != CF_OK) return st;
@@ -483,9 +542,11 @@ static cf_status explicit_step(cf_flow *flow, cf_flow_info *info)
             for (int32_t i = 0; i < nv; ++i) s->x[(size_t)c * nv + i] = flow->positions[3 * (size_t)i + c];
             cf_sparse_multiply(s->l, s->x + (size_t)c * nv, s->r + (size_t)c * nv);
         }
-        for (int32_t i = 0; i < nv; ++i)
+        for (int32_t i = 0; i < nv; ++i) {
+            if (s->held && s->held[i]) continue;
             for (int c = 0; c < 3; ++c)
                 flow->positions[3 * (size_t)i + c] -= s->tau * s->r[(size_t)c * nv + i] / s->mass[i];
+        }
         info->solve_seconds = cfi_now_seconds() - t1;
     } else {
         /* y = L M^-1 L x, then x -= tau M^-1 y */
@@ -495,9 +556,11 @@ static cf_status explicit_step(cf_flow *flow, cf_flow_info *info)
         for (int c = 0; c < 3; ++c)
             for (int32_t i = 0; i < nv; ++i) s->b[(size_t)c * nv + i] = s->y[3 * (size_t)i + c] / s->mass[i];
         for (int c = 0; c < 3; ++c) cf_sparse_multiply(s->l, s->b + (size_t)c * nv, s->r + (size_t)c * nv);
-        for (int32_t i = 0; i < nv; ++i)
+        for (int32_t i = 0; i < nv; ++i) {
+            if (s->held && s->held[i]) continue;
             for (int c = 0; c < 3; ++c)
                 flow->positions[3 * (size_t)i + c] -= s->tau * s->r[(size_t)c * nv + i] / s->mass[i];
+        }
         info->solve_seconds = cfi_now_seconds() - t1;
     }
     return finish_step(flow, s, info, s->tau);
@@ -534,6 +597,7 @@ static cf_status implicit_step(cf_flow *flow, cf_flow_info *info)
     }
     for (int c = 0; c < 3; ++c)
         for (int32_t i = 0; i < nv; ++i) s->b[(size_t)c * nv + i] = s->mass[i] * flow->positions[3 * (size_t)i + c];
+    if (s->held) hold_boundary(s, flow->positions);
     info->assemble_seconds = cfi_now_seconds() - t0;
 
     double t1 = cfi_now_seconds();
@@ -560,8 +624,11 @@ static cf_status implicit_step(cf_flow *flow, cf_flow_info *info)
     }
     info->residuals[0] = bb > 0.0 ? sqrt(rr / bb) : sqrt(rr);
     info->residual_names[0] = "solve";
-    for (int32_t i = 0; i < nv; ++i)
-        for (int c = 0; c < 3; ++c) flow->positions[3 * (size_t)i + c] = s->x[(size_t)c * nv + i];
+    for (int32_t i = 0; i < nv; ++i) {
+        const double *from = s->held && s->held[i] ? s->held_positions : NULL;
+        for (int c = 0; c < 3; ++c)
+            flow->positions[3 * (size_t)i + c] = from ? from[3 * (size_t)i + c] : s->x[(size_t)c * nv + i];
+    }
     return finish_step(flow, s, info, tau);
 }
 
@@ -570,8 +637,9 @@ static cf_status implicit_step(cf_flow *flow, cf_flow_info *info)
  * (time_step 0, the default) is below forward Euler's bound for the
  * operator of the mesh before the step, and a rise under it comes from the
  * operator changing as the mesh moves (an open flat sheet, `generate
- * sheet` or plane_841, rises with the bi-Laplacian at every step size, at
- * first order in the step), which a smaller step does not cure. */
+ * sheet` or plane_841, rises with the bi-Laplacian and boundary=free at
+ * every step size, at first order in the step), which a smaller step does
+ * not cure. */
 #define BASELINE_EXPLICIT_HINT(factor_, unit_)                                                                 \
     "with time_step 0 (the default) this was the automatic step, " factor_ " of forward Euler's stability "   \
     "limit for the current mesh, so the rise comes from the mesh moving (e.g. at a boundary), which a "       \
@@ -602,8 +670,8 @@ static cf_status implicit_step(cf_flow *flow, cf_flow_info *info)
  * is how a user asks for backward Euler's raw steps (cli.cli_policy: the
  * bumpy plane's 130.8 -> 588 -> 13 552). Divergence off for all: with
  * energy_check=false a user asks for steps that may rise (plane_841's
- * bi-Laplacian energy rises at every step size), and with it on an
- * accepted step never ends above its start. */
+ * bi-Laplacian energy with boundary=free rises at every step size), and
+ * with it on an accepted step never ends above its start. */
 #define BASELINE_EXPLICIT_POLICY(unit_, hint_)                                                                 \
     {.rise_check = 1, .backtrack = 0, .convergence = 1, .unit = (unit_), .rise_hint = (hint_),                 \
      .blowup_check = 1, .blowup_default = 10.0, .divergence_check = 1,                                         \

@@ -11,6 +11,8 @@
 #include "curvflow/ops.h"
 #include "test.h"
 
+#include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -403,9 +405,277 @@ static void test_bilaplacian_stops_at_minimum(void)
     cf_context_destroy(&ctx);
 }
 
+/* ---- boundary=fixed (cf_baseline_boundary) ------------------------------ */
+
+/* The bumpy height field over [0, 1]^2 (16 x 16 cells): an open patch whose
+ * boundary the fixed flows hold. */
+static cf_mesh *bumpy_patch(cf_context *ctx)
+{
+    cf_mesh *mesh = NULL;
+    CHECK_OK(ctx, cf_generate_bumpy_plane(ctx, 16, 1.0, 0.1, 7, &mesh));
+    return mesh;
+}
+
+static cf_flow *fixed_flow(cf_context *ctx, const cf_mesh *mesh, cf_flow_kind kind, double time_step)
+{
+    cf_flow_options o;
+    CHECK_OK(ctx, cf_flow_options_default(kind, &o));
+    cf_baseline_options *b = cf_flow_options_method(&o);
+    b->boundary = CF_BASELINE_BOUNDARY_FIXED;
+    if (time_step > 0.0) b->time_step = time_step;
+    cf_flow *flow = NULL;
+    CHECK_OK(ctx, cf_flow_create(ctx, mesh, NULL, &o, &flow));
+    return flow;
+}
+
+/* (1/2) sum over interior i of |(L x)_i|^2 / m_i with L and m (barycentric)
+ * frozen: the energy whose gradient the fixed explicit step follows. */
+static double frozen_interior_energy(const cf_sparse *l, const double *m, const uint8_t *on_boundary, const double *x)
+{
+    int32_t n = l->ncols;
+    double e = 0.0;
+    double *col = malloc((size_t)n * sizeof *col), *lx = malloc((size_t)n * sizeof *lx);
+    for (int c = 0; c < 3; ++c) {
+        for (int32_t i = 0; i < n; ++i) col[i] = x[3 * (size_t)i + c];
+        cf_sparse_multiply(l, col, lx);
+        for (int32_t i = 0; i < n; ++i)
+            if (!on_boundary[i]) e += 0.5 * lx[i] * lx[i] / m[i];
+    }
+    free(col);
+    free(lx);
+    return e;
+}
+
+/* Every baseline flow with boundary=fixed keeps the boundary vertices bit
+ * for bit and never raises its energy; the bi-Laplacian flows and MCF
+ * flatten the bumps (energy, area) while they do. */
+static void test_fixed_boundary_held(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *mesh = bumpy_patch(ctx);
+    if (!mesh) return;
+    int32_t nv = cf_mesh_vertex_count(mesh);
+    const uint8_t *on_boundary = cf_mesh_vertex_on_boundary(mesh);
+    const double *x0 = cf_mesh_positions(mesh);
+    for (int k = 0; k < KIND_COUNT; ++k) {
+        cf_flow *flow = fixed_flow(ctx, mesh, baseline_kinds[k], 0.0);
+        if (!flow) continue;
+        double e0 = cf_flow_energy(flow), prev = e0;
+        for (int s = 0; s < 10; ++s) {
+            cf_flow_info info;
+            CHECK_OK(ctx, cf_flow_step(flow, &info));
+            CHECK_LE(info.energy, prev * (1.0 + 1e-12));
+            prev = info.energy;
+        }
+        const double *x = cf_flow_positions(flow);
+        int32_t moved_boundary = 0, moved_inside = 0;
+        for (int32_t i = 0; i < nv; ++i) {
+            int moved = memcmp(x + 3 * (size_t)i, x0 + 3 * (size_t)i, 3 * sizeof(double)) != 0;
+            if (on_boundary[i]) moved_boundary += moved;
+            else moved_inside += moved;
+        }
+        fprintf(stderr, "   %s, boundary=fixed: energy %.6g -> %.6g, interior vertices moved %d\n",
+                cf_flow_kind_name(baseline_kinds[k]), e0, prev, moved_inside);
+        CHECK(moved_boundary == 0);
+        CHECK(moved_inside > 0);
+        CHECK(prev < e0);
+        cf_flow_destroy(&flow);
+    }
+    cf_mesh_destroy(&mesh);
+    cf_context_destroy(&ctx);
+}
+
+/* Finite differences of the frozen interior energy against the fixed
+ * explicit bi-Laplacian step: x_I' - x_I = -tau M_I^-1 grad_I E. */
+static void test_fixed_boundary_explicit_gradient(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *mesh = bumpy_patch(ctx);
+    if (!mesh) return;
+    int32_t nv = cf_mesh_vertex_count(mesh);
+    const uint8_t *on_boundary = cf_mesh_vertex_on_boundary(mesh);
+    const double *x0 = cf_mesh_positions(mesh);
+    cf_sparse *l = NULL;
+    double *m = malloc((size_t)nv * sizeof *m), *x = malloc(3 * (size_t)nv * sizeof *x);
+    CHECK_OK(ctx, cf_cotan_laplacian(ctx, mesh, x0, &l));
+    CHECK_OK(ctx, cf_vertex_areas(ctx, mesh, x0, CF_DUAL_AREA_BARYCENTRIC, m));
+    cf_flow *flow = fixed_flow(ctx, mesh, CF_FLOW_EXPLICIT_BILAPLACIAN, 0.0);
+    cf_flow_info info;
+    if (flow && l) {
+        CHECK_OK(ctx, cf_flow_step(flow, &info));
+        double tau = info.time_step;
+        CHECK(tau > 0.0);
+        const double *x1 = cf_flow_positions(flow);
+        double worst = 0.0, scale = 0.0;
+        int checked = 0;
+        for (int32_t i = 0; i < nv; i += 7) {
+            if (on_boundary[i]) continue;
+            for (int c = 0; c < 3; ++c) {
+                double g = -m[i] * (x1[3 * (size_t)i + c] - x0[3 * (size_t)i + c]) / tau;
+                double h = 1e-6;
+                memcpy(x, x0, 3 * (size_t)nv * sizeof *x);
+                x[3 * (size_t)i + c] += h;
+                double ep = frozen_interior_energy(l, m, on_boundary, x);
+                x[3 * (size_t)i + c] -= 2 * h;
+                double em = frozen_interior_energy(l, m, on_boundary, x);
+                double fd = (ep - em) / (2 * h);
+                worst = fmax(worst, fabs(fd - g));
+                scale = fmax(scale, fabs(g));
+                ++checked;
+            }
+        }
+        fprintf(stderr, "   fixed explicit bi-Laplacian: %d coordinates, |fd - grad| <= %.3g of max |grad| %.3g\n",
+                checked, worst / scale, scale);
+        CHECK(checked > 30);
+        CHECK(scale > 0.0);
+        CHECK_LE(worst, 1e-6 * scale);
+    }
+    cf_flow_destroy(&flow);
+    cf_sparse_destroy(&l);
+    free(m);
+    free(x);
+    cf_mesh_destroy(&mesh);
+    cf_context_destroy(&ctx);
+}
+
+/* The fixed implicit steps solve their systems: with L and M frozen at the
+ * start, M_I (x'_I - x_I) + tau (L x')_I = 0 (MCF) and
+ * M_I (x'_I - x_I) + tau (L P M^-1 L x')_I = 0 (bi-Laplacian), P the
+ * projection on the interior, at the step the policy accepted. */
+static void test_fixed_boundary_implicit_optimality(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *mesh = bumpy_patch(ctx);
+    if (!mesh) return;
+    int32_t nv = cf_mesh_vertex_count(mesh);
+    const uint8_t *on_boundary = cf_mesh_vertex_on_boundary(mesh);
+    const double *x0 = cf_mesh_positions(mesh);
+    cf_sparse *l = NULL;
+    double *m = malloc((size_t)nv * sizeof *m), *col = malloc((size_t)nv * sizeof *col),
+           *lx = malloc((size_t)nv * sizeof *lx), *llx = malloc((size_t)nv * sizeof *llx);
+    CHECK_OK(ctx, cf_cotan_laplacian(ctx, mesh, x0, &l));
+    CHECK_OK(ctx, cf_vertex_areas(ctx, mesh, x0, CF_DUAL_AREA_BARYCENTRIC, m));
+    const cf_flow_kind kinds[2] = {CF_FLOW_IMPLICIT_MCF, CF_FLOW_IMPLICIT_BILAPLACIAN};
+    for (int k = 0; k < 2 && l; ++k) {
+        cf_flow *flow = fixed_flow(ctx, mesh, kinds[k], 0.0);
+        if (!flow) continue;
+        cf_flow_info info;
+        CHECK_OK(ctx, cf_flow_step(flow, &info));
+        double tau = info.time_step;
+        const double *x1 = cf_flow_positions(flow);
+        double res = 0.0, ref = 0.0;
+        for (int c = 0; c < 3; ++c) {
+            for (int32_t i = 0; i < nv; ++i) col[i] = x1[3 * (size_t)i + c];
+            cf_sparse_multiply(l, col, lx);
+            if (kinds[k] == CF_FLOW_IMPLICIT_BILAPLACIAN) {
+                for (int32_t i = 0; i < nv; ++i) col[i] = on_boundary[i] ? 0.0 : lx[i] / m[i];
+                cf_sparse_multiply(l, col, llx);
+                memcpy(lx, llx, (size_t)nv * sizeof *lx);
+            }
+            for (int32_t i = 0; i < nv; ++i) {
+                if (on_boundary[i]) continue;
+                double change = m[i] * (x1[3 * (size_t)i + c] - x0[3 * (size_t)i + c]);
+                double r = change + tau * lx[i];
+                res += r * r;
+                ref += change * change;
+            }
+        }
+        fprintf(stderr, "   fixed %s: tau %.3g, |optimality residual| / |M dx| = %.3g\n",
+                cf_flow_kind_name(kinds[k]), tau, sqrt(res / ref));
+        CHECK(ref > 0.0);
+        CHECK_LE(sqrt(res / ref), 1e-8);
+        cf_flow_destroy(&flow);
+    }
+    cf_sparse_destroy(&l);
+    free(m);
+    free(col);
+    free(lx);
+    free(llx);
+    cf_mesh_destroy(&mesh);
+    cf_context_destroy(&ctx);
+}
+
+/* A flat sheet: with the default (fixed) boundary the bi-Laplacian flows
+ * leave it where it is (its interior L x is 0 to rounding); with
+ * boundary=free the explicit step raises the energy of the boundary rows at
+ * the first step, whatever its size (the reason for the default). Also:
+ * rescale with a held boundary is refused, and new positions move what is
+ * held. */
+static void test_fixed_boundary_flat_sheet(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *sheet = NULL;
+    CHECK_OK(ctx, cf_generate_sheet(ctx, 12, 1.0, 0, &sheet));
+    if (!sheet) return;
+    int32_t nv = cf_mesh_vertex_count(sheet);
+    const double *x0 = cf_mesh_positions(sheet);
+    for (int k = 3; k < KIND_COUNT; ++k) {
+        cf_flow_options o;
+        CHECK_OK(ctx, cf_flow_options_default(baseline_kinds[k], &o));
+        CHECK(((cf_baseline_options *)cf_flow_options_method(&o))->boundary == CF_BASELINE_BOUNDARY_FIXED);
+        cf_flow *flow = NULL;
+        CHECK_OK(ctx, cf_flow_create(ctx, sheet, NULL, &o, &flow));
+        if (!flow) continue;
+        CHECK_LE(cf_flow_energy(flow), 1e-20);
+        for (int s = 0; s < 10; ++s) CHECK_OK(ctx, cf_flow_step(flow, NULL));
+        double drift = 0.0;
+        for (int32_t i = 0; i < 3 * nv; ++i) drift = fmax(drift, fabs(cf_flow_positions(flow)[i] - x0[i]));
+        CHECK_LE(drift, 1e-12);
+        cf_flow_destroy(&flow);
+    }
+    /* the free boundary's rise, at a step 100 times below the automatic one */
+    cf_flow_options o;
+    CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_EXPLICIT_BILAPLACIAN, &o));
+    CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "boundary", "free"));
+    CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "time_step", "1e-4"));
+    cf_flow *flow = NULL;
+    CHECK_OK(ctx, cf_flow_create(ctx, sheet, NULL, &o, &flow));
+    if (flow) {
+        CHECK(cf_flow_energy(flow) > 1.0);
+        CHECK_STATUS(cf_flow_step(flow, NULL), CF_ERR_NUMERICAL);
+        CHECK(strstr(cf_context_message(ctx), "energy rose") != NULL);
+        cf_flow_destroy(&flow);
+    }
+    /* rescale would move the held boundary */
+    CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_IMPLICIT_BILAPLACIAN, &o));
+    CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "rescale", "true"));
+    CHECK_STATUS(cf_flow_create(ctx, sheet, NULL, &o, &flow), CF_ERR_INVALID_ARG);
+    CHECK(strstr(cf_context_message(ctx), "boundary=free") != NULL);
+    CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "boundary", "free"));
+    CHECK_OK(ctx, cf_flow_create(ctx, sheet, NULL, &o, &flow));
+    cf_flow_destroy(&flow);
+    /* new positions: the boundary is held where they put it */
+    cf_mesh *patch = bumpy_patch(ctx);
+    flow = patch ? fixed_flow(ctx, patch, CF_FLOW_IMPLICIT_BILAPLACIAN, 0.0) : NULL;
+    if (flow) {
+        int32_t np = cf_mesh_vertex_count(patch);
+        double *shifted = malloc(3 * (size_t)np * sizeof *shifted);
+        for (int32_t i = 0; i < 3 * np; ++i) shifted[i] = cf_mesh_positions(patch)[i] + (i % 3 == 2 ? 0.25 : 0.0);
+        CHECK_OK(ctx, cf_flow_set_positions(flow, shifted));
+        CHECK_OK(ctx, cf_flow_step(flow, NULL));
+        const uint8_t *on_boundary = cf_mesh_vertex_on_boundary(patch);
+        int32_t held = 0, boundary = 0;
+        for (int32_t i = 0; i < np; ++i) {
+            if (!on_boundary[i]) continue;
+            ++boundary;
+            held += memcmp(cf_flow_positions(flow) + 3 * (size_t)i, shifted + 3 * (size_t)i, 3 * sizeof(double)) == 0;
+        }
+        CHECK(boundary > 0 && held == boundary);
+        free(shifted);
+        cf_flow_destroy(&flow);
+    }
+    cf_mesh_destroy(&patch);
+    cf_mesh_destroy(&sheet);
+    cf_context_destroy(&ctx);
+}
+
 int main(void)
 {
     CFT_RUN(test_collapse_reported);
+    CFT_RUN(test_fixed_boundary_held);
+    CFT_RUN(test_fixed_boundary_explicit_gradient);
+    CFT_RUN(test_fixed_boundary_implicit_optimality);
+    CFT_RUN(test_fixed_boundary_flat_sheet);
     CFT_RUN(test_bilaplacian_stops_at_minimum);
     CFT_RUN(test_conformal_mcf_is_conformal);
     CFT_RUN(test_explicit_stability);

@@ -311,9 +311,7 @@ static cf_status baseline_create(cf_flow *flow, const void *options)
     if (opt->boundary != CF_BASELINE_BOUNDARY_FREE && opt->boundary != CF_BASELINE_BOUNDARY_FIXED)
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "parameter 'boundary': must be free (0) or fixed (1), got %d",
                          (int)opt->boundary);
-    int has_boundary = 0;
-    for (int32_t i = 0; i < mesh->nv && !has_boundary; ++i) has_boundary = mesh->vertex_on_boundary[i] != 0;
-    int hold = has_boundary && opt->boundary == CF_BASELINE_BOUNDARY_FIXED;
+    int hold = mesh->boundary_loop_count > 0 && opt->boundary == CF_BASELINE_BOUNDARY_FIXED;
     if (hold && opt->rescale)
         return cfi_error(ctx, CF_ERR_INVALID_ARG,
                          "parameters 'rescale' and 'boundary': rescale=true would move the held boundary of this mesh; "
@@ -534,35 +532,30 @@ static cf_status explicit_step(cf_flow *flow, cf_flow_info *info)
             return cfi_error(flow->ctx, CF_ERR_NUMERICAL, "%s: no stable time step on this mesh (Laplacian bound %g)",
                              flow->method->name, s->tau);
     }
+    double t1 = t0;
     if (kind_of(flow) == CF_FLOW_EXPLICIT_MCF) {
         info->assemble_seconds = cfi_now_seconds() - t0;
-        double t1 = cfi_now_seconds();
-        /* x <- x - tau M^-1 L x, one coordinate column at a time */
+        t1 = cfi_now_seconds();
+        /* r = L x, one coordinate column at a time */
         for (int c = 0; c < 3; ++c) {
             for (int32_t i = 0; i < nv; ++i) s->x[(size_t)c * nv + i] = flow->positions[3 * (size_t)i + c];
             cf_sparse_multiply(s->l, s->x + (size_t)c * nv, s->r + (size_t)c * nv);
         }
-        for (int32_t i = 0; i < nv; ++i) {
-            if (s->held && s->held[i]) continue;
-            for (int c = 0; c < 3; ++c)
-                flow->positions[3 * (size_t)i + c] -= s->tau * s->r[(size_t)c * nv + i] / s->mass[i];
-        }
-        info->solve_seconds = cfi_now_seconds() - t1;
     } else {
-        /* y = L M^-1 L x, then x -= tau M^-1 y */
-        (void)bilaplacian_energy(flow, s); /* leaves L x in s->y */
+        /* r = L M^-1 (P L x) */
+        (void)bilaplacian_energy(flow, s); /* leaves P L x in s->y */
         info->assemble_seconds = cfi_now_seconds() - t0;
-        double t1 = cfi_now_seconds();
+        t1 = cfi_now_seconds();
         for (int c = 0; c < 3; ++c)
             for (int32_t i = 0; i < nv; ++i) s->b[(size_t)c * nv + i] = s->y[3 * (size_t)i + c] / s->mass[i];
         for (int c = 0; c < 3; ++c) cf_sparse_multiply(s->l, s->b + (size_t)c * nv, s->r + (size_t)c * nv);
-        for (int32_t i = 0; i < nv; ++i) {
-            if (s->held && s->held[i]) continue;
-            for (int c = 0; c < 3; ++c)
-                flow->positions[3 * (size_t)i + c] -= s->tau * s->r[(size_t)c * nv + i] / s->mass[i];
-        }
-        info->solve_seconds = cfi_now_seconds() - t1;
     }
+    /* x <- x - tau M^-1 r, r = L x (MCF) or L M^-1 L x; held vertices stay */
+    for (int32_t i = 0; i < nv; ++i) {
+        if (s->held && s->held[i]) continue;
+        for (int c = 0; c < 3; ++c) flow->positions[3 * (size_t)i + c] -= s->tau * s->r[(size_t)c * nv + i] / s->mass[i];
+    }
+    info->solve_seconds = cfi_now_seconds() - t1;
     return finish_step(flow, s, info, s->tau);
 }
 

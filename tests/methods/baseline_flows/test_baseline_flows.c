@@ -453,7 +453,10 @@ static void test_fixed_boundary_held(void)
 {
     cf_context *ctx = cft_context();
     cf_mesh *mesh = bumpy_patch(ctx);
-    if (!mesh) return;
+    if (!mesh) {
+        cf_context_destroy(&ctx);
+        return;
+    }
     int32_t nv = cf_mesh_vertex_count(mesh);
     const uint8_t *on_boundary = cf_mesh_vertex_on_boundary(mesh);
     const double *x0 = cf_mesh_positions(mesh);
@@ -491,7 +494,10 @@ static void test_fixed_boundary_explicit_gradient(void)
 {
     cf_context *ctx = cft_context();
     cf_mesh *mesh = bumpy_patch(ctx);
-    if (!mesh) return;
+    if (!mesh) {
+        cf_context_destroy(&ctx);
+        return;
+    }
     int32_t nv = cf_mesh_vertex_count(mesh);
     const uint8_t *on_boundary = cf_mesh_vertex_on_boundary(mesh);
     const double *x0 = cf_mesh_positions(mesh);
@@ -546,7 +552,10 @@ static void test_fixed_boundary_implicit_optimality(void)
 {
     cf_context *ctx = cft_context();
     cf_mesh *mesh = bumpy_patch(ctx);
-    if (!mesh) return;
+    if (!mesh) {
+        cf_context_destroy(&ctx);
+        return;
+    }
     int32_t nv = cf_mesh_vertex_count(mesh);
     const uint8_t *on_boundary = cf_mesh_vertex_on_boundary(mesh);
     const double *x0 = cf_mesh_positions(mesh);
@@ -606,7 +615,10 @@ static void test_fixed_boundary_flat_sheet(void)
     cf_context *ctx = cft_context();
     cf_mesh *sheet = NULL;
     CHECK_OK(ctx, cf_generate_sheet(ctx, 12, 1.0, 0, &sheet));
-    if (!sheet) return;
+    if (!sheet) {
+        cf_context_destroy(&ctx);
+        return;
+    }
     int32_t nv = cf_mesh_vertex_count(sheet);
     const double *x0 = cf_mesh_positions(sheet);
     for (int k = 3; k < KIND_COUNT; ++k) {
@@ -681,7 +693,10 @@ static void test_fixed_boundary_catenoid(void)
     cf_context *ctx = cft_context();
     cf_mesh *tube = NULL;
     CHECK_OK(ctx, cf_generate_cylinder(ctx, 64, 8, 1.0, 0.5, &tube));
-    if (!tube) return;
+    if (!tube) {
+        cf_context_destroy(&ctx);
+        return;
+    }
     double h = 0.5, lo = 0.5, hi = 1.0; /* a cosh(h / 2a) - 1 changes sign once on [0.5, 1] */
     for (int it = 0; it < 200; ++it) {
         double mid = 0.5 * (lo + hi);
@@ -705,7 +720,10 @@ static void test_fixed_boundary_catenoid(void)
     cf_mesh_destroy(&tube);
 
     CHECK_OK(ctx, cf_generate_cylinder(ctx, 32, 16, 1.0, 2.0, &tube));
-    if (!tube) return;
+    if (!tube) {
+        cf_context_destroy(&ctx);
+        return;
+    }
     cf_flow_options o;
     CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_CONFORMAL_MCF, &o));
     CHECK(((cf_baseline_options *)cf_flow_options_method(&o))->boundary == CF_BASELINE_BOUNDARY_FREE);

@@ -635,7 +635,7 @@ static void test_fixed_boundary_flat_sheet(void)
         CHECK_LE(drift, 1e-12);
         cf_flow_destroy(&flow);
     }
-    /* the free boundary's rise, at a step 100 times below the automatic one */
+    /* the free boundary's rise, at a step 42 times below the automatic one */
     cf_flow_options o;
     CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_EXPLICIT_BILAPLACIAN, &o));
     CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "boundary", "free"));

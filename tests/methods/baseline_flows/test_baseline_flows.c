@@ -416,6 +416,48 @@ static cf_mesh *bumpy_patch(cf_context *ctx)
     return mesh;
 }
 
+/* The bumpy patch with what the boundary tests read of it: its boundary,
+ * its positions and, with `operators`, the cotan Laplacian and barycentric
+ * vertex areas of those positions (the L and M a step freezes). */
+typedef struct patch_case {
+    cf_context *ctx;
+    cf_mesh *mesh;
+    int32_t nv;
+    const uint8_t *on_boundary;
+    const double *x0;
+    cf_sparse *l; /* NULL without operators */
+    double *m;    /* nv; NULL without operators */
+} patch_case;
+
+/* 0 (and nothing to close) when the patch could not be made. */
+static int patch_case_open(patch_case *p, int operators)
+{
+    memset(p, 0, sizeof *p);
+    p->ctx = cft_context();
+    p->mesh = bumpy_patch(p->ctx);
+    if (!p->mesh) {
+        cf_context_destroy(&p->ctx);
+        return 0;
+    }
+    p->nv = cf_mesh_vertex_count(p->mesh);
+    p->on_boundary = cf_mesh_vertex_on_boundary(p->mesh);
+    p->x0 = cf_mesh_positions(p->mesh);
+    if (operators) {
+        p->m = malloc((size_t)p->nv * sizeof *p->m);
+        CHECK_OK(p->ctx, cf_cotan_laplacian(p->ctx, p->mesh, p->x0, &p->l));
+        CHECK_OK(p->ctx, cf_vertex_areas(p->ctx, p->mesh, p->x0, CF_DUAL_AREA_BARYCENTRIC, p->m));
+    }
+    return 1;
+}
+
+static void patch_case_close(patch_case *p)
+{
+    cf_sparse_destroy(&p->l);
+    free(p->m);
+    cf_mesh_destroy(&p->mesh);
+    cf_context_destroy(&p->ctx);
+}
+
 static cf_flow *fixed_flow(cf_context *ctx, const cf_mesh *mesh, cf_flow_kind kind, double time_step)
 {
     cf_flow_options o;
@@ -451,17 +493,14 @@ static double frozen_interior_energy(const cf_sparse *l, const double *m, const 
  * flatten the bumps (energy, area) while they do. */
 static void test_fixed_boundary_held(void)
 {
-    cf_context *ctx = cft_context();
-    cf_mesh *mesh = bumpy_patch(ctx);
-    if (!mesh) {
-        cf_context_destroy(&ctx);
-        return;
-    }
-    int32_t nv = cf_mesh_vertex_count(mesh);
-    const uint8_t *on_boundary = cf_mesh_vertex_on_boundary(mesh);
-    const double *x0 = cf_mesh_positions(mesh);
+    patch_case p;
+    if (!patch_case_open(&p, 0)) return;
+    cf_context *ctx = p.ctx;
+    int32_t nv = p.nv;
+    const uint8_t *on_boundary = p.on_boundary;
+    const double *x0 = p.x0;
     for (int k = 0; k < KIND_COUNT; ++k) {
-        cf_flow *flow = fixed_flow(ctx, mesh, baseline_kinds[k], 0.0);
+        cf_flow *flow = fixed_flow(ctx, p.mesh, baseline_kinds[k], 0.0);
         if (!flow) continue;
         double e0 = cf_flow_energy(flow), prev = e0;
         for (int s = 0; s < 10; ++s) {
@@ -484,28 +523,22 @@ static void test_fixed_boundary_held(void)
         CHECK(prev < e0);
         cf_flow_destroy(&flow);
     }
-    cf_mesh_destroy(&mesh);
-    cf_context_destroy(&ctx);
+    patch_case_close(&p);
 }
 
 /* Finite differences of the frozen interior energy against the fixed
  * explicit bi-Laplacian step: x_I' - x_I = -tau M_I^-1 grad_I E. */
 static void test_fixed_boundary_explicit_gradient(void)
 {
-    cf_context *ctx = cft_context();
-    cf_mesh *mesh = bumpy_patch(ctx);
-    if (!mesh) {
-        cf_context_destroy(&ctx);
-        return;
-    }
-    int32_t nv = cf_mesh_vertex_count(mesh);
-    const uint8_t *on_boundary = cf_mesh_vertex_on_boundary(mesh);
-    const double *x0 = cf_mesh_positions(mesh);
-    cf_sparse *l = NULL;
-    double *m = malloc((size_t)nv * sizeof *m), *x = malloc(3 * (size_t)nv * sizeof *x);
-    CHECK_OK(ctx, cf_cotan_laplacian(ctx, mesh, x0, &l));
-    CHECK_OK(ctx, cf_vertex_areas(ctx, mesh, x0, CF_DUAL_AREA_BARYCENTRIC, m));
-    cf_flow *flow = fixed_flow(ctx, mesh, CF_FLOW_EXPLICIT_BILAPLACIAN, 0.0);
+    patch_case p;
+    if (!patch_case_open(&p, 1)) return;
+    cf_context *ctx = p.ctx;
+    int32_t nv = p.nv;
+    const uint8_t *on_boundary = p.on_boundary;
+    const double *x0 = p.x0, *m = p.m;
+    const cf_sparse *l = p.l;
+    double *x = malloc(3 * (size_t)nv * sizeof *x);
+    cf_flow *flow = fixed_flow(ctx, p.mesh, CF_FLOW_EXPLICIT_BILAPLACIAN, 0.0);
     cf_flow_info info;
     if (flow && l) {
         CHECK_OK(ctx, cf_flow_step(flow, &info));
@@ -537,11 +570,8 @@ static void test_fixed_boundary_explicit_gradient(void)
         CHECK_LE(worst, 1e-6 * scale);
     }
     cf_flow_destroy(&flow);
-    cf_sparse_destroy(&l);
-    free(m);
     free(x);
-    cf_mesh_destroy(&mesh);
-    cf_context_destroy(&ctx);
+    patch_case_close(&p);
 }
 
 /* The fixed implicit steps solve their systems: with L and M frozen at the
@@ -550,23 +580,18 @@ static void test_fixed_boundary_explicit_gradient(void)
  * projection on the interior, at the step the policy accepted. */
 static void test_fixed_boundary_implicit_optimality(void)
 {
-    cf_context *ctx = cft_context();
-    cf_mesh *mesh = bumpy_patch(ctx);
-    if (!mesh) {
-        cf_context_destroy(&ctx);
-        return;
-    }
-    int32_t nv = cf_mesh_vertex_count(mesh);
-    const uint8_t *on_boundary = cf_mesh_vertex_on_boundary(mesh);
-    const double *x0 = cf_mesh_positions(mesh);
-    cf_sparse *l = NULL;
-    double *m = malloc((size_t)nv * sizeof *m), *col = malloc((size_t)nv * sizeof *col),
-           *lx = malloc((size_t)nv * sizeof *lx), *llx = malloc((size_t)nv * sizeof *llx);
-    CHECK_OK(ctx, cf_cotan_laplacian(ctx, mesh, x0, &l));
-    CHECK_OK(ctx, cf_vertex_areas(ctx, mesh, x0, CF_DUAL_AREA_BARYCENTRIC, m));
+    patch_case p;
+    if (!patch_case_open(&p, 1)) return;
+    cf_context *ctx = p.ctx;
+    int32_t nv = p.nv;
+    const uint8_t *on_boundary = p.on_boundary;
+    const double *x0 = p.x0, *m = p.m;
+    const cf_sparse *l = p.l;
+    double *col = malloc((size_t)nv * sizeof *col), *lx = malloc((size_t)nv * sizeof *lx),
+           *llx = malloc((size_t)nv * sizeof *llx);
     const cf_flow_kind kinds[2] = {CF_FLOW_IMPLICIT_MCF, CF_FLOW_IMPLICIT_BILAPLACIAN};
     for (int k = 0; k < 2 && l; ++k) {
-        cf_flow *flow = fixed_flow(ctx, mesh, kinds[k], 0.0);
+        cf_flow *flow = fixed_flow(ctx, p.mesh, kinds[k], 0.0);
         if (!flow) continue;
         cf_flow_info info;
         CHECK_OK(ctx, cf_flow_step(flow, &info));
@@ -595,13 +620,10 @@ static void test_fixed_boundary_implicit_optimality(void)
         CHECK_LE(sqrt(res / ref), 1e-8);
         cf_flow_destroy(&flow);
     }
-    cf_sparse_destroy(&l);
-    free(m);
     free(col);
     free(lx);
     free(llx);
-    cf_mesh_destroy(&mesh);
-    cf_context_destroy(&ctx);
+    patch_case_close(&p);
 }
 
 /* A flat sheet: with the default (fixed) boundary the bi-Laplacian flows

@@ -122,7 +122,7 @@ static void test_bunny(void) { shared_case("bunny_2k.obj", 1.05, 1.20, 2.85, 4e-
  * to the sphere in libigl-style tools: an independent reference for how
  * conformal a vertex-sampled map of this triangulation onto the round sphere
  * can be. Returns its W/4pi in *w. */
-static double reference_q(cf_context *ctx, const cf_mesh *mesh, double *w)
+static double reference_q(cf_context *ctx, const cf_mesh *mesh, double *w, double *positions)
 {
     cf_flow_options o;
     CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_CONFORMAL_MCF, &o));
@@ -136,8 +136,83 @@ static double reference_q(cf_context *ctx, const cf_mesh *mesh, double *w)
     double wn = 0.0;
     CHECK_OK(ctx, cf_willmore_energy(ctx, mesh, cf_flow_positions(flow), &wn));
     *w = wn / (4.0 * PI);
+    if (positions) memcpy(positions, cf_flow_positions(flow), 3 * (size_t)cf_mesh_vertex_count(mesh) * sizeof *positions);
     cf_flow_destroy(&flow);
     return q.weighted_mean;
+}
+
+/* Mean Q against the input of sphere-like positions y (centred, unit mean
+ * radius) after the inversion about p = z / |z|^2, y -> p + (y - p) /
+ * |y - p|^2: |p| > 1 for |z| < 1, so the sphere goes to a sphere and the map
+ * stays conformal; z = 0 is the identity. Any other normalisation of a
+ * conformal map of a genus-0 surface onto the sphere differs from this one
+ * by a Moebius transformation, up to a similarity, which Q does not see. */
+static double inverted_q(cf_context *ctx, const cf_mesh *mesh, const double *y, const double z[3], double *out)
+{
+    int32_t nv = cf_mesh_vertex_count(mesh);
+    double r2 = z[0] * z[0] + z[1] * z[1] + z[2] * z[2];
+    if (!(r2 < 0.98 * 0.98)) return INFINITY;
+    for (int32_t i = 0; i < nv; ++i) {
+        double d[3], dd = 0.0;
+        for (int c = 0; c < 3; ++c) {
+            double p = r2 > 0.0 ? z[c] / r2 : 0.0;
+            d[c] = y[3 * (size_t)i + c] - p;
+            dd += d[c] * d[c];
+        }
+        for (int c = 0; c < 3; ++c) out[3 * (size_t)i + c] = r2 > 0.0 ? z[c] / r2 + d[c] / dd : y[3 * (size_t)i + c];
+    }
+    cf_stats q;
+    CHECK_OK(ctx, cf_quasi_conformal_error(ctx, mesh, cf_mesh_positions(mesh), out, NULL, &q));
+    return q.weighted_mean;
+}
+
+/* The least mean Q over the Moebius normalisations of the sphere map
+ * `positions`: a grid of inversions (6 radii of z x 64 directions), then a
+ * compass search from the best. Returns it, with its z. */
+static double moebius_least_q(cf_context *ctx, const cf_mesh *mesh, const double *positions, double z_best[3])
+{
+    int32_t nv = cf_mesh_vertex_count(mesh);
+    double *y = malloc(3 * (size_t)nv * sizeof *y), *out = malloc(3 * (size_t)nv * sizeof *out);
+    double centroid[3] = {0.0, 0.0, 0.0}, radius = 0.0;
+    for (int32_t i = 0; i < nv; ++i)
+        for (int c = 0; c < 3; ++c) centroid[c] += positions[3 * (size_t)i + c] / nv;
+    for (int32_t i = 0; i < nv; ++i) {
+        double d2 = 0.0;
+        for (int c = 0; c < 3; ++c) d2 += pow(positions[3 * (size_t)i + c] - centroid[c], 2);
+        radius += sqrt(d2) / nv;
+    }
+    for (int32_t i = 0; i < nv; ++i)
+        for (int c = 0; c < 3; ++c) y[3 * (size_t)i + c] = (positions[3 * (size_t)i + c] - centroid[c]) / radius;
+    z_best[0] = z_best[1] = z_best[2] = 0.0;
+    double best = inverted_q(ctx, mesh, y, z_best, out);
+    const int directions = 64; /* a Fibonacci sphere */
+    for (int k = 1; k <= 6; ++k)
+        for (int d = 0; d < directions; ++d) {
+            double h = 1.0 - (2.0 * d + 1.0) / directions, ring = sqrt(1.0 - h * h), phi = d * PI * (3.0 - sqrt(5.0));
+            double z[3] = {0.15 * k * ring * cos(phi), 0.15 * k * ring * sin(phi), 0.15 * k * h};
+            double v = inverted_q(ctx, mesh, y, z, out);
+            if (v < best) {
+                best = v;
+                memcpy(z_best, z, sizeof z);
+            }
+        }
+    for (double step = 0.05; step > 1e-4;) {
+        int improved = 0;
+        for (int c = 0; c < 6; ++c) {
+            double z[3] = {z_best[0], z_best[1], z_best[2]};
+            z[c / 2] += c % 2 ? -step : step;
+            double v = inverted_q(ctx, mesh, y, z, out);
+            if (v < best) {
+                best = v;
+                memcpy(z_best, z, sizeof z);
+                improved = 1;
+            }
+        }
+        if (!improved) step *= 0.5;
+    }
+    free(y);
+    free(out);
+    return best;
 }
 
 /* Spin flow with time step tau for `steps` steps: mean Q against the input. */
@@ -176,7 +251,7 @@ static void reference_case(const char *name, double small_tau_ratio_bound)
     cf_context *ctx = shared.ctx;
     cf_mesh *mesh = shared.mesh;
     double w_ref = 0.0, w_small = 0.0, w_default = 0.0;
-    double q_ref = reference_q(ctx, mesh, &w_ref);
+    double q_ref = reference_q(ctx, mesh, &w_ref, NULL);
     double q_small = spin_q(ctx, mesh, 0.05, 100, &w_small);
     double q_default = spin_q(ctx, mesh, 0.5, 10, &w_default);
     fprintf(stderr,
@@ -249,7 +324,7 @@ static void test_spot_issue13(void)
     if (!cft_shared_case_open(&shared, "spot_3k.obj", 0)) return;
     cf_context *ctx = shared.ctx;
     cf_mesh *mesh = shared.mesh;
-    double w_ref = 0.0, q_ref = reference_q(ctx, mesh, &w_ref);
+    double w_ref = 0.0, q_ref = reference_q(ctx, mesh, &w_ref, NULL);
     for (int faired = 1; faired >= 0; --faired) {
         cf_flow_options o;
         CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o));
@@ -291,8 +366,11 @@ static void test_conformality_reference(void)
 /* Issue 13's mean Q <= 1.5 (10 default steps) on cactus_620 is below the
  * conformal floor of that triangulation: the converged conformalized MCF
  * (400 steps, W/4pi 0.966) has mean Q 1.525 (800 steps: 1.528, 1600:
- * 1.539), and the spin flow's 1.568 after 10 default steps (W/4pi 6.48 ->
- * 1.10) is within 5 % of it, the criterion the issue sets for spot_3k. */
+ * 1.539), and the spin flow's 1.580 after 10 default steps (W/4pi 6.48 ->
+ * 1.02) is within 5 % of it, the criterion the issue sets for spot_3k.
+ * No other normalisation of that map gets under 1.5 either: its least mean
+ * Q over the Moebius transformations is 1.5227 (measured; a Nelder-Mead
+ * search from 1 400 starts, outside the suite, found the same point). */
 static void test_cactus_reference(void)
 {
     cft_shared_case shared;
@@ -302,14 +380,20 @@ static void test_cactus_reference(void)
     double w_ref = 0.0, w_default = 0.0, w0 = 0.0;
     CHECK_OK(ctx, cf_willmore_energy(ctx, mesh, cf_mesh_positions(mesh), &w0));
     w0 /= 4.0 * PI;
-    double q_ref = reference_q(ctx, mesh, &w_ref);
+    double *sphere = malloc(3 * (size_t)cf_mesh_vertex_count(mesh) * sizeof *sphere), z[3];
+    double q_ref = reference_q(ctx, mesh, &w_ref, sphere);
+    double q_moebius = moebius_least_q(ctx, mesh, sphere, z);
+    free(sphere);
     double q_default = spin_q(ctx, mesh, 0.5, 10, &w_default);
     fprintf(stderr,
-            "   cactus_620: converged conformalized MCF Q mean %.4f (W/4pi %.4f); spin, 10 default steps: Q mean "
-            "%.4f (%.3f x the reference), W/4pi %.4f -> %.4f\n",
-            q_ref, w_ref, q_default, q_default / q_ref, w0, w_default);
+            "   cactus_620: converged conformalized MCF Q mean %.4f (W/4pi %.4f), least over its Moebius "
+            "normalisations %.4f (inversion z = %.3f %.3f %.3f); spin, 10 default steps: Q mean %.4f (%.3f x the "
+            "reference), W/4pi %.4f -> %.4f\n",
+            q_ref, w_ref, q_moebius, z[0], z[1], z[2], q_default, q_default / q_ref, w0, w_default);
     CHECK_LE(w_ref, 1.0);             /* the reference did reach the sphere */
     CHECK(q_ref > 1.5);               /* its floor is above the issue's absolute bound */
+    CHECK(q_moebius > 1.5);           /* in every normalisation */
+    CHECK_LE(q_moebius, q_ref - 1e-3); /* the search found a better one than cMCF's own */
     CHECK_LE(q_default, 1.05 * q_ref); /* within 5 % of it */
     CHECK_LE(w_default, 0.5 * w0);
     cft_shared_case_close(&shared);

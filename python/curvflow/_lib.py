@@ -73,6 +73,10 @@ class Stats(Structure):
                 ("weighted_mean", c_double), ("weighted_std", c_double), ("p50", c_double), ("p95", c_double)]
 
 
+class VertexScaleFit(Structure):
+    _fields_ = [("q", Stats), ("invalid_faces", c_int32), ("rms_residual", c_double)]
+
+
 MAX_TERMS = 4
 MAX_RESIDUALS = 8
 
@@ -272,6 +276,7 @@ def _declare(lib):
     f("cf_quasi_conformal_error", S, P, P, P, P, P, POINTER(Stats))
     f("cf_log_area_distortion", S, P, P, P, P, P, POINTER(Stats))
     f("cf_angle_change", S, P, P, P, P, P, POINTER(Stats))
+    f("cf_vertex_scale_fit_compute", S, P, P, P, P, P, P, POINTER(VertexScaleFit))
     f("cf_shape_summary_compute", S, P, P, P, POINTER(ShapeSummary))
     f("cf_mesh_quality_compute", S, P, P, P, POINTER(MeshQuality))
     # ops.h

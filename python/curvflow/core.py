@@ -539,7 +539,12 @@ def compare(V0, V1, F):
     per-vertex largest angle change (radians). Statistics are area-weighted
     with the areas of V0 (keys mean, std, min, median, p95, max as in
     `compare --json`); "Q" and "log_area_distortion" are the per-face arrays
-    (m,), "angle_change_per_vertex" the per-vertex array (n,)."""
+    (m,), "angle_change_per_vertex" the per-vertex array (n,).
+    "vertex_scale_model_q" (with "invalid_faces" and "rms_log_length_residual")
+    is the vertex-scale model of `compare`: log scales fitted at the vertices to
+    the change of edge lengths ("log_scale", (n,)) and the Q of each face with its
+    lengths so rescaled ("vertex_scale_model_q_per_face", (m,), NaN where they form
+    no triangle): the Q that the conformal scale's variation causes by itself."""
     V0 = _vertices(V0, "V0")
     V1 = _vertices(V1, "V1")
     F = _faces(F)
@@ -553,9 +558,13 @@ def compare(V0, V1, F):
         ctx.check(ctx.L.cf_quasi_conformal_error(ctx.ptr, mesh, a, b, q.ctypes.data, byref(sq)))
         ctx.check(ctx.L.cf_log_area_distortion(ctx.ptr, mesh, a, b, lad.ctypes.data, byref(sl)))
         ctx.check(ctx.L.cf_angle_change(ctx.ptr, mesh, a, b, ang.ctypes.data, byref(sa)))
+        u, qm, fit = np.empty(n), np.empty(m), _lib.VertexScaleFit()
+        ctx.check(ctx.L.cf_vertex_scale_fit_compute(ctx.ptr, mesh, a, b, u.ctypes.data, qm.ctypes.data, byref(fit)))
+        model = dict(_stats(fit.q), invalid_faces=fit.invalid_faces, rms_log_length_residual=fit.rms_residual)
         return {"faces": m, "quasi_conformal_error": _stats(sq), "log_area_distortion": _stats(sl),
-                "angle_change": dict(_stats(sa), unit="radians"), "Q": q, "log_area_distortion_per_face": lad,
-                "angle_change_per_vertex": ang}
+                "angle_change": dict(_stats(sa), unit="radians"), "vertex_scale_model_q": model, "Q": q,
+                "log_area_distortion_per_face": lad, "angle_change_per_vertex": ang, "log_scale": u,
+                "vertex_scale_model_q_per_face": qm}
 
 
 # ---- files -----------------------------------------------------------------------

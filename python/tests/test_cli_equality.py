@@ -171,11 +171,19 @@ def test_compare_equals_cli(cli, meshes, tmp_path):
     fields = curvflow.load(ply)[2]["face_fields"]
     assert np.array_equal(got["Q"], fields["Q"])
     assert np.array_equal(got["log_area_distortion_per_face"], fields["log_area_distortion"])
-    for key in ("quasi_conformal_error", "log_area_distortion", "angle_change"):
+    for key in ("quasi_conformal_error", "log_area_distortion", "angle_change", "vertex_scale_model_q"):
         for stat in ("mean", "std", "min", "median", "p95", "max"):
             # --json prints 10 significant digits
             assert got[key][stat] == pytest.approx(js[key][stat], rel=1e-9, abs=1e-300)
+    model = got["vertex_scale_model_q"]
+    assert model["invalid_faces"] == js["vertex_scale_model_q"]["invalid_faces"] == 0
+    assert model["rms_log_length_residual"] == pytest.approx(js["vertex_scale_model_q"]["rms_log_length_residual"],
+                                                             rel=1e-9)
     assert 1.0 < got["quasi_conformal_error"]["mean"] < 1.1  # a conformal flow: Q near 1
+    # a conformal flow: its excess Q - 1 is the vertex-scale model's (0.01500 against 0.01504, measured)
+    assert model["mean"] - 1.0 == pytest.approx(got["quasi_conformal_error"]["mean"] - 1.0, rel=0.02)
+    assert model["rms_log_length_residual"] < 1e-3
+    assert got["log_scale"].shape == (len(V),) and got["vertex_scale_model_q_per_face"].shape == (len(F),)
     assert got["faces"] == js["faces"] == len(F)
 
 

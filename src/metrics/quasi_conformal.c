@@ -2,7 +2,11 @@
  * Per-face comparisons of two position sets on one connectivity:
  * quasi-conformal error (Sander, Snyder, Gortler & Hoppe 2001, Sec. 3: the
  * ratio of the singular values of the affine map between corresponding
- * triangles), log area distortion and per-vertex corner-angle change.
+ * triangles), log area distortion, per-vertex corner-angle change, and the
+ * vertex-scale fit (the conformal part of the map: log scales at the
+ * vertices fitted to the edge-length change, the rescaling of discrete
+ * conformal equivalence, Luo 2004 / Springborn, Schroeder, Pinkall 2008,
+ * and the Q that their variation across a face causes by itself).
  *
  * The 2 x 2 map J = [[a, b], [c, d]] between the triangles, each written in
  * its own orthonormal frame, splits into conformal and anti-conformal parts:
@@ -12,9 +16,11 @@
  * for a similarity.
  */
 #include "metrics/metrics_internal.h"
+#include "curvflow/linalg.h"
 #include "curvflow/ops.h"
 
 #include <math.h>
+#include <string.h>
 
 /* Edge vectors of face f in the face's own frame: columns (e1, e2) as the
  * upper-triangular [[|e1|, e2.x], [0, e2.y]]. Returns 0 for a degenerate face. */
@@ -39,6 +45,18 @@ static int face_frame(const cf_mesh *mesh, const double *x, int32_t f, double m[
     return 1;
 }
 
+/* Q of the affine map from the triangle with frame p to the one with frame
+ * r (face_frame's form); infinite for a singular map. */
+static double frames_q(const double p[4], const double r[4])
+{
+    /* J = R P^-1, P^-1 = [[1/p0, -p1/(p0 p3)], [0, 1/p3]] */
+    double ja = r[0] / p[0], jb = (r[1] - r[0] * p[1] / p[0]) / p[3];
+    double jc = r[2] / p[0], jd = (r[3] - r[2] * p[1] / p[0]) / p[3];
+    double pc = hypot(ja + jd, jc - jb), mc = hypot(ja - jd, jb + jc);
+    double smin = fabs(pc - mc);
+    return smin > 0.0 ? (pc + mc) / smin : INFINITY;
+}
+
 cf_status cf_quasi_conformal_error(cf_context *ctx, const cf_mesh *mesh, const double *a, const double *b,
                                    double *q, cf_stats *stats)
 {
@@ -61,12 +79,7 @@ cf_status cf_quasi_conformal_error(cf_context *ctx, const cf_mesh *mesh, const d
             goto done;
         }
         area[f] = 0.5 * p[0] * p[3];
-        /* J = R P^-1, P^-1 = [[1/p0, -p1/(p0 p3)], [0, 1/p3]] */
-        double ja = r[0] / p[0], jb = (r[1] - r[0] * p[1] / p[0]) / p[3];
-        double jc = r[2] / p[0], jd = (r[3] - r[2] * p[1] / p[0]) / p[3];
-        double pc = hypot(ja + jd, jc - jb), mc = hypot(ja - jd, jb + jc);
-        double smin = fabs(pc - mc);
-        qq[f] = smin > 0.0 ? (pc + mc) / smin : INFINITY;
+        qq[f] = frames_q(p, r);
         if (!isfinite(qq[f])) {
             s = cfi_error(ctx, CF_ERR_NUMERICAL, "face %d: affine map is singular (Q infinite)", f);
             goto done;
@@ -78,6 +91,138 @@ cf_status cf_quasi_conformal_error(cf_context *ctx, const cf_mesh *mesh, const d
 done:
     CFI_FREE(ctx, qq, mesh->nf);
     CFI_FREE(ctx, area, mesh->nf);
+    return s;
+}
+
+static double edge_length(const double *x, int32_t i, int32_t j)
+{
+    return hypot(hypot(x[3 * i] - x[3 * j], x[3 * i + 1] - x[3 * j + 1]), x[3 * i + 2] - x[3 * j + 2]);
+}
+
+/* The least-squares log scales: the normal equations N u = A^T t of the
+ * edge-vertex incidence A (+1, +1 per edge), N = A^T A the signless
+ * Laplacian (degree on the diagonal, 1 per edge), positive definite because
+ * every component of a triangle mesh has an odd cycle; t_e = 2 log(|e|_b /
+ * |e|_a). Returns the edges' RMS residual in *rms. */
+static cf_status fit_log_scales(cf_context *ctx, const cf_mesh *mesh, const double *a, const double *b, double *u,
+                                double *rms)
+{
+    int32_t nv = mesh->nv, ne = mesh->ne;
+    const int32_t *ev = mesh->edge_vertices;
+    int64_t nt = (int64_t)nv + 2 * (int64_t)ne;
+    int32_t *rows = CFI_ALLOC(ctx, int32_t, nt), *cols = CFI_ALLOC(ctx, int32_t, nt);
+    double *vals = CFI_ALLOC(ctx, double, nt), *target = CFI_ALLOC(ctx, double, ne), *rhs = CFI_ALLOC(ctx, double, nv);
+    cf_sparse *n = NULL;
+    cf_cholesky *chol = NULL;
+    cf_status s = CF_OK;
+    if (!rows || !cols || !vals || !target || !rhs) {
+        s = CF_ERR_NOMEM;
+        goto done;
+    }
+    for (int32_t i = 0; i < nv; ++i) {
+        rows[i] = cols[i] = i;
+        vals[i] = 0.0;
+        rhs[i] = 0.0;
+    }
+    for (int32_t e = 0; e < ne; ++e) {
+        int32_t i = ev[2 * e], j = ev[2 * e + 1];
+        double la = edge_length(a, i, j), lb = edge_length(b, i, j);
+        if (!(la > 0.0) || !(lb > 0.0)) {
+            s = cfi_error(ctx, CF_ERR_DEGENERATE_FACE,
+                          "vertex_scale_fit: edge %d (vertices %d, %d): zero length in the %s positions", e, i, j,
+                          la > 0.0 ? "deformed" : "reference");
+            goto done;
+        }
+        target[e] = 2.0 * log(lb / la);
+        rhs[i] += target[e];
+        rhs[j] += target[e];
+        vals[i] += 1.0;
+        vals[j] += 1.0;
+        int64_t k = nv + 2 * (int64_t)e;
+        rows[k] = i, cols[k] = j, vals[k] = 1.0;
+        rows[k + 1] = j, cols[k + 1] = i, vals[k + 1] = 1.0;
+    }
+    for (int32_t i = 0; i < nv; ++i)
+        if (vals[i] == 0.0) vals[i] = 1.0; /* a vertex on no edge: u_i = 0 */
+    s = cf_sparse_from_triplets(ctx, nv, nv, nt, rows, cols, vals, 1, &n, NULL);
+    if (s == CF_OK) s = cf_cholesky_create(ctx, n, NULL, &chol);
+    if (s == CF_OK) s = cf_cholesky_factorize(chol, n);
+    if (s == CF_OK) s = cf_cholesky_solve(chol, 1, rhs, u);
+    if (s != CF_OK) goto done;
+    double sum = 0.0;
+    for (int32_t e = 0; e < ne; ++e) {
+        double r = 0.5 * (target[e] - u[ev[2 * e]] - u[ev[2 * e + 1]]);
+        sum += r * r;
+    }
+    *rms = ne > 0 ? sqrt(sum / ne) : 0.0;
+done:
+    cf_cholesky_destroy(&chol);
+    cf_sparse_destroy(&n);
+    CFI_FREE(ctx, rows, nt);
+    CFI_FREE(ctx, cols, nt);
+    CFI_FREE(ctx, vals, nt);
+    CFI_FREE(ctx, target, ne);
+    CFI_FREE(ctx, rhs, nv);
+    return s;
+}
+
+/* The model Q of face f: its triangle in a against the triangle of its
+ * lengths in a rescaled by e^((u_i + u_j) / 2) (NaN when they form none). */
+static double model_face_q(const cf_mesh *mesh, const double *a, const double *u, int32_t f, const double p[4])
+{
+    const int32_t *t = mesh->triangles + 3 * f;
+    double l01 = edge_length(a, t[0], t[1]) * exp(0.5 * (u[t[0]] + u[t[1]]));
+    double l02 = edge_length(a, t[0], t[2]) * exp(0.5 * (u[t[0]] + u[t[2]]));
+    double l12 = edge_length(a, t[1], t[2]) * exp(0.5 * (u[t[1]] + u[t[2]]));
+    /* Heron: 16 A^2; the model triangle in face_frame's form */
+    double h = (l01 + l02 + l12) * (l02 + l12 - l01) * (l01 - l02 + l12) * (l01 + l02 - l12);
+    if (!(h > 0.0)) return NAN;
+    double r[4] = {l01, (l01 * l01 + l02 * l02 - l12 * l12) / (2.0 * l01), 0.0, sqrt(h) / (2.0 * l01)};
+    return frames_q(p, r);
+}
+
+cf_status cf_vertex_scale_fit_compute(cf_context *ctx, const cf_mesh *mesh, const double *a, const double *b,
+                                      double *u, double *q, cf_vertex_scale_fit *result)
+{
+    cf_status s = cfi_metrics_check_pair(ctx, mesh, a, b, "vertex_scale_fit");
+    if (s != CF_OK) return s;
+    int32_t nv = mesh->nv, nf = mesh->nf, valid = 0;
+    double *uu = CFI_ALLOC(ctx, double, nv), *qq = CFI_ALLOC(ctx, double, nf);
+    double *qv = CFI_ALLOC(ctx, double, nf), *area = CFI_ALLOC(ctx, double, nf);
+    cf_vertex_scale_fit out;
+    memset(&out, 0, sizeof out);
+    if (!uu || !qq || !qv || !area) {
+        s = CF_ERR_NOMEM;
+        goto done;
+    }
+    if ((s = fit_log_scales(ctx, mesh, a, b, uu, &out.rms_residual)) != CF_OK) goto done;
+    for (int32_t f = 0; f < nf; ++f) {
+        double p[4];
+        if (!face_frame(mesh, a, f, p)) {
+            s = cfi_error(ctx, CF_ERR_DEGENERATE_FACE, "vertex_scale_fit: face %d: zero area in the reference positions",
+                          f);
+            goto done;
+        }
+        qq[f] = model_face_q(mesh, a, uu, f, p);
+        if (isfinite(qq[f])) {
+            qv[valid] = qq[f];
+            area[valid++] = 0.5 * p[0] * p[3];
+        }
+    }
+    out.invalid_faces = nf - valid;
+    if (valid == 0) {
+        s = cfi_error(ctx, CF_ERR_NUMERICAL, "vertex_scale_fit: no face's rescaled lengths form a triangle");
+        goto done;
+    }
+    if (result && (s = cf_stats_compute(ctx, valid, qv, area, &out.q)) != CF_OK) goto done;
+    if (u) memcpy(u, uu, (size_t)nv * sizeof *u);
+    if (q) memcpy(q, qq, (size_t)nf * sizeof *q);
+    if (result) *result = out;
+done:
+    CFI_FREE(ctx, uu, nv);
+    CFI_FREE(ctx, qq, nf);
+    CFI_FREE(ctx, qv, nf);
+    CFI_FREE(ctx, area, nf);
     return s;
 }
 

@@ -159,6 +159,21 @@ static void test_metrics(void)
     CHECK(strstr(cf_context_message(ctx), "vertex 5") != NULL);
     CHECK_STATUS(cf_log_area_distortion(ctx, m, b, a, NULL, &st), CF_ERR_NONFINITE);
     CHECK_STATUS(cf_angle_change(ctx, m, a, b, NULL, &st), CF_ERR_NONFINITE);
+    cf_vertex_scale_fit fit;
+    CHECK_STATUS(cf_vertex_scale_fit_compute(ctx, m, a, b, NULL, NULL, &fit), CF_ERR_NONFINITE);
+    CHECK(strstr(cf_context_message(ctx), "vertex 5") != NULL);
+    CHECK_STATUS(cf_vertex_scale_fit_compute(ctx, NULL, a, a, NULL, NULL, &fit), CF_ERR_INVALID_ARG);
+    {
+        /* an edge of zero length in b: vertex 1 onto its neighbour (the edge is named) */
+        double *c = malloc(3 * (size_t)nv * sizeof *c);
+        const int32_t *ev = cf_mesh_edge_vertices(m);
+        memcpy(c, a, 3 * (size_t)nv * sizeof *c);
+        memcpy(c + 3 * ev[1], c + 3 * ev[0], 3 * sizeof *c);
+        CHECK_STATUS(cf_vertex_scale_fit_compute(ctx, m, a, c, NULL, NULL, &fit), CF_ERR_DEGENERATE_FACE);
+        CHECK(strstr(cf_context_message(ctx), "edge 0") != NULL);
+        CHECK(strstr(cf_context_message(ctx), "deformed") != NULL);
+        free(c);
+    }
     CHECK_STATUS(cf_stats_compute(ctx, -1, a, NULL, &st), CF_ERR_INVALID_ARG);
     CHECK_STATUS(cf_stats_compute(ctx, 3, NULL, NULL, &st), CF_ERR_INVALID_ARG);
     CHECK_STATUS(cf_stats_compute(ctx, (int64_t)nv * 3, b, NULL, &st), CF_ERR_NONFINITE);

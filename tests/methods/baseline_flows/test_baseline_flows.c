@@ -532,31 +532,26 @@ static void test_fixed_boundary_explicit_gradient(void)
 {
     patch_case p;
     if (!patch_case_open(&p, 1)) return;
-    cf_context *ctx = p.ctx;
-    int32_t nv = p.nv;
-    const uint8_t *on_boundary = p.on_boundary;
-    const double *x0 = p.x0, *m = p.m;
-    const cf_sparse *l = p.l;
-    double *x = malloc(3 * (size_t)nv * sizeof *x);
-    cf_flow *flow = fixed_flow(ctx, p.mesh, CF_FLOW_EXPLICIT_BILAPLACIAN, 0.0);
+    double *x = malloc(3 * (size_t)p.nv * sizeof *x);
+    cf_flow *flow = fixed_flow(p.ctx, p.mesh, CF_FLOW_EXPLICIT_BILAPLACIAN, 0.0);
     cf_flow_info info;
-    if (flow && l) {
-        CHECK_OK(ctx, cf_flow_step(flow, &info));
+    if (flow && p.l) {
+        CHECK_OK(p.ctx, cf_flow_step(flow, &info));
         double tau = info.time_step;
         CHECK(tau > 0.0);
         const double *x1 = cf_flow_positions(flow);
         double worst = 0.0, scale = 0.0;
         int checked = 0;
-        for (int32_t i = 0; i < nv; i += 7) {
-            if (on_boundary[i]) continue;
+        for (int32_t i = 0; i < p.nv; i += 7) {
+            if (p.on_boundary[i]) continue;
             for (int c = 0; c < 3; ++c) {
-                double g = -m[i] * (x1[3 * (size_t)i + c] - x0[3 * (size_t)i + c]) / tau;
+                double g = -p.m[i] * (x1[3 * (size_t)i + c] - p.x0[3 * (size_t)i + c]) / tau;
                 double h = 1e-6;
-                memcpy(x, x0, 3 * (size_t)nv * sizeof *x);
+                memcpy(x, p.x0, 3 * (size_t)p.nv * sizeof *x);
                 x[3 * (size_t)i + c] += h;
-                double ep = frozen_interior_energy(l, m, on_boundary, x);
+                double ep = frozen_interior_energy(p.l, p.m, p.on_boundary, x);
                 x[3 * (size_t)i + c] -= 2 * h;
-                double em = frozen_interior_energy(l, m, on_boundary, x);
+                double em = frozen_interior_energy(p.l, p.m, p.on_boundary, x);
                 double fd = (ep - em) / (2 * h);
                 worst = fmax(worst, fabs(fd - g));
                 scale = fmax(scale, fabs(g));
@@ -582,33 +577,28 @@ static void test_fixed_boundary_implicit_optimality(void)
 {
     patch_case p;
     if (!patch_case_open(&p, 1)) return;
-    cf_context *ctx = p.ctx;
-    int32_t nv = p.nv;
-    const uint8_t *on_boundary = p.on_boundary;
-    const double *x0 = p.x0, *m = p.m;
-    const cf_sparse *l = p.l;
-    double *col = malloc((size_t)nv * sizeof *col), *lx = malloc((size_t)nv * sizeof *lx),
-           *llx = malloc((size_t)nv * sizeof *llx);
+    double *col = malloc((size_t)p.nv * sizeof *col), *lx = malloc((size_t)p.nv * sizeof *lx),
+           *llx = malloc((size_t)p.nv * sizeof *llx);
     const cf_flow_kind kinds[2] = {CF_FLOW_IMPLICIT_MCF, CF_FLOW_IMPLICIT_BILAPLACIAN};
-    for (int k = 0; k < 2 && l; ++k) {
-        cf_flow *flow = fixed_flow(ctx, p.mesh, kinds[k], 0.0);
+    for (int k = 0; k < 2 && p.l; ++k) {
+        cf_flow *flow = fixed_flow(p.ctx, p.mesh, kinds[k], 0.0);
         if (!flow) continue;
         cf_flow_info info;
-        CHECK_OK(ctx, cf_flow_step(flow, &info));
+        CHECK_OK(p.ctx, cf_flow_step(flow, &info));
         double tau = info.time_step;
         const double *x1 = cf_flow_positions(flow);
         double res = 0.0, ref = 0.0;
         for (int c = 0; c < 3; ++c) {
-            for (int32_t i = 0; i < nv; ++i) col[i] = x1[3 * (size_t)i + c];
-            cf_sparse_multiply(l, col, lx);
+            for (int32_t i = 0; i < p.nv; ++i) col[i] = x1[3 * (size_t)i + c];
+            cf_sparse_multiply(p.l, col, lx);
             if (kinds[k] == CF_FLOW_IMPLICIT_BILAPLACIAN) {
-                for (int32_t i = 0; i < nv; ++i) col[i] = on_boundary[i] ? 0.0 : lx[i] / m[i];
-                cf_sparse_multiply(l, col, llx);
-                memcpy(lx, llx, (size_t)nv * sizeof *lx);
+                for (int32_t i = 0; i < p.nv; ++i) col[i] = p.on_boundary[i] ? 0.0 : lx[i] / p.m[i];
+                cf_sparse_multiply(p.l, col, llx);
+                memcpy(lx, llx, (size_t)p.nv * sizeof *lx);
             }
-            for (int32_t i = 0; i < nv; ++i) {
-                if (on_boundary[i]) continue;
-                double change = m[i] * (x1[3 * (size_t)i + c] - x0[3 * (size_t)i + c]);
+            for (int32_t i = 0; i < p.nv; ++i) {
+                if (p.on_boundary[i]) continue;
+                double change = p.m[i] * (x1[3 * (size_t)i + c] - p.x0[3 * (size_t)i + c]);
                 double r = change + tau * lx[i];
                 res += r * r;
                 ref += change * change;

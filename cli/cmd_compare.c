@@ -30,8 +30,9 @@ static void usage(FILE *out)
             "on this triangulation (near the measured Q: the map is as conformal as its scale\n"
             "allows). The residual is the RMS log-length change that no vertex scale explains.\n\n"
             "  --json       print one JSON object instead of text\n"
-            "  --ply OUT    write B with per-face fields Q and log_area_distortion (OUT.ply: PLY\n"
-            "               properties; OUT.obj: a side CSV <stem>.face.csv; OFF cannot hold them)\n"
+            "  --ply OUT    write B with per-face fields Q and log_area_distortion and the per-vertex\n"
+            "               field log_scale, the fitted log conformal factor (OUT.ply: PLY properties;\n"
+            "               OUT.obj: side CSVs <stem>.face.csv, <stem>.vertex.csv; OFF cannot hold them)\n"
             "  -f, --force  replace read-only output files\n"
             "  -h, --help   show this help\n\n"
             "Exit status: 0 ok, 1 usage, 2 unreadable / invalid mesh, different connectivity, or an\n"
@@ -91,7 +92,7 @@ int cli_compare(int argc, char **argv)
     cf_context *ctx = cli_context(false);
     if (!ctx) return CLI_EXIT_NUMERICAL;
     cf_mesh *a = NULL, *b = NULL;
-    double *q = NULL, *lad = NULL;
+    double *q = NULL, *lad = NULL, *log_scale = NULL;
     int code = cli_files_check(ctx, &files);
     if (code == CLI_EXIT_OK) code = cli_load_mesh(ctx, pa, &a);
     if (code == CLI_EXIT_OK) code = cli_load_mesh(ctx, pb, &b);
@@ -106,7 +107,8 @@ int cli_compare(int argc, char **argv)
     }
     q = malloc((size_t)nf * sizeof *q);
     lad = malloc((size_t)nf * sizeof *lad);
-    if (!q || !lad) {
+    log_scale = malloc((size_t)nv * sizeof *log_scale);
+    if (!q || !lad || !log_scale) {
         fprintf(stderr, "curvflow: out of memory\n");
         code = CLI_EXIT_NUMERICAL;
         goto done;
@@ -118,7 +120,7 @@ int cli_compare(int argc, char **argv)
     if ((st = cf_quasi_conformal_error(ctx, a, xa, xb, q, &sq)) != CF_OK ||
         (st = cf_log_area_distortion(ctx, a, xa, xb, lad, &sl)) != CF_OK ||
         (st = cf_angle_change(ctx, a, xa, xb, NULL, &sa)) != CF_OK ||
-        (st = cf_vertex_scale_fit_compute(ctx, a, xa, xb, NULL, NULL, &fit)) != CF_OK) {
+        (st = cf_vertex_scale_fit_compute(ctx, a, xa, xb, log_scale, NULL, &fit)) != CF_OK) {
         code = cli_fail(ctx, pb, st);
         if (code == CLI_EXIT_USAGE) code = CLI_EXIT_INPUT;
         goto done;
@@ -155,18 +157,21 @@ int cli_compare(int argc, char **argv)
                fit.q.weighted_mean, fit.q.p50, fit.q.p95, fit.q.max, (int)fit.invalid_faces, fit.rms_residual);
     }
     if (ply) {
-        cf_field fields[2] = {{"Q", CF_FIELD_FACE, q}, {"log_area_distortion", CF_FIELD_FACE, lad}};
-        st = cf_write_mesh_file(ctx, ply, b, NULL, fields, 2);
+        cf_field fields[3] = {{"Q", CF_FIELD_FACE, q},
+                              {"log_area_distortion", CF_FIELD_FACE, lad},
+                              {"log_scale", CF_FIELD_VERTEX, log_scale}};
+        st = cf_write_mesh_file(ctx, ply, b, NULL, fields, 3);
         if (st != CF_OK) {
             code = cli_fail(ctx, ply, st);
             if (code == CLI_EXIT_USAGE) code = CLI_EXIT_INPUT;
         } else if (!as_json) {
-            printf("wrote:                 %s (per-face Q, log_area_distortion)\n", ply);
+            printf("wrote:                 %s (per-face Q, log_area_distortion; per-vertex log_scale)\n", ply);
         }
     }
 done:
     free(q);
     free(lad);
+    free(log_scale);
     cf_mesh_destroy(&a);
     cf_mesh_destroy(&b);
     cf_context_destroy(&ctx);

@@ -168,8 +168,10 @@ def test_compare_equals_cli(cli, meshes, tmp_path):
     ply = tmp_path / "q.ply"
     js = json.loads(run_cli(cli, "compare", meshes["bumpy"], b, "--json", "--ply", ply).stdout)
     got = curvflow.compare(V, V2, F)
-    fields = curvflow.load(ply)[2]["face_fields"]
+    extras = curvflow.load(ply)[2]
+    fields = extras["face_fields"]
     assert np.array_equal(got["Q"], fields["Q"])
+    assert np.array_equal(got["log_scale"], extras["vertex_fields"]["log_scale"])
     assert np.array_equal(got["log_area_distortion_per_face"], fields["log_area_distortion"])
     for key in ("quasi_conformal_error", "log_area_distortion", "angle_change", "vertex_scale_model_q"):
         for stat in ("mean", "std", "min", "median", "p95", "max"):

@@ -338,6 +338,7 @@ static void test_compare(void)
 {
     CHECK_RUN("compare bumpy.obj smooth.obj", 0);
     CHECK(strstr(cft_out, "quasi-conformal Q") != NULL);
+    CHECK(strstr(cft_out, "vertex-scale model Q") != NULL);
     CHECK_RUN("compare bumpy.obj bumpy.obj --json --ply same.ply", 0);
     json_error_t jerr;
     json_t *root = json_loads(cft_out, 0, &jerr);
@@ -347,6 +348,11 @@ static void test_compare(void)
         json_t *q = json_object_get(root, "quasi_conformal_error");
         CHECK_NEAR(json_real_value(json_object_get(q, "max")), 1.0, 0.0, 1e-9);
         CHECK_NEAR(json_real_value(json_object_get(json_object_get(root, "log_area_distortion"), "max")), 0.0, 0.0, 1e-9);
+        /* and the vertex-scale model: every log scale 0, model Q 1, nothing left over */
+        json_t *model = json_object_get(root, "vertex_scale_model_q");
+        CHECK_NEAR(json_real_value(json_object_get(model, "max")), 1.0, 0.0, 1e-9);
+        CHECK(json_integer_value(json_object_get(model, "invalid_faces")) == 0);
+        CHECK_NEAR(json_real_value(json_object_get(model, "rms_log_length_residual")), 0.0, 0.0, 1e-12);
     }
     json_decref(root);
     /* the PLY carries the per-face fields */
@@ -357,6 +363,9 @@ static void test_compare(void)
         const cf_mesh_property *q = cf_mesh_data_face_property(data, "Q");
         CHECK(q != NULL && cf_mesh_data_face_property(data, "log_area_distortion") != NULL);
         if (q) CHECK_NEAR(q->values[0], 1.0, 0.0, 1e-9);
+        const cf_mesh_property *u = cf_mesh_data_vertex_property(data, "log_scale");
+        CHECK(u != NULL);
+        if (u) CHECK_NEAR(u->values[0], 0.0, 0.0, 1e-12);
     }
     cf_mesh_data_destroy(&data);
     cf_context_destroy(&ctx);

@@ -101,8 +101,9 @@ static double edge_length(const double *x, int32_t i, int32_t j)
 
 /* The least-squares log scales: the normal equations N u = A^T t of the
  * edge-vertex incidence A (+1, +1 per edge), N = A^T A the signless
- * Laplacian (degree on the diagonal, 1 per edge), positive definite because
- * every component of a triangle mesh has an odd cycle; t_e = 2 log(|e|_b /
+ * Laplacian (degree on the diagonal, 1 per edge; a valid mesh has no vertex
+ * on no edge), positive definite because every component of a triangle
+ * mesh has an odd cycle; t_e = 2 log(|e|_b /
  * |e|_a). Returns the edges' RMS residual in *rms. */
 static cf_status fit_log_scales(cf_context *ctx, const cf_mesh *mesh, const double *a, const double *b, double *u,
                                 double *rms)
@@ -142,8 +143,6 @@ static cf_status fit_log_scales(cf_context *ctx, const cf_mesh *mesh, const doub
         rows[k] = i, cols[k] = j, vals[k] = 1.0;
         rows[k + 1] = j, cols[k + 1] = i, vals[k + 1] = 1.0;
     }
-    for (int32_t i = 0; i < nv; ++i)
-        if (vals[i] == 0.0) vals[i] = 1.0; /* a vertex on no edge: u_i = 0 */
     s = cf_sparse_from_triplets(ctx, nv, nv, nt, rows, cols, vals, 1, &n, NULL);
     if (s == CF_OK) s = cf_cholesky_create(ctx, n, NULL, &chol);
     if (s == CF_OK) s = cf_cholesky_factorize(chol, n);

@@ -16,7 +16,6 @@
  * for a similarity.
  */
 #include "metrics/metrics_internal.h"
-#include "curvflow/linalg.h"
 #include "curvflow/ops.h"
 
 #include <math.h>
@@ -99,32 +98,46 @@ static double edge_length(const double *x, int32_t i, int32_t j)
     return hypot(hypot(x[3 * i] - x[3 * j], x[3 * i + 1] - x[3 * j + 1]), x[3 * i + 2] - x[3 * j + 2]);
 }
 
-/* The least-squares log scales: the normal equations N u = A^T t of the
- * edge-vertex incidence A (+1, +1 per edge), N = A^T A the signless
- * Laplacian (degree on the diagonal, 1 per edge; a valid mesh has no vertex
- * on no edge), positive definite because every component of a triangle
- * mesh has an odd cycle; t_e = 2 log(|e|_b /
- * |e|_a). Returns the edges' RMS residual in *rms. */
+/* y = N x for the signless Laplacian N = A^T A of the edge-vertex incidence
+ * A (+1, +1 per edge): degree on the diagonal, 1 per edge; returns x^T y. */
+static double signless_multiply(const cf_mesh *mesh, const double *degree, const double *x, double *y)
+{
+    const int32_t *ev = mesh->edge_vertices;
+    for (int32_t i = 0; i < mesh->nv; ++i) y[i] = degree[i] * x[i];
+    for (int32_t e = 0; e < mesh->ne; ++e) {
+        int32_t i = ev[2 * e], j = ev[2 * e + 1];
+        y[i] += x[j];
+        y[j] += x[i];
+    }
+    double xy = 0.0;
+    for (int32_t i = 0; i < mesh->nv; ++i) xy += x[i] * y[i];
+    return xy;
+}
+
+/* The least-squares log scales: the normal equations N u = A^T t with t_e =
+ * 2 log(|e|_b / |e|_a). N is positive definite because every component of a
+ * triangle mesh has an odd cycle, and well conditioned: it depends on the
+ * graph only (not on the triangles' shapes), and on a regular triangulation
+ * its spectrum is [3, 12]. So conjugate gradients with the diagonal (the
+ * degrees) as preconditioner solve it in a few dozen iterations, with four
+ * vectors and no factor (a Cholesky factor took 0.25 s and 35 % of its time
+ * in BLAS threads' spinning at 41k vertices). Returns the edges' RMS
+ * residual in *rms. */
+#define CFI_SCALE_FIT_TOLERANCE 1e-13
+#define CFI_SCALE_FIT_MAX_ITERATIONS 2000
 static cf_status fit_log_scales(cf_context *ctx, const cf_mesh *mesh, const double *a, const double *b, double *u,
                                 double *rms)
 {
     int32_t nv = mesh->nv, ne = mesh->ne;
     const int32_t *ev = mesh->edge_vertices;
-    int64_t nt = (int64_t)nv + 2 * (int64_t)ne;
-    int32_t *rows = CFI_ALLOC(ctx, int32_t, nt), *cols = CFI_ALLOC(ctx, int32_t, nt);
-    double *vals = CFI_ALLOC(ctx, double, nt), *target = CFI_ALLOC(ctx, double, ne), *rhs = CFI_ALLOC(ctx, double, nv);
-    cf_sparse *n = NULL;
-    cf_cholesky *chol = NULL;
+    double *target = CFI_ALLOC(ctx, double, ne), *degree = CFI_ALLOC(ctx, double, nv);
+    double *r = CFI_ALLOC(ctx, double, nv), *p = CFI_ALLOC(ctx, double, nv), *q = CFI_ALLOC(ctx, double, nv);
     cf_status s = CF_OK;
-    if (!rows || !cols || !vals || !target || !rhs) {
+    if (!target || !degree || !r || !p || !q) {
         s = CF_ERR_NOMEM;
         goto done;
     }
-    for (int32_t i = 0; i < nv; ++i) {
-        rows[i] = cols[i] = i;
-        vals[i] = 0.0;
-        rhs[i] = 0.0;
-    }
+    for (int32_t i = 0; i < nv; ++i) degree[i] = r[i] = u[i] = 0.0;
     for (int32_t e = 0; e < ne; ++e) {
         int32_t i = ev[2 * e], j = ev[2 * e + 1];
         double la = edge_length(a, i, j), lb = edge_length(b, i, j);
@@ -135,33 +148,50 @@ static cf_status fit_log_scales(cf_context *ctx, const cf_mesh *mesh, const doub
             goto done;
         }
         target[e] = 2.0 * log(lb / la);
-        rhs[i] += target[e];
-        rhs[j] += target[e];
-        vals[i] += 1.0;
-        vals[j] += 1.0;
-        int64_t k = nv + 2 * (int64_t)e;
-        rows[k] = i, cols[k] = j, vals[k] = 1.0;
-        rows[k + 1] = j, cols[k + 1] = i, vals[k + 1] = 1.0;
+        r[i] += target[e];
+        r[j] += target[e];
+        degree[i] += 1.0;
+        degree[j] += 1.0;
     }
-    s = cf_sparse_from_triplets(ctx, nv, nv, nt, rows, cols, vals, 1, &n, NULL);
-    if (s == CF_OK) s = cf_cholesky_create(ctx, n, NULL, &chol);
-    if (s == CF_OK) s = cf_cholesky_factorize(chol, n);
-    if (s == CF_OK) s = cf_cholesky_solve(chol, 1, rhs, u);
-    if (s != CF_OK) goto done;
+    /* preconditioned conjugate gradients from u = 0 (r = A^T t) */
+    double bnorm = 0.0, rz = 0.0;
+    for (int32_t i = 0; i < nv; ++i) {
+        p[i] = r[i] / degree[i];
+        rz += r[i] * p[i];
+        bnorm += r[i] * r[i];
+    }
+    double rr = bnorm;
+    int32_t it = 0;
+    while (rr > CFI_SCALE_FIT_TOLERANCE * CFI_SCALE_FIT_TOLERANCE * bnorm) {
+        if (++it > CFI_SCALE_FIT_MAX_ITERATIONS) {
+            s = cfi_error(ctx, CF_ERR_NOT_CONVERGED, "vertex_scale_fit: conjugate gradients did not converge in %d "
+                          "iterations (residual %.3g of the right-hand side)", CFI_SCALE_FIT_MAX_ITERATIONS,
+                          sqrt(rr / bnorm));
+            goto done;
+        }
+        double alpha = rz / signless_multiply(mesh, degree, p, q), rz_new = 0.0;
+        rr = 0.0;
+        for (int32_t i = 0; i < nv; ++i) {
+            u[i] += alpha * p[i];
+            r[i] -= alpha * q[i];
+            rr += r[i] * r[i];
+            rz_new += r[i] * r[i] / degree[i];
+        }
+        for (int32_t i = 0; i < nv; ++i) p[i] = r[i] / degree[i] + rz_new / rz * p[i];
+        rz = rz_new;
+    }
     double sum = 0.0;
     for (int32_t e = 0; e < ne; ++e) {
-        double r = 0.5 * (target[e] - u[ev[2 * e]] - u[ev[2 * e + 1]]);
-        sum += r * r;
+        double res = 0.5 * (target[e] - u[ev[2 * e]] - u[ev[2 * e + 1]]);
+        sum += res * res;
     }
     *rms = ne > 0 ? sqrt(sum / ne) : 0.0;
 done:
-    cf_cholesky_destroy(&chol);
-    cf_sparse_destroy(&n);
-    CFI_FREE(ctx, rows, nt);
-    CFI_FREE(ctx, cols, nt);
-    CFI_FREE(ctx, vals, nt);
     CFI_FREE(ctx, target, ne);
-    CFI_FREE(ctx, rhs, nv);
+    CFI_FREE(ctx, degree, nv);
+    CFI_FREE(ctx, r, nv);
+    CFI_FREE(ctx, p, nv);
+    CFI_FREE(ctx, q, nv);
     return s;
 }
 

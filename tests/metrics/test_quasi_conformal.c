@@ -210,8 +210,9 @@ static cf_mesh *moebius_case(cf_context *ctx, int level, double **x, double **y,
  * Schroeder and Pinkall 2008 call discrete conformal equivalence
  * Moebius-invariant), so the fit recovers the analytic log factor at every
  * vertex with no residual, and each face's model triangle is the sampled
- * map's own: model Q = Q face by face. Measured: |u - log factor| <= 6.9e-13,
- * residual <= 6.7e-15, at 642 / 2562 / 10242 vertices. */
+ * map's own: model Q = Q face by face. Measured: |u - log factor| <= 7.5e-13,
+ * residual <= 6.9e-14 (the conjugate gradients' tolerance, 1e-13 of the
+ * right-hand side), at 642 / 2562 / 10242 vertices. */
 static void test_vertex_scale_fit(void)
 {
     cf_context *ctx = cft_context();
@@ -251,7 +252,7 @@ static void test_vertex_scale_fit(void)
                 "%.4f, max difference per face %.2e)\n",
                 nv, u_error, fit.rms_residual, fit.q.weighted_mean, q.weighted_mean, q_error);
         CHECK_LE(u_error, 1e-11);
-        CHECK_LE(fit.rms_residual, 1e-13);
+        CHECK_LE(fit.rms_residual, 1e-12);
         CHECK_LE(q_error, 1e-11);
         CHECK(fit.invalid_faces == 0 && fit.q.count == nf);
         CHECK(q.weighted_mean - 1.0 > 0.02); /* the sampled map is not conformal per face */

@@ -88,7 +88,9 @@ typedef struct cf_vertex_scale_fit {
  * Statuses: CF_OK, CF_ERR_INVALID_ARG (NULL mesh or positions),
  * CF_ERR_NONFINITE (a coordinate NaN or infinite, naming the vertex),
  * CF_ERR_DEGENERATE_FACE (an edge of zero length in a or b, naming it),
- * CF_ERR_NUMERICAL (no face has a model triangle), CF_ERR_NOMEM. */
+ * CF_ERR_NUMERICAL (no face has a model triangle), CF_ERR_NOT_CONVERGED
+ * (the normal equations' conjugate gradients past 2000 iterations; 22-26
+ * on every mesh tried, docs/ops.md), CF_ERR_NOMEM. */
 CF_API cf_status cf_vertex_scale_fit_compute(cf_context *ctx, const cf_mesh *mesh, const double *a, const double *b,
                                              double *u, double *q, cf_vertex_scale_fit *result);
 

@@ -141,9 +141,9 @@ static double reference_q(cf_context *ctx, const cf_mesh *mesh, double *w, doubl
     return q.weighted_mean;
 }
 
-/* Mean Q against the input of sphere-like positions y (centred, unit mean
- * radius) after the inversion about p = z / |z|^2, y -> p + (y - p) /
- * |y - p|^2: |p| > 1 for |z| < 1, so the sphere goes to a sphere and the map
+/* Mean Q against the input of sphere-like positions y (centred on their
+ * fitted sphere, unit radius) after the inversion about p = z / |z|^2,
+ * y -> p + (y - p) / |y - p|^2: |p| > 1 for |z| < 1, so the sphere goes to a sphere and the map
  * stays conformal; z = 0 is the identity. Any other normalisation of a
  * conformal map of a genus-0 surface onto the sphere differs from this one
  * by a Moebius transformation, up to a similarity, which Q does not see. */
@@ -166,49 +166,67 @@ static double inverted_q(cf_context *ctx, const cf_mesh *mesh, const double *y, 
     return q.weighted_mean;
 }
 
-/* The least mean Q over the Moebius normalisations of the sphere map
- * `positions`: a grid of inversions (6 radii of z x 64 directions), then a
- * compass search from the best. Returns it, with its z. */
-static double moebius_least_q(cf_context *ctx, const cf_mesh *mesh, const double *positions, double z_best[3])
+/* Compass search for a lower inverted_q from z (updated) whose value is
+ * *value (updated): steps of 0.05 halved down to 1e-4. */
+static void compass_refine(cf_context *ctx, const cf_mesh *mesh, const double *y, double z[3], double *value,
+                           double *out)
 {
-    int32_t nv = cf_mesh_vertex_count(mesh);
-    double *y = malloc(3 * (size_t)nv * sizeof *y), *out = malloc(3 * (size_t)nv * sizeof *out);
-    double centroid[3] = {0.0, 0.0, 0.0}, radius = 0.0;
-    for (int32_t i = 0; i < nv; ++i)
-        for (int c = 0; c < 3; ++c) centroid[c] += positions[3 * (size_t)i + c] / nv;
-    for (int32_t i = 0; i < nv; ++i) {
-        double d2 = 0.0;
-        for (int c = 0; c < 3; ++c) d2 += pow(positions[3 * (size_t)i + c] - centroid[c], 2);
-        radius += sqrt(d2) / nv;
-    }
-    for (int32_t i = 0; i < nv; ++i)
-        for (int c = 0; c < 3; ++c) y[3 * (size_t)i + c] = (positions[3 * (size_t)i + c] - centroid[c]) / radius;
-    z_best[0] = z_best[1] = z_best[2] = 0.0;
-    double best = inverted_q(ctx, mesh, y, z_best, out);
-    const int directions = 64; /* a Fibonacci sphere */
-    for (int k = 1; k <= 6; ++k)
-        for (int d = 0; d < directions; ++d) {
-            double h = 1.0 - (2.0 * d + 1.0) / directions, ring = sqrt(1.0 - h * h), phi = d * PI * (3.0 - sqrt(5.0));
-            double z[3] = {0.15 * k * ring * cos(phi), 0.15 * k * ring * sin(phi), 0.15 * k * h};
-            double v = inverted_q(ctx, mesh, y, z, out);
-            if (v < best) {
-                best = v;
-                memcpy(z_best, z, sizeof z);
-            }
-        }
     for (double step = 0.05; step > 1e-4;) {
         int improved = 0;
         for (int c = 0; c < 6; ++c) {
-            double z[3] = {z_best[0], z_best[1], z_best[2]};
-            z[c / 2] += c % 2 ? -step : step;
-            double v = inverted_q(ctx, mesh, y, z, out);
-            if (v < best) {
-                best = v;
-                memcpy(z_best, z, sizeof z);
+            double t[3] = {z[0], z[1], z[2]};
+            t[c / 2] += c % 2 ? -step : step;
+            double v = inverted_q(ctx, mesh, y, t, out);
+            if (v < *value) {
+                *value = v;
+                memcpy(z, t, sizeof t);
                 improved = 1;
             }
         }
         if (!improved) step *= 0.5;
+    }
+}
+
+/* The least mean Q over the Moebius normalisations of the sphere map
+ * `positions` (normalised to its fitted sphere): a grid of inversions (12
+ * radii of z x 64 directions), then a compass search from each of the
+ * MOEBIUS_STARTS best grid points (the landscape has several local minima).
+ * Returns the least, with its z. */
+#define MOEBIUS_STARTS 8
+static double moebius_least_q(cf_context *ctx, const cf_mesh *mesh, const double *positions, double z_best[3])
+{
+    int32_t nv = cf_mesh_vertex_count(mesh);
+    double *y = malloc(3 * (size_t)nv * sizeof *y), *out = malloc(3 * (size_t)nv * sizeof *out);
+    double centre[3] = {0.0, 0.0, 0.0}, radius = 1.0;
+    CHECK_OK(ctx, cf_fit_sphere(ctx, nv, positions, centre, &radius, NULL, NULL));
+    for (int32_t i = 0; i < nv; ++i)
+        for (int c = 0; c < 3; ++c) y[3 * (size_t)i + c] = (positions[3 * (size_t)i + c] - centre[c]) / radius;
+    /* the best grid points, sorted by value (z = 0, the identity, included) */
+    double start_z[MOEBIUS_STARTS][3] = {{0.0, 0.0, 0.0}}, start_v[MOEBIUS_STARTS];
+    for (int k = 0; k < MOEBIUS_STARTS; ++k) start_v[k] = INFINITY;
+    start_v[0] = inverted_q(ctx, mesh, y, start_z[0], out);
+    const int directions = 64; /* a Fibonacci sphere */
+    for (int k = 1; k <= 12; ++k)
+        for (int d = 0; d < directions; ++d) {
+            double h = 1.0 - (2.0 * d + 1.0) / directions, ring = sqrt(1.0 - h * h), phi = d * PI * (3.0 - sqrt(5.0));
+            double z[3] = {0.075 * k * ring * cos(phi), 0.075 * k * ring * sin(phi), 0.075 * k * h};
+            double v = inverted_q(ctx, mesh, y, z, out);
+            int at = MOEBIUS_STARTS;
+            while (at > 0 && v < start_v[at - 1]) --at;
+            if (at == MOEBIUS_STARTS) continue;
+            memmove(start_v + at + 1, start_v + at, (MOEBIUS_STARTS - 1 - at) * sizeof start_v[0]);
+            memmove(start_z + at + 1, start_z + at, (MOEBIUS_STARTS - 1 - at) * sizeof start_z[0]);
+            start_v[at] = v;
+            memcpy(start_z[at], z, sizeof z);
+        }
+    double best = INFINITY;
+    z_best[0] = z_best[1] = z_best[2] = 0.0;
+    for (int k = 0; k < MOEBIUS_STARTS && isfinite(start_v[k]); ++k) {
+        compass_refine(ctx, mesh, y, start_z[k], &start_v[k], out);
+        if (start_v[k] < best) {
+            best = start_v[k];
+            memcpy(z_best, start_z[k], sizeof start_z[k]);
+        }
     }
     free(y);
     free(out);
@@ -368,9 +386,12 @@ static void test_conformality_reference(void)
  * (400 steps, W/4pi 0.966) has mean Q 1.525 (800 steps: 1.528, 1600:
  * 1.539), and the spin flow's 1.580 after 10 default steps (W/4pi 6.48 ->
  * 1.02) is within 5 % of it, the criterion the issue sets for spot_3k.
- * No other normalisation of that map gets under 1.5 either: its least mean
- * Q over the Moebius transformations is 1.5227 (measured; a Nelder-Mead
- * search from 1 400 starts, outside the suite, found the same point). */
+ * No other normalisation of that map gets under 1.5 either: the least mean
+ * Q found over the Moebius transformations is 1.5220 (measured). The
+ * landscape has at least two local minima, 1.5227 and a narrow 1.5220 at a
+ * strong inversion (|z| 0.69); a denser grid refined from its 24 best
+ * points, and a Nelder-Mead search outside the suite, found only the
+ * first. */
 static void test_cactus_reference(void)
 {
     cft_shared_case shared;

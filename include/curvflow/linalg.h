@@ -4,7 +4,8 @@
  * across numeric refactorisations, saddle-point systems, LU, inverse power
  * iteration and weighted Gram-Schmidt; the fixed-value / linear-equality
  * quadratic solver built on them (cf_min_quad); Anderson acceleration
- * (cf_anderson); the dense 3 x 3 SVD (curvflow/svd3.h, included here).
+ * (cf_anderson); matrix-free preconditioned conjugate gradients
+ * (cf_pcg_solve); the dense 3 x 3 SVD (curvflow/svd3.h, included here).
  *
  * Only src/linalg/ includes SuiteSparse. Dense vectors are double arrays;
  * several right-hand sides are stored column after column (column-major,
@@ -486,6 +487,37 @@ CF_API void cf_anderson_reset(cf_anderson *aa);
 CF_API int32_t cf_anderson_history(const cf_anderson *aa);
 
 CF_API void cf_anderson_destroy(cf_anderson **aa);
+
+/* ---- matrix-free preconditioned conjugate gradients ---------------------- */
+
+/* Up to this many right-hand sides per cf_pcg_solve call. */
+#define CF_PCG_MAX_COLUMNS 8
+
+/* q = A p for the symmetric positive (semi)definite A of cf_pcg_solve, on
+ * its interleaved columns, and pq[c] = p . q of every column c. */
+typedef void (*cf_pcg_multiply_fn)(void *user, const double *p, double *q, double *pq);
+
+typedef struct cf_pcg_result {
+    int32_t iterations;       /* products with A */
+    double relative_residual; /* largest |r_c| / |r_c at the start| over the columns */
+} cf_pcg_result;
+
+/* Conjugate gradients on A x = b with the preconditioner
+ * diag(inverse_diagonal), for `columns` right-hand sides at once (1 ..
+ * CF_PCG_MAX_COLUMNS). Unlike the rest of this header, the columns are
+ * interleaved: entry (i, c) of x, r, p and q is at index i * columns + c,
+ * the layout of vertex positions. On entry x is the starting guess and r
+ * the residual b - A x (the caller forms it: it knows its rows); on return x
+ * is the solution and r its residual. p and q are workspace of n * columns
+ * each; nothing is allocated. A row whose inverse_diagonal is 0 never moves
+ * when its r is 0 and multiply keeps its q at 0 (held rows). Each column has
+ * its own step lengths and stops once |r_c| <= tolerance |r_c at the start|
+ * (a zero right-hand side at once). Statuses: CF_OK; CF_ERR_NOT_CONVERGED
+ * after max_iterations (x and r hold the last iterate, *result says how far
+ * it got; the message gives both); CF_ERR_INVALID_ARG. */
+CF_API cf_status cf_pcg_solve(cf_context *ctx, int32_t n, int32_t columns, cf_pcg_multiply_fn multiply, void *user,
+                              const double *inverse_diagonal, double *x, double *r, double *p, double *q,
+                              double tolerance, int32_t max_iterations, cf_pcg_result *result);
 
 #ifdef __cplusplus
 }

@@ -16,6 +16,7 @@
  * for a similarity.
  */
 #include "metrics/metrics_internal.h"
+#include "curvflow/linalg.h"
 #include "curvflow/ops.h"
 
 #include <math.h>
@@ -99,19 +100,20 @@ static double edge_length(const double *x, int32_t i, int32_t j)
 }
 
 /* y = N x for the signless Laplacian N = A^T A of the edge-vertex incidence
- * A (+1, +1 per edge): degree on the diagonal, 1 per edge; returns x^T y. */
-static double signless_multiply(const cf_mesh *mesh, const double *degree, const double *x, double *y)
+ * A (+1, +1 per edge): degree on the diagonal, 1 per edge; *xy = x^T y
+ * (cf_pcg_multiply_fn, one column; user: the mesh). */
+static void signless_multiply(void *user, const double *x, double *y, double *xy)
 {
+    const cf_mesh *mesh = user;
     const int32_t *ev = mesh->edge_vertices;
-    for (int32_t i = 0; i < mesh->nv; ++i) y[i] = degree[i] * x[i];
+    for (int32_t i = 0; i < mesh->nv; ++i) y[i] = 0.0;
     for (int32_t e = 0; e < mesh->ne; ++e) {
         int32_t i = ev[2 * e], j = ev[2 * e + 1];
-        y[i] += x[j];
-        y[j] += x[i];
+        y[i] += x[i] + x[j];
+        y[j] += x[i] + x[j];
     }
-    double xy = 0.0;
-    for (int32_t i = 0; i < mesh->nv; ++i) xy += x[i] * y[i];
-    return xy;
+    *xy = 0.0;
+    for (int32_t i = 0; i < mesh->nv; ++i) *xy += x[i] * y[i];
 }
 
 /* The least-squares log scales: the normal equations N u = A^T t with t_e =
@@ -119,7 +121,7 @@ static double signless_multiply(const cf_mesh *mesh, const double *degree, const
  * triangle mesh has an odd cycle, and well conditioned: it depends on the
  * graph only (not on the triangles' shapes), and on a regular triangulation
  * its spectrum is [3, 12]. So conjugate gradients with the diagonal (the
- * degrees) as preconditioner solve it in a few dozen iterations, with four
+ * degrees) as preconditioner (cf_pcg_solve) solve it in a few dozen iterations, with four
  * vectors and no factor (a Cholesky factor took 0.25 s and 35 % of its time
  * in BLAS threads' spinning at 41k vertices). Returns the edges' RMS
  * residual in *rms. */
@@ -130,14 +132,14 @@ static cf_status fit_log_scales(cf_context *ctx, const cf_mesh *mesh, const doub
 {
     int32_t nv = mesh->nv, ne = mesh->ne;
     const int32_t *ev = mesh->edge_vertices;
-    double *target = CFI_ALLOC(ctx, double, ne), *degree = CFI_ALLOC(ctx, double, nv);
+    double *target = CFI_ALLOC(ctx, double, ne), *inverse_degree = CFI_ALLOC(ctx, double, nv);
     double *r = CFI_ALLOC(ctx, double, nv), *p = CFI_ALLOC(ctx, double, nv), *q = CFI_ALLOC(ctx, double, nv);
     cf_status s = CF_OK;
-    if (!target || !degree || !r || !p || !q) {
+    if (!target || !inverse_degree || !r || !p || !q) {
         s = CF_ERR_NOMEM;
         goto done;
     }
-    for (int32_t i = 0; i < nv; ++i) degree[i] = r[i] = u[i] = 0.0;
+    for (int32_t i = 0; i < nv; ++i) inverse_degree[i] = r[i] = u[i] = 0.0;
     for (int32_t e = 0; e < ne; ++e) {
         int32_t i = ev[2 * e], j = ev[2 * e + 1];
         double la = edge_length(a, i, j), lb = edge_length(b, i, j);
@@ -150,36 +152,16 @@ static cf_status fit_log_scales(cf_context *ctx, const cf_mesh *mesh, const doub
         target[e] = 2.0 * log(lb / la);
         r[i] += target[e];
         r[j] += target[e];
-        degree[i] += 1.0;
-        degree[j] += 1.0;
+        inverse_degree[i] += 1.0;
+        inverse_degree[j] += 1.0;
     }
     /* preconditioned conjugate gradients from u = 0 (r = A^T t) */
-    double bnorm = 0.0, rz = 0.0;
-    for (int32_t i = 0; i < nv; ++i) {
-        p[i] = r[i] / degree[i];
-        rz += r[i] * p[i];
-        bnorm += r[i] * r[i];
-    }
-    double rr = bnorm;
-    int32_t it = 0;
-    while (rr > CFI_SCALE_FIT_TOLERANCE * CFI_SCALE_FIT_TOLERANCE * bnorm) {
-        if (++it > CFI_SCALE_FIT_MAX_ITERATIONS) {
-            s = cfi_error(ctx, CF_ERR_NOT_CONVERGED, "vertex_scale_fit: conjugate gradients did not converge in %d "
-                          "iterations (residual %.3g of the right-hand side)", CFI_SCALE_FIT_MAX_ITERATIONS,
-                          sqrt(rr / bnorm));
-            goto done;
-        }
-        double alpha = rz / signless_multiply(mesh, degree, p, q), rz_new = 0.0;
-        rr = 0.0;
-        for (int32_t i = 0; i < nv; ++i) {
-            u[i] += alpha * p[i];
-            r[i] -= alpha * q[i];
-            rr += r[i] * r[i];
-            rz_new += r[i] * r[i] / degree[i];
-        }
-        for (int32_t i = 0; i < nv; ++i) p[i] = r[i] / degree[i] + rz_new / rz * p[i];
-        rz = rz_new;
-    }
+    for (int32_t i = 0; i < nv; ++i) inverse_degree[i] = 1.0 / inverse_degree[i]; /* the degree until here */
+    cf_pcg_result pcg;
+    s = cf_pcg_solve(ctx, nv, 1, signless_multiply, (void *)(uintptr_t)mesh, inverse_degree, u, r, p, q,
+                     CFI_SCALE_FIT_TOLERANCE, CFI_SCALE_FIT_MAX_ITERATIONS, &pcg);
+    if (s == CF_ERR_NOT_CONVERGED) cfi_error_prefix(ctx, "vertex_scale_fit");
+    if (s != CF_OK) goto done;
     double sum = 0.0;
     for (int32_t e = 0; e < ne; ++e) {
         double res = 0.5 * (target[e] - u[ev[2 * e]] - u[ev[2 * e + 1]]);
@@ -188,7 +170,7 @@ static cf_status fit_log_scales(cf_context *ctx, const cf_mesh *mesh, const doub
     *rms = ne > 0 ? sqrt(sum / ne) : 0.0;
 done:
     CFI_FREE(ctx, target, ne);
-    CFI_FREE(ctx, degree, nv);
+    CFI_FREE(ctx, inverse_degree, nv);
     CFI_FREE(ctx, r, nv);
     CFI_FREE(ctx, p, nv);
     CFI_FREE(ctx, q, nv);

@@ -12,11 +12,12 @@
  * fairing"); conventions: curvflow/ops.h.
  *
  * Solved by conjugate gradients with the diagonal as preconditioner, x, y
- * and z at once: I + kappa L0 is well conditioned for the kappa of a
+ * and z at once (cf_pcg_solve, curvflow/linalg.h): I + kappa L0 is well conditioned for the kappa of a
  * fairing (the identity dominates every smooth mode), so no factorisation
  * is kept; a factor would cost as much memory as the position recovery's
  * (0.4 GB at 655k vertices, docs/memory.md) and a new one for every kappa.
  */
+#include "curvflow/linalg.h"
 #include "curvflow/ops.h"
 #include "mesh/mesh_internal.h"
 
@@ -71,11 +72,20 @@ cf_status cf_vertex_fairing_create(cf_context *ctx, const cf_mesh *mesh, const d
     return CF_OK;
 }
 
+/* The operator of an apply: kappa with the fairing. */
+typedef struct fairing_operator {
+    const cf_vertex_fairing *f;
+    double kappa;
+} fairing_operator;
+
 /* q = (I + kappa L0) p on the free vertices (q's held entries set to 0;
  * in the iteration p's held entries are 0 and stay 0), and pq[c] = p . q
- * per coordinate. L0 is symmetric, so column i of its CSC form is row i. */
-static void multiply(const cf_vertex_fairing *f, double kappa, const double *p, double *q, double pq[3])
+ * per coordinate (cf_pcg_multiply_fn). L0 is symmetric, so column i of its
+ * CSC form is row i. */
+static void multiply(void *user, const double *p, double *q, double *pq)
 {
+    const fairing_operator *op = user;
+    const cf_vertex_fairing *f = op->f;
     const cf_sparse *l = f->l0;
     pq[0] = pq[1] = pq[2] = 0.0;
     for (int32_t i = 0; i < f->nv; ++i) {
@@ -94,7 +104,7 @@ static void multiply(const cf_vertex_fairing *f, double kappa, const double *p, 
         }
         const double *pi = p + 3 * (int64_t)i;
         for (int c = 0; c < 3; ++c) {
-            qi[c] = pi[c] + kappa * s[c];
+            qi[c] = pi[c] + op->kappa * s[c];
             pq[c] += pi[c] * qi[c];
         }
     }
@@ -122,59 +132,23 @@ cf_status cf_vertex_fairing_apply(cf_vertex_fairing *f, double kappa, const doub
      * -kappa L0 in on the free vertices (held ones do not move), so that the
      * tolerance is relative to the change, whatever the coordinates'
      * offset. Preconditioner: the diagonal 1 + kappa L0_ii. */
-    double *r = f->r, *p = f->p, *q = f->q, *minv = f->minv;
-    double bnorm[3] = {0, 0, 0}, rz[3] = {0, 0, 0}, unused[3];
+    fairing_operator op = {f, kappa};
+    double *r = f->r, unused[3];
     /* r = (I + kappa L0) in on the free rows, then in - r below; in's held
      * entries couple into the free rows, as they must (they stay put) */
-    multiply(f, kappa, in, r, unused);
+    multiply(&op, in, r, unused);
     for (int32_t i = 0; i < nv; ++i) {
-        minv[i] = f->held[i] ? 0.0 : 1.0 / (1.0 + kappa * f->diag[i]);
-        for (int c = 0; c < 3; ++c) {
-            double ri = f->held[i] ? 0.0 : in[3 * i + c] - r[3 * i + c];
-            r[3 * i + c] = ri;
-            p[3 * i + c] = minv[i] * ri;
-            rz[c] += ri * p[3 * i + c];
-            bnorm[c] += ri * ri;
-        }
+        f->minv[i] = f->held[i] ? 0.0 : 1.0 / (1.0 + kappa * f->diag[i]);
+        for (int c = 0; c < 3; ++c) r[3 * i + c] = f->held[i] ? 0.0 : in[3 * i + c] - r[3 * i + c];
     }
     if (out != in) memmove(out, in, (size_t)n3 * sizeof(double));
-    int done[3];
-    for (int c = 0; c < 3; ++c) done[c] = !(bnorm[c] > 0.0);
-    int32_t it = 0;
-    while (!(done[0] && done[1] && done[2])) {
-        if (it >= CFI_FAIRING_MAX_ITERATIONS) {
-            f->iterations = it;
-            if (timings) timings->solve_seconds += cfi_now_seconds() - t0;
-            return cfi_error(f->ctx, CF_ERR_NOT_CONVERGED,
-                             "vertex_fairing: conjugate gradients did not converge in %d iterations (kappa %g)", it,
-                             kappa);
-        }
-        ++it;
-        double pq[3], alpha[3], rr[3] = {0, 0, 0}, rz_new[3] = {0, 0, 0};
-        multiply(f, kappa, p, q, pq);
-        for (int c = 0; c < 3; ++c) alpha[c] = done[c] || !(pq[c] > 0.0) ? 0.0 : rz[c] / pq[c];
-        for (int32_t i = 0; i < nv; ++i)
-            for (int c = 0; c < 3; ++c) {
-                int64_t k = 3 * (int64_t)i + c;
-                out[k] += alpha[c] * p[k];
-                r[k] -= alpha[c] * q[k];
-                rr[c] += r[k] * r[k];
-                rz_new[c] += r[k] * r[k] * minv[i];
-            }
-        double beta[3];
-        for (int c = 0; c < 3; ++c) {
-            if (!(rr[c] > CFI_FAIRING_TOLERANCE * CFI_FAIRING_TOLERANCE * bnorm[c])) done[c] = 1;
-            beta[c] = rz[c] > 0.0 ? rz_new[c] / rz[c] : 0.0;
-            rz[c] = rz_new[c];
-        }
-        for (int32_t i = 0; i < nv; ++i)
-            for (int c = 0; c < 3; ++c) {
-                int64_t k = 3 * (int64_t)i + c;
-                p[k] = minv[i] * r[k] + beta[c] * p[k];
-            }
-    }
-    f->iterations = it;
+    cf_pcg_result pcg;
+    cf_status st = cf_pcg_solve(f->ctx, nv, 3, multiply, &op, f->minv, out, r, f->p, f->q, CFI_FAIRING_TOLERANCE,
+                                CFI_FAIRING_MAX_ITERATIONS, &pcg);
+    f->iterations = pcg.iterations;
     if (timings) timings->solve_seconds += cfi_now_seconds() - t0;
+    if (st == CF_ERR_NOT_CONVERGED) return cfi_error_prefix(f->ctx, "vertex_fairing (kappa %g)", kappa);
+    if (st != CF_OK) return st;
     for (int64_t i = 0; i < n3; ++i)
         if (!isfinite(out[i]))
             return cfi_error(f->ctx, CF_ERR_NUMERICAL, "vertex_fairing: vertex %lld: result is not finite",

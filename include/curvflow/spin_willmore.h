@@ -116,8 +116,11 @@ typedef struct cf_spin_willmore_options {
                                 * is below this fraction of them (*1 norm of the input). Default 3e-3 */
     double max_integrability_error; /* with adaptive: redo a step (tau halved) whose transformed edges
                                 * are non-integrable by more than this fraction (the `integrability`
-                                * residual). Default 0 = no bound: it trades W for triangle quality
-                                * (docs/spin.md, "Periods") */
+                                * residual). 0 = no bound. Default -1 = automatic: 0.15 on closed
+                                * surfaces, where an accepted step above it leaves distortion that
+                                * no vertex scale explains and later steps stall; no bound with a
+                                * boundary, where it cost blade its triangles (docs/spin.md,
+                                * "The integrability bound on closed surfaces") */
     int32_t harmonic_update;   /* with App. C's Z_i (exactness_linearized = 0): re-project the
                                 * input's harmonic 1-forms onto the current surface's every step;
                                 * 0 keeps the input's forms, as the paper. Default 1 */

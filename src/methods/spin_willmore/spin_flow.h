@@ -26,6 +26,9 @@
 #include "methods/spin_willmore/spin_internal.h"
 
 #define CFI_PI 3.14159265358979323846
+/* max_integrability_error's automatic value on closed surfaces (docs/spin.md,
+ * "The integrability bound on closed surfaces") */
+#define CFI_SPIN_CLOSED_INTEGRABILITY_BOUND 0.15
 
 typedef struct cfi_spin_state {
     cf_spin_willmore_options opt;
@@ -63,6 +66,7 @@ typedef struct cfi_spin_state {
     double *hweights;        /* ne: cotan weights of the input (the *1 of the harmonic basis), linearized only */
     int32_t fixed_boundary;
     int32_t restricted_boundary;   /* PRESCRIBED or CMC */
+    double integrability_bound; /* max_integrability_error resolved (its -1: 0.15 closed, else 0) */
     int32_t has_boundary;
     double *frames;          /* 16 nv: Q_i of cfi_dirac_restrict_boundary (boundary vertices) */
     double *target;          /* 3 nv: prescribed V~ (PRESCRIBED) */

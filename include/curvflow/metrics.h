@@ -94,6 +94,19 @@ typedef struct cf_vertex_scale_fit {
 CF_API cf_status cf_vertex_scale_fit_compute(cf_context *ctx, const cf_mesh *mesh, const double *a, const double *b,
                                              double *u, double *q, cf_vertex_scale_fit *result);
 
+/* The two means of the split above for a check made at every step, with no
+ * allocation: *mean_q, the area-weighted mean Q of the map a -> b
+ * (cf_quasi_conformal_error's weighted_mean; infinite if a face of b has no
+ * area), and *mean_model_q, its vertex-scale model's over the faces that
+ * have one (cf_vertex_scale_fit_compute's q.weighted_mean; NaN if none).
+ * *mean_q - *mean_model_q is the map's distortion that no vertex scale
+ * explains. work: cf_conformal_excess_work_size(mesh) doubles. Statuses as
+ * cf_vertex_scale_fit_compute's, and CF_ERR_INVALID_ARG for a NULL work or
+ * output. */
+CF_API int64_t cf_conformal_excess_work_size(const cf_mesh *mesh);
+CF_API cf_status cf_conformal_excess(cf_context *ctx, const cf_mesh *mesh, const double *a, const double *b,
+                                     double *work, double *mean_q, double *mean_model_q);
+
 /* ---- single-shape summary -------------------------------------------------- */
 
 typedef struct cf_shape_summary {

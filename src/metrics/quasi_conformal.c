@@ -52,7 +52,11 @@ static double frames_q(const double p[4], const double r[4])
     /* J = R P^-1, P^-1 = [[1/p0, -p1/(p0 p3)], [0, 1/p3]] */
     double ja = r[0] / p[0], jb = (r[1] - r[0] * p[1] / p[0]) / p[3];
     double jc = r[2] / p[0], jd = (r[3] - r[2] * p[1] / p[0]) / p[3];
-    double pc = hypot(ja + jd, jc - jb), mc = hypot(ja - jd, jb + jc);
+    /* sqrt rather than hypot: the entries are ratios of lengths of one
+     * triangle, far from overflow, and this runs at every step of a flow
+     * (cf_conformal_excess) */
+    double pc = sqrt((ja + jd) * (ja + jd) + (jc - jb) * (jc - jb));
+    double mc = sqrt((ja - jd) * (ja - jd) + (jb + jc) * (jb + jc));
     double smin = fabs(pc - mc);
     return smin > 0.0 ? (pc + mc) / smin : INFINITY;
 }
@@ -94,9 +98,10 @@ done:
     return s;
 }
 
-static double edge_length(const double *x, int32_t i, int32_t j)
+static double squared_edge_length(const double *x, int32_t i, int32_t j)
 {
-    return hypot(hypot(x[3 * i] - x[3 * j], x[3 * i + 1] - x[3 * j + 1]), x[3 * i + 2] - x[3 * j + 2]);
+    double dx = x[3 * i] - x[3 * j], dy = x[3 * i + 1] - x[3 * j + 1], dz = x[3 * i + 2] - x[3 * j + 2];
+    return dx * dx + dy * dy + dz * dz;
 }
 
 /* y = N x for the signless Laplacian N = A^T A of the edge-vertex incidence
@@ -127,29 +132,29 @@ static void signless_multiply(void *user, const double *x, double *y, double *xy
  * residual in *rms. */
 #define CFI_SCALE_FIT_TOLERANCE 1e-13
 #define CFI_SCALE_FIT_MAX_ITERATIONS 2000
+/* cf_conformal_excess needs the mean model Q to a few digits: 21 iterations
+ * instead of 25 on spot_3k; at 1e-6 armadillo's mean model Q moved in the
+ * second decimal, at 1e-8 and 1e-10 not in the fifth */
+#define CFI_EXCESS_FIT_TOLERANCE 1e-10
+/* Workspace of fit_log_scales: the edges' targets (ne) and the conjugate
+ * gradients' preconditioner and vectors (4 nv). */
+static int64_t fit_work_size(const cf_mesh *mesh) { return (int64_t)mesh->ne + 4 * (int64_t)mesh->nv; }
+
 static cf_status fit_log_scales(cf_context *ctx, const cf_mesh *mesh, const double *a, const double *b, double *u,
-                                double *rms)
+                                double *rms, double *work, double tolerance)
 {
     int32_t nv = mesh->nv, ne = mesh->ne;
     const int32_t *ev = mesh->edge_vertices;
-    double *target = CFI_ALLOC(ctx, double, ne), *inverse_degree = CFI_ALLOC(ctx, double, nv);
-    double *r = CFI_ALLOC(ctx, double, nv), *p = CFI_ALLOC(ctx, double, nv), *q = CFI_ALLOC(ctx, double, nv);
-    cf_status s = CF_OK;
-    if (!target || !inverse_degree || !r || !p || !q) {
-        s = CF_ERR_NOMEM;
-        goto done;
-    }
+    double *target = work, *inverse_degree = target + ne, *r = inverse_degree + nv, *p = r + nv, *q = p + nv;
     for (int32_t i = 0; i < nv; ++i) inverse_degree[i] = r[i] = u[i] = 0.0;
     for (int32_t e = 0; e < ne; ++e) {
         int32_t i = ev[2 * e], j = ev[2 * e + 1];
-        double la = edge_length(a, i, j), lb = edge_length(b, i, j);
-        if (!(la > 0.0) || !(lb > 0.0)) {
-            s = cfi_error(ctx, CF_ERR_DEGENERATE_FACE,
-                          "vertex_scale_fit: edge %d (vertices %d, %d): zero length in the %s positions", e, i, j,
-                          la > 0.0 ? "deformed" : "reference");
-            goto done;
-        }
-        target[e] = 2.0 * log(lb / la);
+        double la2 = squared_edge_length(a, i, j), lb2 = squared_edge_length(b, i, j);
+        if (!(la2 > 0.0) || !(lb2 > 0.0))
+            return cfi_error(ctx, CF_ERR_DEGENERATE_FACE,
+                             "vertex_scale_fit: edge %d (vertices %d, %d): zero length in the %s positions", e, i, j,
+                             la2 > 0.0 ? "deformed" : "reference");
+        target[e] = log(lb2 / la2); /* 2 log(|e|_b / |e|_a) */
         r[i] += target[e];
         r[j] += target[e];
         inverse_degree[i] += 1.0;
@@ -158,33 +163,30 @@ static cf_status fit_log_scales(cf_context *ctx, const cf_mesh *mesh, const doub
     /* preconditioned conjugate gradients from u = 0 (r = A^T t) */
     for (int32_t i = 0; i < nv; ++i) inverse_degree[i] = 1.0 / inverse_degree[i]; /* the degree until here */
     cf_pcg_result pcg;
-    s = cf_pcg_solve(ctx, nv, 1, signless_multiply, (void *)(uintptr_t)mesh, inverse_degree, u, r, p, q,
-                     CFI_SCALE_FIT_TOLERANCE, CFI_SCALE_FIT_MAX_ITERATIONS, &pcg);
+    cf_status s = cf_pcg_solve(ctx, nv, 1, signless_multiply, (void *)(uintptr_t)mesh, inverse_degree, u, r, p, q,
+                               tolerance, CFI_SCALE_FIT_MAX_ITERATIONS, &pcg);
     if (s == CF_ERR_NOT_CONVERGED) cfi_error_prefix(ctx, "vertex_scale_fit");
-    if (s != CF_OK) goto done;
-    double sum = 0.0;
-    for (int32_t e = 0; e < ne; ++e) {
-        double res = 0.5 * (target[e] - u[ev[2 * e]] - u[ev[2 * e + 1]]);
-        sum += res * res;
+    if (s != CF_OK) return s;
+    if (rms) {
+        double sum = 0.0;
+        for (int32_t e = 0; e < ne; ++e) {
+            double res = 0.5 * (target[e] - u[ev[2 * e]] - u[ev[2 * e + 1]]);
+            sum += res * res;
+        }
+        *rms = ne > 0 ? sqrt(sum / ne) : 0.0;
     }
-    *rms = ne > 0 ? sqrt(sum / ne) : 0.0;
-done:
-    CFI_FREE(ctx, target, ne);
-    CFI_FREE(ctx, inverse_degree, nv);
-    CFI_FREE(ctx, r, nv);
-    CFI_FREE(ctx, p, nv);
-    CFI_FREE(ctx, q, nv);
-    return s;
+    return CF_OK;
 }
 
 /* The model Q of face f: its triangle in a against the triangle of its
- * lengths in a rescaled by e^((u_i + u_j) / 2) (NaN when they form none). */
-static double model_face_q(const cf_mesh *mesh, const double *a, const double *u, int32_t f, const double p[4])
+ * lengths in a rescaled by e^((u_i + u_j) / 2) = scale_i scale_j, with
+ * scale = e^(u / 2) per vertex (NaN when they form none). */
+static double model_face_q(const cf_mesh *mesh, const double *a, const double *scale, int32_t f, const double p[4])
 {
     const int32_t *t = mesh->triangles + 3 * f;
-    double l01 = edge_length(a, t[0], t[1]) * exp(0.5 * (u[t[0]] + u[t[1]]));
-    double l02 = edge_length(a, t[0], t[2]) * exp(0.5 * (u[t[0]] + u[t[2]]));
-    double l12 = edge_length(a, t[1], t[2]) * exp(0.5 * (u[t[1]] + u[t[2]]));
+    double l01 = sqrt(squared_edge_length(a, t[0], t[1])) * scale[t[0]] * scale[t[1]];
+    double l02 = sqrt(squared_edge_length(a, t[0], t[2])) * scale[t[0]] * scale[t[2]];
+    double l12 = sqrt(squared_edge_length(a, t[1], t[2])) * scale[t[1]] * scale[t[2]];
     /* Heron: 16 A^2; the model triangle in face_frame's form */
     double h = (l01 + l02 + l12) * (l02 + l12 - l01) * (l01 - l02 + l12) * (l01 + l02 - l12);
     if (!(h > 0.0)) return NAN;
@@ -198,15 +200,19 @@ cf_status cf_vertex_scale_fit_compute(cf_context *ctx, const cf_mesh *mesh, cons
     cf_status s = cfi_metrics_check_pair(ctx, mesh, a, b, "vertex_scale_fit");
     if (s != CF_OK) return s;
     int32_t nv = mesh->nv, nf = mesh->nf, valid = 0;
+    int64_t nwork = fit_work_size(mesh);
     double *uu = CFI_ALLOC(ctx, double, nv), *qq = CFI_ALLOC(ctx, double, nf);
     double *qv = CFI_ALLOC(ctx, double, nf), *area = CFI_ALLOC(ctx, double, nf);
+    double *work = CFI_ALLOC(ctx, double, nwork);
     cf_vertex_scale_fit out;
     memset(&out, 0, sizeof out);
-    if (!uu || !qq || !qv || !area) {
+    if (!uu || !qq || !qv || !area || !work) {
         s = CF_ERR_NOMEM;
         goto done;
     }
-    if ((s = fit_log_scales(ctx, mesh, a, b, uu, &out.rms_residual)) != CF_OK) goto done;
+    if ((s = fit_log_scales(ctx, mesh, a, b, uu, &out.rms_residual, work, CFI_SCALE_FIT_TOLERANCE)) != CF_OK) goto done;
+    double *scale = work; /* the fit's workspace is free again (ne + 4 nv >= nv entries) */
+    for (int32_t i = 0; i < nv; ++i) scale[i] = exp(0.5 * uu[i]);
     for (int32_t f = 0; f < nf; ++f) {
         double p[4];
         if (!face_frame(mesh, a, f, p)) {
@@ -214,7 +220,7 @@ cf_status cf_vertex_scale_fit_compute(cf_context *ctx, const cf_mesh *mesh, cons
                           f);
             goto done;
         }
-        qq[f] = model_face_q(mesh, a, uu, f, p);
+        qq[f] = model_face_q(mesh, a, scale, f, p);
         if (isfinite(qq[f])) {
             qv[valid] = qq[f];
             area[valid++] = 0.5 * p[0] * p[3];
@@ -234,7 +240,46 @@ done:
     CFI_FREE(ctx, qq, nf);
     CFI_FREE(ctx, qv, nf);
     CFI_FREE(ctx, area, nf);
+    CFI_FREE(ctx, work, nwork);
     return s;
+}
+
+int64_t cf_conformal_excess_work_size(const cf_mesh *mesh)
+{
+    return mesh ? (int64_t)mesh->nv + fit_work_size(mesh) : 0;
+}
+
+cf_status cf_conformal_excess(cf_context *ctx, const cf_mesh *mesh, const double *a, const double *b, double *work,
+                              double *mean_q, double *mean_model_q)
+{
+    cf_status s = cfi_metrics_check_pair(ctx, mesh, a, b, "conformal_excess");
+    if (s != CF_OK) return s;
+    if (!work || !mean_q || !mean_model_q)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "conformal_excess: work, mean_q or mean_model_q is NULL");
+    double *u = work, *scale = work + mesh->nv;
+    if ((s = fit_log_scales(ctx, mesh, a, b, u, NULL, work + mesh->nv, CFI_EXCESS_FIT_TOLERANCE)) != CF_OK) return s;
+    for (int32_t i = 0; i < mesh->nv; ++i) scale[i] = exp(0.5 * u[i]); /* over the fit's spent workspace */
+    /* the weighted means of cf_quasi_conformal_error and cf_vertex_scale_fit_compute, without their
+     * per-face arrays and percentiles */
+    double sum_q = 0.0, sum_area = 0.0, sum_model = 0.0, sum_model_area = 0.0;
+    for (int32_t f = 0; f < mesh->nf; ++f) {
+        double p[4], r[4];
+        if (!face_frame(mesh, a, f, p))
+            return cfi_error(ctx, CF_ERR_DEGENERATE_FACE, "conformal_excess: face %d: zero area in the reference "
+                             "positions", f);
+        double area = 0.5 * p[0] * p[3];
+        /* a face of zero area in b has no finite Q: the mean is infinite */
+        sum_q += area * (face_frame(mesh, b, f, r) ? frames_q(p, r) : INFINITY);
+        sum_area += area;
+        double model = model_face_q(mesh, a, scale, f, p);
+        if (isfinite(model)) {
+            sum_model += area * model;
+            sum_model_area += area;
+        }
+    }
+    *mean_q = sum_q / sum_area;
+    *mean_model_q = sum_model_area > 0.0 ? sum_model / sum_model_area : NAN;
+    return CF_OK;
 }
 
 cf_status cf_log_area_distortion(cf_context *ctx, const cf_mesh *mesh, const double *a, const double *b,

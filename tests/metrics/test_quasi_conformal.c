@@ -318,6 +318,68 @@ static void test_tube_crowding(void)
     cf_context_destroy(&ctx);
 }
 
+/* cf_conformal_excess: the two weighted means of cf_quasi_conformal_error
+ * and cf_vertex_scale_fit_compute without their arrays. Against them on the
+ * Moebius map (excess 0: the model is the map) and on a map with a shear
+ * part (the bumpy sphere's positions pushed along x by a smooth function of
+ * z, whose excess is positive); a workspace of the stated size is enough
+ * (checked with a guard after it); nothing is allocated; bad arguments. */
+static void test_conformal_excess(void)
+{
+    cf_context *ctx = cft_context();
+    double *x = NULL, *y = NULL, *exact = NULL;
+    cf_mesh *m = moebius_case(ctx, 4, &x, &y, &exact);
+    if (m) {
+        int64_t n = cf_conformal_excess_work_size(m);
+        CHECK(n == 5 * (int64_t)cf_mesh_vertex_count(m) + cf_mesh_edge_count(m));
+        double *work = malloc(sizeof(double) * (size_t)(n + 1));
+        work[n] = 12345.0; /* guard */
+        cf_stats q;
+        cf_vertex_scale_fit fit;
+        double mean_q = 0.0, mean_model = 0.0;
+        CHECK_OK(ctx, cf_quasi_conformal_error(ctx, m, x, y, NULL, &q));
+        CHECK_OK(ctx, cf_vertex_scale_fit_compute(ctx, m, x, y, NULL, NULL, &fit));
+        size_t bytes = cf_context_bytes_in_use(ctx);
+        CHECK_OK(ctx, cf_conformal_excess(ctx, m, x, y, work, &mean_q, &mean_model));
+        CHECK(cf_context_bytes_in_use(ctx) == bytes);
+        CHECK(work[n] == 12345.0);
+        fprintf(stderr, "  Moebius map: mean Q %.6f (%.6f), model %.6f (%.6f)\n", mean_q, q.weighted_mean, mean_model,
+                fit.q.weighted_mean);
+        CHECK_NEAR(mean_q, q.weighted_mean, 1e-12, 0);
+        CHECK_NEAR(mean_model, fit.q.weighted_mean, 1e-9, 0);
+        CHECK_NEAR(mean_q - mean_model, 0.0, 0, 1e-9);
+        CHECK(mean_q - 1.0 > 0.02);
+
+        /* a shear: x += 0.3 sin(2 z) moves the faces' shapes in a way no vertex scale explains */
+        int32_t nv = cf_mesh_vertex_count(m);
+        for (int32_t v = 0; v < nv; ++v) {
+            for (int c = 0; c < 3; ++c) y[3 * v + c] = x[3 * v + c];
+            y[3 * v] += 0.3 * sin(2.0 * x[3 * v + 2]);
+        }
+        CHECK_OK(ctx, cf_quasi_conformal_error(ctx, m, x, y, NULL, &q));
+        CHECK_OK(ctx, cf_vertex_scale_fit_compute(ctx, m, x, y, NULL, NULL, &fit));
+        CHECK_OK(ctx, cf_conformal_excess(ctx, m, x, y, work, &mean_q, &mean_model));
+        fprintf(stderr, "  shear: mean Q %.6f, model %.6f, excess %.4f\n", mean_q, mean_model, mean_q - mean_model);
+        CHECK_NEAR(mean_q, q.weighted_mean, 1e-12, 0);
+        CHECK_NEAR(mean_model, fit.q.weighted_mean, 1e-9, 0);
+        CHECK(mean_q - mean_model > 0.05);
+
+        CHECK(cf_conformal_excess(ctx, m, x, y, NULL, &mean_q, &mean_model) == CF_ERR_INVALID_ARG);
+        CHECK(cf_conformal_excess(ctx, m, x, y, work, NULL, &mean_model) == CF_ERR_INVALID_ARG);
+        CHECK(cf_conformal_excess(ctx, NULL, x, y, work, &mean_q, &mean_model) == CF_ERR_INVALID_ARG);
+        y[7] = NAN;
+        CHECK(cf_conformal_excess(ctx, m, x, y, work, &mean_q, &mean_model) == CF_ERR_NONFINITE);
+        CHECK(cf_conformal_excess_work_size(NULL) == 0);
+        free(work);
+        free(x);
+        free(y);
+        free(exact);
+        cf_mesh_destroy(&m);
+    }
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 static void test_stats(void)
 {
     cf_context *ctx = cft_context();
@@ -341,6 +403,7 @@ int main(void)
     CFT_RUN(test_moebius_sampling_first_order);
     CFT_RUN(test_vertex_scale_fit);
     CFT_RUN(test_tube_crowding);
+    CFT_RUN(test_conformal_excess);
     CFT_RUN(test_stats);
     return cft_finish();
 }

@@ -116,11 +116,8 @@ typedef struct cf_spin_willmore_options {
                                 * is below this fraction of them (*1 norm of the input). Default 3e-3 */
     double max_integrability_error; /* with adaptive: redo a step (tau halved) whose transformed edges
                                 * are non-integrable by more than this fraction (the `integrability`
-                                * residual). 0 = no bound. Default -1 = automatic: 0.15 on closed
-                                * surfaces, where an accepted step above it leaves distortion that
-                                * no vertex scale explains and later steps stall; no bound with a
-                                * boundary, where it cost blade its triangles (docs/spin.md,
-                                * "The integrability bound on closed surfaces") */
+                                * residual). Default 0 = no bound: it trades W for triangle quality
+                                * (docs/spin.md, "Periods") */
     int32_t harmonic_update;   /* with App. C's Z_i (exactness_linearized = 0): re-project the
                                 * input's harmonic 1-forms onto the current surface's every step;
                                 * 0 keeps the input's forms, as the paper. Default 1 */
@@ -158,6 +155,13 @@ typedef struct cf_spin_willmore_options {
                                 * cotan curvature, which the vertex-based spin transformation sees only
                                 * through face sums. Default 1; 0: the paper's step. Not with
                                 * prescribed / cmc boundaries (docs/spin.md, "Vertex-scale fairing") */
+    double max_conformal_excess; /* with adaptive: redo a step (tau halved) whose map from the step's
+                                * start has an area-weighted mean Q above its vertex-scale model's
+                                * by more than this (cf_conformal_excess: the distortion that no
+                                * vertex scale explains, which a conformal step should not make).
+                                * 0 = no bound. Default -1 = automatic: 0.12 on closed surfaces, no
+                                * bound with a boundary (docs/spin.md, "The step's non-conformal
+                                * excess") */
 } cf_spin_willmore_options;
 
 CF_API void cf_spin_willmore_options_default(cf_spin_willmore_options *options);

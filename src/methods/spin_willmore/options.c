@@ -34,7 +34,8 @@ void cf_spin_willmore_options_default(cf_spin_willmore_options *o)
     o->exactness_linearized = 1;
     o->period_iterations = 3;
     o->period_tolerance = 3e-3;
-    o->max_integrability_error = -1.0; /* auto: the bound on closed surfaces only */
+    o->max_integrability_error = 0.0;
+    o->max_conformal_excess = -1.0; /* automatic: the bound on closed surfaces only */
     o->adaptive = 1;
     o->max_scale_change = 1.2;
     o->input_metric = 1;
@@ -91,10 +92,13 @@ static const cf_param_desc spin_params[] = {
      "first-order exactness only)"},
     {"period_tolerance", CF_PARAM_DOUBLE, OPT(period_tolerance), 0.0, 1.0, NULL,
      "stop the period corrections below this harmonic part of the transformed edges (relative)"},
-    {"max_integrability_error", CF_PARAM_DOUBLE, OPT(max_integrability_error), -1.0, 1.0, NULL,
+    {"max_integrability_error", CF_PARAM_DOUBLE, OPT(max_integrability_error), 0.0, 1.0, NULL,
      "adaptive: redo a step with half tau while its transformed edges are non-integrable by more than this "
-     "(relative; -1: 0.15 on closed surfaces, no bound with a boundary; 0: no bound; e.g. 0.04 keeps triangles "
-     "better at some cost in W)"},
+     "(relative; 0: no bound; e.g. 0.04 keeps triangles better at some cost in W)"},
+    {"max_conformal_excess", CF_PARAM_DOUBLE, OPT(max_conformal_excess), -1.0, 100.0, NULL,
+     "adaptive: redo a step with half tau while its map's mean Q exceeds its vertex-scale model's by more than "
+     "this (the distortion no conformal scale explains; -1: 0.12 on closed surfaces, no bound with a boundary; "
+     "0: no bound)"},
     {"regularization", CF_PARAM_DOUBLE, OPT(regularization), 1e-9, 1e6, NULL,
      "weight of |lambda - 1|^2 in units of 4pi/area: damps near-kernel modes of thin shapes"},
     {"growth_ratio", CF_PARAM_DOUBLE, OPT(growth_ratio), 0.0, 1.0, NULL,
@@ -124,10 +128,10 @@ cf_status cfi_spin_validate_options(cf_context *ctx, const cf_mesh *mesh, const 
      * rules a range cannot express. */
     if (!(o->regularization > 0.0) || !isfinite(o->regularization))
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: regularization must be > 0, got %g", o->regularization);
-    if (o->max_integrability_error < 0.0 && o->max_integrability_error != -1.0)
+    if (o->max_conformal_excess < 0.0 && o->max_conformal_excess != -1.0)
         return cfi_error(ctx, CF_ERR_INVALID_ARG,
-                         "spin-willmore: max_integrability_error must be -1 (automatic), 0 (no bound) or in (0, 1], "
-                         "got %g", o->max_integrability_error);
+                         "spin-willmore: max_conformal_excess must be -1 (automatic), 0 (no bound) or positive, got %g",
+                         o->max_conformal_excess);
     double axis_len = sqrt(o->boundary_axis[0] * o->boundary_axis[0] + o->boundary_axis[1] * o->boundary_axis[1] +
                            o->boundary_axis[2] * o->boundary_axis[2]);
     if (o->boundary_mode == CF_SPIN_BOUNDARY_PRESCRIBED && (!(axis_len > 0.0) || !isfinite(axis_len) || !isfinite(o->boundary_angle)))

@@ -26,9 +26,9 @@
 #include "methods/spin_willmore/spin_internal.h"
 
 #define CFI_PI 3.14159265358979323846
-/* max_integrability_error's automatic value on closed surfaces (docs/spin.md,
- * "The integrability bound on closed surfaces") */
-#define CFI_SPIN_CLOSED_INTEGRABILITY_BOUND 0.15
+/* max_conformal_excess's automatic value on closed surfaces (docs/spin.md,
+ * "The step's non-conformal excess") */
+#define CFI_SPIN_CLOSED_EXCESS_BOUND 0.12
 
 typedef struct cfi_spin_state {
     cf_spin_willmore_options opt;
@@ -66,7 +66,8 @@ typedef struct cfi_spin_state {
     double *hweights;        /* ne: cotan weights of the input (the *1 of the harmonic basis), linearized only */
     int32_t fixed_boundary;
     int32_t restricted_boundary;   /* PRESCRIBED or CMC */
-    double integrability_bound; /* max_integrability_error resolved (its -1: 0.15 closed, else 0) */
+    double excess_bound;     /* max_conformal_excess resolved (its -1: 0.12 closed, else 0) */
+    double *excess_work;     /* cf_conformal_excess_work_size doubles while excess_bound > 0 */
     int32_t has_boundary;
     double *frames;          /* 16 nv: Q_i of cfi_dirac_restrict_boundary (boundary vertices) */
     double *target;          /* 3 nv: prescribed V~ (PRESCRIBED) */
@@ -169,8 +170,10 @@ cf_status cfi_spin_period_correction(cf_flow *flow, cfi_spin_state *s, cfi_spin_
 typedef enum cfi_spin_too_large {
     CFI_SPIN_STEP_OK = 0,
     CFI_SPIN_SCALE_CHANGE = 1,   /* before the positions: lambda's scale jumps more than max_scale_change */
-    CFI_SPIN_NOT_INTEGRABLE = 2  /* the recovered positions not applied: the edges are less integrable
+    CFI_SPIN_NOT_INTEGRABLE = 2, /* the recovered positions not applied: the edges are less integrable
                                   * than max_integrability_error allows */
+    CFI_SPIN_NOT_CONFORMAL = 3   /* the new positions' map from the step's start makes more distortion
+                                  * than its vertex scales explain by more than max_conformal_excess */
 } cfi_spin_too_large;
 cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, cfi_spin_too_large *too_large,
                                 cfi_spin_timers *t);

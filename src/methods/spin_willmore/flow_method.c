@@ -679,7 +679,10 @@ cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, cf
 
     ta = cfi_now_seconds();
     st = kappa > 0.0 ? keep_lower(flow, s, x) : cfi_spin_update_geometry(flow, s, x);
-    if (st == CF_OK && s->excess_bound > 0.0) {
+    /* An attempt that raises W is rejected by the layer's rise check anyway
+     * (exact under `adaptive`, which the bound needs): no excess to measure,
+     * so a stall's attempts do not pay for it. */
+    if (st == CF_OK && s->excess_bound > 0.0 && s->energy <= flow->info.energy) {
         /* the map from the step's start (the layer's saved positions) to the
          * positions kept, faired or not: the distortion no vertex scale
          * explains (create says why the bound) */

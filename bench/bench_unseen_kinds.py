@@ -1,9 +1,11 @@
 #!/usr/bin/env python3
 """Flows on generated meshes of the kinds issue 13 checks outside ../shared:
 a knotted tube (genus 1), marching-tetrahedra plates of genus 1-5 (slivers down
-to about 0.1 degrees, staircase noise), a sphere with 7 holes and a disk.
+to about 0.1 degrees, staircase noise), a sphere with 7 holes and a disk; with
+--subdivided, cow_3k and dino_4k Loop-subdivided twice (curvflow.loop_subdivide).
 
-    BUILD_DIR=build python3 bench/bench_unseen_kinds.py [--curvflow PATH] [--steps N] [--keep DIR] [METHOD ...]
+    BUILD_DIR=build python3 bench/bench_unseen_kinds.py [--curvflow PATH] [--steps N] [--keep DIR]
+        [--subdivided ../shared/meshes] [METHOD ...]
 
 Writes the meshes (to a temporary directory, or DIR), runs every METHOD
 (default: spin-willmore and conformal-mcf) with its defaults for N steps
@@ -11,7 +13,8 @@ Writes the meshes (to a temporary directory, or DIR), runs every METHOD
 status, W/4pi before and after, area-weighted mean and max quasi-conformal
 error against the input, smallest angle, whole-process ms per step. Nothing
 is asserted (docs/spin.md, "Meshes of the unseen kinds"). Needs numpy and the
-built library (the Python package's load / save / info / compare; BUILD_DIR,
+built library (the Python package's load / save / info / compare /
+loop_subdivide; BUILD_DIR,
 default build/).
 """
 import argparse
@@ -195,6 +198,9 @@ def main():
     parser.add_argument("--curvflow", default=str(BUILD / "curvflow"))
     parser.add_argument("--steps", type=int, default=10)
     parser.add_argument("--keep", help="write the meshes and results here (kept)")
+    parser.add_argument("--subdivided", metavar="MESH_DIR",
+                        help="also cow_3k and dino_4k from MESH_DIR (e.g. ../shared/meshes), Loop-subdivided twice "
+                             "(46k and 63k vertices, closed: the 50k-vertex kind)")
     parser.add_argument("methods", nargs="*", default=["spin-willmore", "conformal-mcf"])
     args = parser.parse_args()
     if not os.path.exists(args.curvflow):
@@ -215,6 +221,13 @@ def main():
         sphere = generated_sphere(args.curvflow, os.path.join(out_dir, "sphere_source.obj"))
         add("sphere_7_holes", *cut_holes(*sphere, 7, 0.25))
         add("disk_cap", *cut_holes(*sphere, 1, 1.3))
+        for name in ("cow_3k", "dino_4k") if args.subdivided else ():
+            source = os.path.join(args.subdivided, name + ".obj")
+            if not os.path.exists(source):
+                print("skip %s: %s is absent" % (name, source), file=sys.stderr)
+                continue
+            vertices, faces, _ = curvflow.load(source)
+            add(name + "_loop2", *curvflow.loop_subdivide(vertices, faces, 2))
         print("mesh\tmethod\texit\tW0/4pi\tW/4pi\tQ_mean\tQ_max\tmin_angle\tms_per_step")
         for mesh in meshes:
             for method in args.methods:

@@ -13,8 +13,8 @@ every computation is the library's. Quick start::
 See docs/python.md for the array conventions, errors, cancellation and the
 batch runner (python3 -m curvflow.batch).
 """
-from .core import (check_params, compare, edit, flow, info, load, method_params, methods, read_log, save, spin,
-                   write_log, write_text_atomic)
+from .core import (check_params, compare, edit, flow, info, load, loop_subdivide, method_params, methods, read_log,
+                   save, spin, write_log, write_text_atomic)
 from .errors import (CancelledError, CurvflowError, CurvflowMemoryError, InvalidMeshError, LibraryNotFoundError,
                      MeshFormatError, MeshIOError, NumericalError, UnsupportedError, UsageError)
 from .report import report
@@ -34,7 +34,7 @@ def library_version():
     return _lib.lib().cf_version_string().decode()
 
 
-__all__ = ["flow", "edit", "spin", "compare", "load", "save", "info", "methods", "method_params", "check_params",
+__all__ = ["flow", "edit", "spin", "compare", "load", "save", "info", "loop_subdivide", "methods", "method_params", "check_params",
            "write_log", "read_log", "write_text_atomic", "report", "library_path", "library_version",
            "CurvflowError", "UsageError", "InvalidMeshError", "MeshFormatError", "MeshIOError", "UnsupportedError",
            "NumericalError", "CurvflowMemoryError", "CancelledError", "LibraryNotFoundError"]

@@ -705,6 +705,25 @@ def read_log(path):
 
 # ---- info ------------------------------------------------------------------------
 
+def loop_subdivide(V, F, levels=1):
+    """Loop subdivision (Loop 1987; boundary rules of Hoppe et al. 1994),
+    `levels` times (1 to 10; each multiplies the face count by 4): returns
+    (V, F) of the finer mesh, whose first len(V) vertices are the input's,
+    moved by the Loop rules. The input must be a valid mesh
+    (InvalidMeshError otherwise)."""
+    V = _vertices(V)
+    F = _faces(F)
+    if isinstance(levels, bool) or not isinstance(levels, (int, np.integer)):
+        raise TypeError("levels: expected an integer, got %r" % (levels,))
+    with _Context() as ctx:
+        mesh = ctx.mesh(V, F)
+        out = c_void_p()
+        ctx.check(ctx.L.cf_loop_subdivide(ctx.ptr, mesh, V.ctypes.data, int(levels), byref(out)), "loop_subdivide")
+        ctx.defer(ctx.L.cf_mesh_destroy, out)
+        nv, nf = ctx.L.cf_mesh_vertex_count(out), ctx.L.cf_mesh_face_count(out)
+        return _copy_out(ctx.L.cf_mesh_positions(out), (nv, 3)), _copy_out(ctx.L.cf_mesh_triangles(out), (nf, 3))
+
+
 def info(V_or_path, F=None):
     """Mesh summary as `curvflow info --json`: counts, texture coordinates,
     the validation report (every defect counted), and for a valid mesh

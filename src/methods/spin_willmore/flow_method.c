@@ -682,6 +682,7 @@ cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, cf
     /* An attempt that raises W is rejected by the layer's rise check anyway
      * (exact under `adaptive`, which the bound needs): no excess to measure,
      * so a stall's attempts do not pay for it. */
+    s->diag.conformal_excess = 0.0;
     if (st == CF_OK && s->excess_bound > 0.0 && s->energy <= flow->info.energy) {
         /* the map from the step's start (the layer's saved positions) to the
          * positions kept, faired or not: the distortion no vertex scale

@@ -138,7 +138,8 @@ typedef struct cfi_spin_diagnostics {
     double total_curvature_change;  /* |<rhodot, 1>_M| / (|rhodot|_M |1|_M) */
     double integrability_error;     /* cf_edge_closure_error of the step */
     double conformal_excess;        /* mean Q of the step's map minus its vertex-scale model's (cf_conformal_excess;
-                                     * computed while max_conformal_excess bounds it, else 0) */
+                                     * measured while max_conformal_excess bounds it and the attempt did not
+                                     * raise W, else 0) */
     double eigenvalue;              /* Rayleigh quotient of lambda (shift removed) */
     int32_t harmonic_dimension;     /* dim H^1 used by the exactness constraint: 2g, or 2g + b - 1 with a free boundary (0 if off) */
     double mobius_norm;             /* |balancing term|_M added to rhodot */

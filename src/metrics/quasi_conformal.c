@@ -129,7 +129,7 @@ static void signless_multiply(void *user, const double *x, double *y, double *xy
  * degrees) as preconditioner (cf_pcg_solve) solve it in a few dozen iterations, with four
  * vectors and no factor (a Cholesky factor took 0.25 s and 35 % of its time
  * in BLAS threads' spinning at 41k vertices). Returns the edges' RMS
- * residual in *rms. */
+ * residual in *rms (if not NULL); work: fit_work_size doubles. */
 #define CFI_SCALE_FIT_TOLERANCE 1e-13
 #define CFI_SCALE_FIT_MAX_ITERATIONS 2000
 /* cf_conformal_excess needs the mean model Q to a few digits: 21 iterations
@@ -161,7 +161,7 @@ static cf_status fit_log_scales(cf_context *ctx, const cf_mesh *mesh, const doub
         inverse_degree[j] += 1.0;
     }
     /* preconditioned conjugate gradients from u = 0 (r = A^T t) */
-    for (int32_t i = 0; i < nv; ++i) inverse_degree[i] = 1.0 / inverse_degree[i]; /* the degree until here */
+    for (int32_t i = 0; i < nv; ++i) inverse_degree[i] = 1.0 / inverse_degree[i]; /* it held the degree */
     cf_pcg_result pcg;
     cf_status s = cf_pcg_solve(ctx, nv, 1, signless_multiply, (void *)(uintptr_t)mesh, inverse_degree, u, r, p, q,
                                tolerance, CFI_SCALE_FIT_MAX_ITERATIONS, &pcg);

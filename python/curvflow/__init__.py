@@ -34,7 +34,7 @@ def library_version():
     return _lib.lib().cf_version_string().decode()
 
 
-__all__ = ["flow", "edit", "spin", "compare", "load", "save", "info", "loop_subdivide", "methods", "method_params", "check_params",
-           "write_log", "read_log", "write_text_atomic", "report", "library_path", "library_version",
+__all__ = ["flow", "edit", "spin", "compare", "load", "save", "info", "loop_subdivide", "methods", "method_params",
+           "check_params", "write_log", "read_log", "write_text_atomic", "report", "library_path", "library_version",
            "CurvflowError", "UsageError", "InvalidMeshError", "MeshFormatError", "MeshIOError", "UnsupportedError",
            "NumericalError", "CurvflowMemoryError", "CancelledError", "LibraryNotFoundError"]

@@ -238,9 +238,9 @@ def _declare(lib):
     f("cf_mesh_positions", POINTER(c_double), P)
     f("cf_mesh_triangles", POINTER(c_int32), P)
     f("cf_mesh_uv", POINTER(c_double), P)
+    f("cf_mesh_uv_triangles", POINTER(c_int32), P)
     # ops.h
     f("cf_loop_subdivide", S, P, P, P, I32, POINTER(c_void_p))
-    f("cf_mesh_uv_triangles", POINTER(c_int32), P)
     # io.h
     f("cf_mesh_data_destroy", None, POINTER(POINTER(MeshData)))
     f("cf_mesh_data_desc", S, POINTER(MeshData), POINTER(MeshDesc))

@@ -126,8 +126,8 @@ static void signless_multiply(void *user, const double *x, double *y, double *xy
  * triangle mesh has an odd cycle, and well conditioned: it depends on the
  * graph only (not on the triangles' shapes), and on a regular triangulation
  * its spectrum is [3, 12]. So conjugate gradients with the diagonal (the
- * degrees) as preconditioner (cf_pcg_solve) solve it in a few dozen iterations, with four
- * vectors and no factor (a Cholesky factor took 0.25 s and 35 % of its time
+ * degrees) as preconditioner (cf_pcg_solve) solve it in a few dozen
+ * iterations, with four vectors and no factor (a Cholesky factor took 0.25 s and 35 % of its time
  * in BLAS threads' spinning at 41k vertices). Returns the edges' RMS
  * residual in *rms (if not NULL); work: fit_work_size doubles. */
 #define CFI_SCALE_FIT_TOLERANCE 1e-13

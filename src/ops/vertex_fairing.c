@@ -12,10 +12,11 @@
  * fairing"); conventions: curvflow/ops.h.
  *
  * Solved by conjugate gradients with the diagonal as preconditioner, x, y
- * and z at once (cf_pcg_solve, curvflow/linalg.h): I + kappa L0 is well conditioned for the kappa of a
- * fairing (the identity dominates every smooth mode), so no factorisation
- * is kept; a factor would cost as much memory as the position recovery's
- * (0.4 GB at 655k vertices, docs/memory.md) and a new one for every kappa.
+ * and z at once (cf_pcg_solve, curvflow/linalg.h): I + kappa L0 is well
+ * conditioned for the kappa of a fairing (the identity dominates every
+ * smooth mode), so no factorisation is kept; a factor would cost as much
+ * memory as the position recovery's (0.4 GB at 655k vertices,
+ * docs/memory.md) and a new one for every kappa.
  */
 #include "curvflow/linalg.h"
 #include "curvflow/ops.h"

@@ -124,7 +124,10 @@ typedef struct cf_step_policy {
     int32_t energy_check;       /* 1: reject a step that raises the energy (methods that descend it) [1] */
     int32_t backtrack;          /* 1: retry a rejected step with half the time step, grow it back after [1] */
     int32_t max_halvings;       /* retries of one step, 0..60 [10] */
-    int32_t reserved_;          /* (alignment) */
+    int32_t halving_search;     /* 1: a round of halvings whose rises shrink like a first-order rise
+                                 * tries the smallest step it may reach first and bisects; the same
+                                 * step as plain halving wherever acceptance is monotone in the step,
+                                 * in fewer attempts (spin-willmore; docs/flowcli.md) [1] */
     double step_growth;         /* factor on the step after an accepted step, up to time_step, [1, 16] [2] */
     double rise_tolerance;      /* relative rise of the energy in a step taken as rounding, [0, 1] [1e-9] */
     double divergence_tolerance; /* relative slack of divergence tests against the start, [0, 1] [1e-4] */

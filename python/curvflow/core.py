@@ -200,7 +200,7 @@ def method_params(method):
     """Parameters of a method with their defaults, ranges and help (as
     `curvflow flow --method NAME --list-params`): {name: dict}, the method's
     own first, then the step policy common to every method (energy_check,
-    backtrack, max_halvings, step_growth, rise_tolerance,
+    backtrack, max_halvings, halving_search, step_growth, rise_tolerance,
     divergence_tolerance, energy_floor, blowup_factor, divergence_factor,
     whose defaults depend on the method; docs/flowcli.md). Each dict: type,
     default (text, as the CLI prints it), help, group ("method" or

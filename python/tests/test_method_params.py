@@ -14,6 +14,7 @@ COMMON = {  # name: (type, default text, accepted values as printed)
     "energy_check": ("bool", "true", "true|false"),
     "backtrack": ("bool", "true", "true|false"),
     "max_halvings": ("int", "10", "[0, 60]"),
+    "halving_search": ("bool", "true", "true|false"),
     "step_growth": ("double", "2", "[1, 16]"),
     "rise_tolerance": ("double", "1e-09", "[0, 1]"),
     "divergence_tolerance": ("double", "0.0001", "[0, 1]"),

@@ -809,6 +809,49 @@ static cf_status check_energy_jumps(cf_flow *flow, double before, const cf_flow_
     return CF_OK;
 }
 
+/* A round of halvings that searches (option halving_search, for a method
+ * whose descriptor allows it): a rise at step t after rises at 2 t and 4 t
+ * that each shrank like a first-order rise (rise_halved_as_first_order)
+ * says the rise is unlikely to turn into a descent within the halvings
+ * left. The round then tries the smallest step it may reach, t 2^-j with j
+ * the halvings left, first. If that is rejected too, the round ends there
+ * (the method's fallback or a stall) as it would have after trying every
+ * step in between; if it is accepted, a bisection on the exponent finds
+ * the smallest exponent whose attempt is accepted. Where acceptance is
+ * monotone in the step (every attempt below the first accepted one is
+ * accepted), that is the step plain halving takes, so the result is the
+ * same and only the rejected attempts in between are saved. A failed
+ * attempt (no factorisation, a degenerate face) ends the search: plain
+ * halving goes on from t. */
+typedef struct halving_search {
+    int active;
+    double step;      /* t: the last step of the plain halving, rejected (exponent 0) */
+    int32_t halvings; /* the halvings counted at t */
+    int32_t lo;       /* the largest exponent whose attempt was rejected */
+    int32_t hi;       /* the smallest exponent whose attempt was accepted, -1: none yet */
+    int32_t j;        /* the exponent of the attempt under way */
+    double slope;     /* the first-order term of the rise at t, per unit step (rise_slope) */
+} halving_search;
+
+/* Whether a halving shrank a rise as a first-order rise shrinks: rise at
+ * step t and last_rise at 2 t (the attempt just before), both above
+ * rounding (1e-8 |before|), with last_rise / rise in [1.5, 3.5]. With the
+ * rise modelled as a t + b t^2, that ratio is 4 (a + b t) / (2 a + b t):
+ * 2 where the first-order term dominates, 4 where the second-order one
+ * does, above 4 when a < 0 (a descent at small enough steps) and b > 0.
+ * The band keeps away from 4, and from the ratios below 1.5 of rises that
+ * do not follow the model at all (a rise that grows when the step is
+ * halved). */
+/* a of the rise a s + b s^2 through rise at step t and last_rise at 2 t. */
+static double rise_slope(double last_rise, double rise, double step) { return (4.0 * rise - last_rise) / (2.0 * step); }
+
+static int rise_halved_as_first_order(double last_rise, double last_rise_step, double rise, double step, double before)
+{
+    double noise = 1e-8 * fabs(before);
+    return isfinite(last_rise) && isfinite(rise) && step == 0.5 * last_rise_step && rise > noise &&
+           last_rise >= 1.5 * rise && last_rise <= 3.5 * rise;
+}
+
 /* One step under the shared safety net and step policy. The method's
  * begin_step (if any), then attempts (its attempt, or its whole step) at
  * the policy's current step. An attempt is rejected when the method says
@@ -844,6 +887,12 @@ cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info)
     int32_t halvings = 0;
     int stalled = 0, fell_back = 0;
     int32_t hold_step = 0;
+    /* the rise of the round's last attempt, if it was rejected for a rise,
+     * its step, and how many halvings in a row shrank the rise like a
+     * first-order one (halving_search) */
+    double last_rise = NAN, last_rise_step = 0.0;
+    int32_t first_order_halvings = 0;
+    halving_search search = {0, 0.0, 0, 0, -1, 0, 0.0};
     cf_status st = CF_OK;
 
     memcpy(flow->saved_positions, flow->positions, 3 * (size_t)nv * sizeof(double));
@@ -864,6 +913,7 @@ cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info)
         /* so that a failing method that records no message is noticed */
         cf_context_clear_error(ctx);
         st = m->attempt ? m->attempt(flow, pol->step, &step, &verdict) : m->step(flow, &step);
+        ++flow->attempts;
         hold_step = verdict.hold_step; /* the accepted attempt's is the one that counts */
         int reason = ACCEPTED;
         if (st != CF_OK) {
@@ -889,7 +939,19 @@ cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info)
                 st = CF_ERR_NUMERICAL;
                 reason = REJECT_FAILURE;
             } else if (!pol->rise_check || !rose(flow, before, step.energy)) {
-                break;
+                if (!search.active) break;
+                /* the search found an accepted step: it is the round's
+                 * answer once no larger one is left to try */
+                search.hi = search.j;
+                if (search.hi - search.lo <= 1) {
+                    halvings = search.halvings + search.hi;
+                    break;
+                }
+                st = back_to_start(flow);
+                if (st != CF_OK) return fail_method(flow, st, iteration, start_step);
+                search.j = (search.lo + search.hi) / 2;
+                pol->step = ldexp(search.step, -search.j);
+                continue;
             } else {
                 reason = REJECT_RISE;
             }
@@ -914,6 +976,64 @@ cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info)
          * halvings_per_step counts the retries of each step instead. */
         int at_limit = desc->halvings_per_step ? halvings >= pol->opt.max_halvings
                                                : pol->step <= pol->full_step * ldexp(1.0, -pol->opt.max_halvings);
+        if (search.active) {
+            if (reason == REJECT_FAILURE || search.j == search.hi) {
+                /* a failed attempt, or the accepted step of the search that
+                 * does not repeat: the plain halving from where the search
+                 * began */
+                search.active = 0;
+                pol->step = search.step;
+                halvings = search.halvings;
+            } else {
+                search.lo = search.j;
+                double rise = step.energy - before, expected = search.slope * pol->step;
+                if (search.hi < 0 && reason == REJECT_RISE && rise >= 0.5 * expected && rise <= 2.0 * expected) {
+                    /* the smallest step rose as the first-order term
+                     * predicts: the round's end, as if every halving down
+                     * to it had been tried */
+                    halvings = search.halvings + search.j;
+                    at_limit = 1;
+                } else if (search.hi < 0) {
+                    /* rejected otherwise (a rise the model does not
+                     * predict: rounding of the step at tiny tau, or a
+                     * rise that bends): plain halving from t */
+                    search.active = 0;
+                    pol->step = search.step;
+                    halvings = search.halvings;
+                } else {
+                    /* between the largest rejected and the smallest
+                     * accepted; the latter again when they are adjacent */
+                    search.j = search.hi - search.lo <= 1 ? search.hi : (search.lo + search.hi) / 2;
+                    st = back_to_start(flow);
+                    if (st != CF_OK) return fail_method(flow, st, iteration, start_step);
+                    pol->step = ldexp(search.step, -search.j);
+                    continue;
+                }
+            }
+            last_rise = NAN;
+            first_order_halvings = 0;
+        } else if (reason == REJECT_RISE && desc->halving_search && desc->halvings_per_step && pol->opt.halving_search) {
+            double rise = step.energy - before, last_rise_before = last_rise;
+            first_order_halvings = rise_halved_as_first_order(last_rise, last_rise_step, rise, pol->step, before)
+                                       ? first_order_halvings + 1
+                                       : 0;
+            last_rise = rise;
+            last_rise_step = pol->step;
+            int32_t left = pol->opt.max_halvings - halvings;
+            if (first_order_halvings >= 2 && left >= 2) {
+                /* the rises look as if they persist down to the limit: the
+                 * smallest step first (halving_search) */
+                st = back_to_start(flow);
+                if (st != CF_OK) return fail_method(flow, st, iteration, start_step);
+                search = (halving_search){1, pol->step, halvings, 0, -1, left, 0.0};
+                search.slope = rise_slope(last_rise_before, rise, pol->step);
+                pol->step = ldexp(search.step, -search.j);
+                continue;
+            }
+        } else {
+            last_rise = NAN;
+            first_order_halvings = 0;
+        }
         if (at_limit && reason == REJECT_FAILURE) {
             if (halvings > 0)
                 cfi_error_prefix(ctx, "at every time step down to %g (time_step / %.0f)", pol->step,
@@ -934,6 +1054,9 @@ cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info)
             if (switched) {
                 pol->step = restart_step > 0.0 && restart_step < pol->full_step ? restart_step : pol->full_step;
                 halvings = 0;
+                last_rise = NAN;
+                first_order_halvings = 0;
+                search.active = 0;
                 continue;
             }
         }

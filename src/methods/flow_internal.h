@@ -96,6 +96,7 @@ struct cf_flow {
     cf_progress_fn progress;
     void *progress_user;
     cfi_step_policy_state policy; /* the shared step policy (cf_flow_step) */
+    int64_t attempts;           /* attempts made since create (tests, benchmarks) */
 };
 
 /* The step policy's time step for the current attempt: the full step

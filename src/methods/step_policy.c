@@ -20,6 +20,7 @@ void cfi_step_policy_default(cf_step_policy *p)
     p->energy_check = 1;
     p->backtrack = 1;
     p->max_halvings = 10;
+    p->halving_search = 1;
     p->step_growth = 2.0;
     /* the explicit baselines' former slack: above rounding, below any
      * unstable mode's growth per step */
@@ -51,6 +52,10 @@ static const cf_param_desc policy_params[] = {
     {"max_halvings", CF_PARAM_INT, POL(max_halvings), 0, 60, NULL,
      "step policy: the step never goes below time_step / 2^max_halvings; when no step down to that lowers the "
      "energy, the run stops there as converged (the last state that lowered it kept)"},
+    {"halving_search", CF_PARAM_BOOL, POL(halving_search), 0, 1, NULL,
+     "step policy: once two halvings in a row shrank the rise as a first-order rise shrinks, try the smallest "
+     "step the limit allows and bisect: the step plain halving finds wherever acceptance is monotone in the "
+     "step, in fewer attempts (spin-willmore); false: plain halving"},
     {"step_growth", CF_PARAM_DOUBLE, POL(step_growth), 1.0, 16.0, NULL,
      "step policy: factor on a reduced time step after an accepted step (up to time_step)"},
     {"rise_tolerance", CF_PARAM_DOUBLE, POL(rise_tolerance), 0.0, 1.0, NULL,

@@ -71,6 +71,10 @@ typedef struct cfi_step_policy_desc {
      * decrease for any time step down to ..."): spin-willmore. 0: the
      * iteration does not advance and a WARNING says why the run stops. */
     int32_t stall_as_step;
+    /* 1: the option halving_search applies (halvings_per_step needed): a
+     * round of halvings whose rises look persistent tries its smallest
+     * step first and bisects (flow.c, halving_search). */
+    int32_t halving_search;
     const char *energy_name; /* in the stall and divergence messages (NULL: "the energy") */
     /* 1: the blow-up check applies (the common option blowup_factor): an
      * accepted step whose energy exceeds blowup_factor times the energy

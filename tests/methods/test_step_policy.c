@@ -87,13 +87,13 @@ static void test_options(void)
     const cf_param_desc *params = NULL;
     int32_t count = 0;
     CHECK_OK(ctx, cf_flow_common_params(&params, &count));
-    CHECK(count == 9);
+    CHECK(count == 10);
     CHECK_STATUS(cf_flow_common_params(NULL, &count), CF_ERR_INVALID_ARG);
     for (int k = 0; k < CF_FLOW_KIND_COUNT; ++k) {
         cf_flow_options o;
         CHECK_OK(ctx, cf_flow_options_default((cf_flow_kind)k, &o));
         const cf_step_policy *p = cf_flow_options_policy_const(&o);
-        CHECK(p->energy_check == 1 && p->backtrack == 1 && p->max_halvings == 10);
+        CHECK(p->energy_check == 1 && p->backtrack == 1 && p->max_halvings == 10 && p->halving_search == 1);
         CHECK(p->step_growth == 2.0 && p->rise_tolerance == 1e-9 && p->divergence_tolerance == 1e-4);
         CHECK(p->energy_floor == 1e-12);
         /* the blow-up and divergence defaults are the method's (its descriptor) */
@@ -111,6 +111,8 @@ static void test_options(void)
         CHECK(cf_flow_options_policy(&o)->backtrack == 0);
         CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "max_halvings", "3"));
         CHECK(cf_flow_options_policy(&o)->max_halvings == 3);
+        CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "halving_search", "false"));
+        CHECK(cf_flow_options_policy(&o)->halving_search == 0);
         CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "rise_tolerance", "1e-6"));
         CHECK(cf_flow_options_policy(&o)->rise_tolerance == 1e-6);
         CHECK_STATUS(cf_flow_options_set(ctx, &o, "max_halvings", "61"), CF_ERR_INVALID_ARG);

@@ -185,7 +185,7 @@ const cfi_flow_method cfi_spin_willmore_method = {
      * 102): the divergence check (default 1). Convergence is the method's
      * (end_step; step_policy.c says why). */
     .policy = {.rise_check = 1, .backtrack = 1, .unit = CFI_ENERGY_UNIT_4PI, .rise_exact = 1,
-               .halvings_per_step = 1, .stall_as_step = 1, .energy_name = "W", .blowup_check = 1,
+               .halvings_per_step = 1, .stall_as_step = 1, .halving_search = 1, .energy_name = "W", .blowup_check = 1,
                .blowup_default = 10.0, .divergence_check = 1, .divergence_default = 1.0,
                .divergence_cause = " is above this mesh's stability limit",
                .divergence_hint = "adaptive=1 or a larger regularization (docs/spin.md)"},

@@ -162,6 +162,12 @@ typedef struct cf_spin_willmore_options {
                                 * 0 = no bound. Default -1 = automatic: 0.12 on closed surfaces, no
                                 * bound with a boundary (docs/spin.md, "The step's non-conformal
                                 * excess") */
+    int32_t stall_fairing;     /* with adaptive and fairing: a step whose spin attempts raise W at
+                                * every tau, in the input metric and in the current one, is taken as
+                                * the vertex-scale fairing of its start alone (kappa = fairing tau,
+                                * tau halved while W rises or the excess bound is exceeded) before
+                                * the flow stops as converged. Default 1; 0: the stall stops the
+                                * run (docs/spin.md, "A stall's last variant") */
 } cf_spin_willmore_options;
 
 CF_API void cf_spin_willmore_options_default(cf_spin_willmore_options *options);

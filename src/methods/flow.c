@@ -866,7 +866,8 @@ static int rise_halved_as_first_order(double last_rise, double last_rise_step, d
  * rise or the method's rejection is a stall: the run stops as converged at
  * the state before the step, unless the method's fallback switches to
  * another variant of its attempt, which then gets the same halvings from
- * the full step or the smaller step the method asks for (once per step).
+ * the full step or the smaller step the method asks for (asked again at
+ * that variant's stall, at most 4 times per step).
  * Without backtracking a rise fails (or, with rise_stops, stops the run). The accepted step (after the method's
  * end_step) then passes the blow-up and divergence checks or fails
  * (check_energy_jumps). After an accepted step without retries a reduced
@@ -1042,7 +1043,7 @@ cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info)
         }
         st = back_to_start(flow);
         if (st != CF_OK) return fail_method(flow, st, iteration, start_step);
-        if (at_limit && m->fallback && !fell_back) {
+        if (at_limit && m->fallback && fell_back < 4) {
             /* the method's other variant of the step, from the full step
              * or the smaller step the method asks for */
             int32_t switched = 0;
@@ -1050,7 +1051,7 @@ cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info)
             cf_context_clear_error(ctx);
             st = m->fallback(flow, &switched, &restart_step);
             if (st != CF_OK) return fail_method(flow, st, iteration, start_step);
-            fell_back = 1;
+            ++fell_back;
             if (switched) {
                 pol->step = restart_step > 0.0 && restart_step < pol->full_step ? restart_step : pol->full_step;
                 halvings = 0;

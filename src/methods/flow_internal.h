@@ -68,7 +68,9 @@ typedef struct cfi_flow_method {
     /* Optional, with attempt: at a stall (no attempt down to the policy's
      * limit accepted), the method may switch the rest of this step to
      * another variant of its attempt and set *switched; the layer then
-     * restarts the step's halvings, once per step, from *restart_step
+     * restarts the step's halvings from *restart_step, and at that
+     * variant's stall asks again (at most 4 variants per step; the method
+     * says when it has none left by not switching)
      * (set to the full step before the call; the method may lower it, e.g.
      * to where the variant's last step was accepted). The method goes back
      * to its first variant in begin_step. The layer has put back the step's
@@ -103,6 +105,11 @@ struct cf_flow {
  * given to cfi_flow_set_time_step, or a smaller one after rejected steps
  * (methods with policy.backtrack take their step from here). */
 static inline double cfi_flow_time_step(const cf_flow *flow) { return flow->policy.step; }
+
+/* Called by a method's begin_step: this step's attempts start from the
+ * full step instead of the step carried from the last one (spin-willmore's
+ * fairing variant, which is not the step whose tau was carried). */
+static inline void cfi_flow_start_from_full_step(cf_flow *flow) { flow->policy.step = flow->policy.full_step; }
 
 /* 1 when this flow's rejected steps are redone with a smaller step. */
 static inline int cfi_flow_backtracks(const cf_flow *flow) { return flow->policy.backtrack; }

@@ -589,9 +589,68 @@ static cf_status keep_lower(cf_flow *flow, cfi_spin_state *s, double *x)
     return geometry_is_faired ? cfi_spin_update_geometry(flow, s, x) : CF_OK;
 }
 
+/* The bound on the step's non-conformal excess (max_conformal_excess) for
+ * the positions x kept, whose geometry s holds: *too_large set when the
+ * map from the step's start makes more distortion than its vertex scales
+ * explain by more than the bound. */
+static cf_status check_excess(cf_flow *flow, cfi_spin_state *s, const double *x, cfi_spin_too_large *too_large)
+{
+    /* An attempt that raises W is rejected by the layer's rise check anyway
+     * (exact under `adaptive`, which the bound needs): no excess to measure,
+     * so a stall's attempts do not pay for it. */
+    s->diag.conformal_excess = 0.0;
+    if (!(s->excess_bound > 0.0 && s->energy <= flow->info.energy)) return CF_OK;
+    /* the map from the step's start (the layer's saved positions) to the
+     * positions kept, faired or not: the distortion no vertex scale
+     * explains (create says why the bound) */
+    double mean_q = 0.0, mean_model_q = 0.0;
+    cf_status st = cf_conformal_excess(flow->ctx, flow->mesh, flow->saved_positions, x, s->excess_work, &mean_q,
+                                       &mean_model_q);
+    if (st == CF_ERR_DEGENERATE_FACE || st == CF_ERR_NUMERICAL || st == CF_ERR_NOT_CONVERGED) {
+        /* no model of the map: no excess to judge; the layer's face check decides */
+        cf_context_clear_error(flow->ctx);
+        return CF_OK;
+    }
+    if (st != CF_OK) return st;
+    s->diag.conformal_excess = mean_q - mean_model_q;
+    if (!(s->diag.conformal_excess <= s->excess_bound)) *too_large = CFI_SPIN_NOT_CONFORMAL;
+    return CF_OK;
+}
+
+/* The fallback's last variant (cfi_spin_fallback): the step's start
+ * relaxed by the vertex-scale fairing alone, kappa = fairing tau, placed
+ * like a step's positions. */
+static cf_status realise_fairing_only(cf_flow *flow, cfi_spin_state *s, double tau, cfi_spin_too_large *too_large,
+                                     cfi_spin_timers *t)
+{
+    double *x = flow->positions;
+    double kappa = s->opt.fairing * tau;
+    cf_solver_timings ft = {0.0, 0.0, 0.0};
+    cf_status st = cf_vertex_fairing_apply(s->fairing, kappa, x, s->faired, &ft);
+    t->solve += ft.solve_seconds;
+    if (st == CF_ERR_NOT_CONVERGED) return CF_ERR_NUMERICAL; /* no candidate: the layer halves tau */
+    if (st != CF_OK) return st;
+    double ta = cfi_now_seconds();
+    placement pl;
+    start_placement(flow, s, x, &pl);
+    st = place(flow, s, &pl, s->faired, x);
+    if (st != CF_OK) return st;
+    s->diag.scale_change = 0.0;
+    s->diag.integrability_error = 0.0;
+    s->diag.fairing_kappa = kappa;
+    s->diag.fairing_kept = 1;
+    s->diag.predicted_energy = NAN; /* no curvature-space model: no realised decrease, tau may grow */
+    st = cfi_spin_update_geometry(flow, s, x);
+    s->diag.fairing_energy = s->diag.plain_energy = s->energy;
+    if (st == CF_OK) st = check_excess(flow, s, x, too_large);
+    t->assemble += cfi_now_seconds() - ta;
+    return st;
+}
+
 cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, cfi_spin_too_large *too_large,
                                 cfi_spin_timers *t)
 {
+    if (s->fairing_only_step) return realise_fairing_only(flow, s, tau, too_large, t);
     const cf_mesh *mesh = flow->mesh;
     cf_context *ctx = flow->ctx;
     int32_t nv = s->nv;
@@ -679,25 +738,7 @@ cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, cf
 
     ta = cfi_now_seconds();
     st = kappa > 0.0 ? keep_lower(flow, s, x) : cfi_spin_update_geometry(flow, s, x);
-    /* An attempt that raises W is rejected by the layer's rise check anyway
-     * (exact under `adaptive`, which the bound needs): no excess to measure,
-     * so a stall's attempts do not pay for it. */
-    s->diag.conformal_excess = 0.0;
-    if (st == CF_OK && s->excess_bound > 0.0 && s->energy <= flow->info.energy) {
-        /* the map from the step's start (the layer's saved positions) to the
-         * positions kept, faired or not: the distortion no vertex scale
-         * explains (create says why the bound) */
-        double mean_q = 0.0, mean_model_q = 0.0;
-        st = cf_conformal_excess(ctx, mesh, flow->saved_positions, x, s->excess_work, &mean_q, &mean_model_q);
-        if (st == CF_ERR_DEGENERATE_FACE || st == CF_ERR_NUMERICAL || st == CF_ERR_NOT_CONVERGED) {
-            /* no model of the map: no excess to judge; the layer's face check decides */
-            cf_context_clear_error(ctx);
-            st = CF_OK;
-        } else if (st == CF_OK) {
-            s->diag.conformal_excess = mean_q - mean_model_q;
-            if (!(s->diag.conformal_excess <= s->excess_bound)) *too_large = CFI_SPIN_NOT_CONFORMAL;
-        }
-    }
+    if (st == CF_OK) st = check_excess(flow, s, x, too_large);
     t->assemble += cfi_now_seconds() - ta;
     return st;
 }
@@ -708,6 +749,13 @@ cf_status cfi_spin_begin_step(cf_flow *flow, cf_flow_info *info)
     cfi_spin_state *s = flow->impl;
     s->energy_before = s->energy;
     s->current_metric_step = 0; /* the input metric again (cfi_spin_fallback) */
+    /* After a step the fairing alone took, the spin step stalled again in
+     * both metrics at every step where that was measured (man_slivers_17k,
+     * steps 5-9, each after two rounds of attempts): such a step is the
+     * fairing alone, from the full step as in the fallback, and the run
+     * stops when it stalls (docs/spin.md, "A stall's last variant"). */
+    s->fairing_only_step = s->last_fairing_only;
+    if (s->fairing_only_step) cfi_flow_start_from_full_step(flow);
     s->x0_renew_pending = 0;
     memset(&s->diag, 0, sizeof s->diag);
     return step_direction(flow, s, &info->factorize_seconds, &info->solve_seconds);
@@ -762,7 +810,18 @@ cf_status cfi_spin_fallback(cf_flow *flow, int32_t *switched, double *restart_st
 {
     cfi_spin_state *s = flow->impl;
     *switched = 0;
-    if (!s->stall_retry || s->current_metric_step) return CF_OK;
+    /* the fairing alone stalled too: no variant is left, the run stops */
+    if (s->fairing_only_step) return CF_OK;
+    if (!s->stall_retry || s->current_metric_step) {
+        /* the spin step stalled in every metric it has: the vertex-scale
+         * fairing of the step's start alone, from the full step
+         * (docs/spin.md, "A stall's last variant") */
+        if (s->fairing && s->opt.stall_fairing) {
+            s->fairing_only_step = 1;
+            *switched = 1;
+        }
+        return CF_OK;
+    }
     /* where the last step already needed this metric, its tau is the
      * better guess than the full step: restart two doublings above it
      * (bull_6k, steps 6-9: 2-3 retries instead of 8-9; docs/spin.md,
@@ -826,7 +885,9 @@ cf_status cfi_spin_end_step(cf_flow *flow, cf_flow_info *info)
     s->x0_scale_since += s->diag.scale_change;
     s->x0_period_first = s->diag.period_error_first;
     s->diag.current_metric = s->current_metric_step;
-    s->fallback_step = s->current_metric_step && !flow->converged ? info->time_step : 0.0;
+    s->diag.fairing_only = s->fairing_only_step;
+    s->last_fairing_only = s->fairing_only_step && info->time_step > 0.0;
+    s->fallback_step = s->current_metric_step && !s->fairing_only_step && !flow->converged ? info->time_step : 0.0;
     return CF_OK;
 }
 
@@ -837,6 +898,7 @@ cf_status cfi_spin_reset(cf_flow *flow)
     flow->converged = 0;
     s->x0_factored = 0; /* new positions: X(0) of the old ones is no guide */
     s->fallback_step = 0.0;
+    s->last_fairing_only = 0;
     cf_status st = cfi_spin_update_geometry(flow, s, flow->positions);
     /* the flow layer compares the next step's W with this one */
     flow->info.energy = s->energy;

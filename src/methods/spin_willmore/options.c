@@ -36,6 +36,7 @@ void cf_spin_willmore_options_default(cf_spin_willmore_options *o)
     o->period_tolerance = 3e-3;
     o->max_integrability_error = 0.0;
     o->max_conformal_excess = -1.0; /* automatic: the bound on closed surfaces only */
+    o->stall_fairing = 1;
     o->adaptive = 1;
     o->max_scale_change = 1.2;
     o->input_metric = 1;
@@ -99,6 +100,10 @@ static const cf_param_desc spin_params[] = {
      "adaptive: redo a step with half tau while its map's mean Q exceeds its vertex-scale model's by more than "
      "this (the distortion no conformal scale explains; -1: 0.12 on closed surfaces, no bound with a boundary; "
      "0: no bound)"},
+    {"stall_fairing", CF_PARAM_BOOL, OPT(stall_fairing), 0, 1, NULL,
+     "adaptive, fairing > 0: a step that raises W at every tau in both metrics is taken as the vertex-scale "
+     "fairing of its start alone (tau halved while W rises or the excess bound is exceeded) before the run "
+     "stops as converged (0: it stops)"},
     {"regularization", CF_PARAM_DOUBLE, OPT(regularization), 1e-9, 1e6, NULL,
      "weight of |lambda - 1|^2 in units of 4pi/area: damps near-kernel modes of thin shapes"},
     {"growth_ratio", CF_PARAM_DOUBLE, OPT(growth_ratio), 0.0, 1.0, NULL,

@@ -159,6 +159,8 @@ typedef struct cfi_spin_diagnostics {
     int32_t current_metric;         /* 1: the accepted attempt recovered positions in the current metric (the
                                        layer's fallback at a stall of the input metric's); at a stall, the
                                        last attempt's */
+    int32_t fairing_only;           /* 1: the accepted step was the vertex-scale fairing alone (the spin
+                                       step stalled in both metrics) */
 } cfi_spin_diagnostics;
 
 /* Nonzero full: the linearised exactness constraint solves X(0) for each of

@@ -842,6 +842,14 @@ typedef struct halving_search {
  * The band keeps away from 4, and from the ratios below 1.5 of rises that
  * do not follow the model at all (a rise that grows when the step is
  * halved). */
+/* The search's next attempt, of exponent j, from the step's start. */
+static cf_status search_probe(cf_flow *flow, halving_search *search, int32_t j)
+{
+    search->j = j;
+    flow->policy.step = ldexp(search->step, -j);
+    return back_to_start(flow);
+}
+
 /* a of the rise a s + b s^2 through rise at step t and last_rise at 2 t. */
 static double rise_slope(double last_rise, double rise, double step) { return (4.0 * rise - last_rise) / (2.0 * step); }
 
@@ -948,10 +956,8 @@ cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info)
                     halvings = search.halvings + search.hi;
                     break;
                 }
-                st = back_to_start(flow);
+                st = search_probe(flow, &search, (search.lo + search.hi) / 2);
                 if (st != CF_OK) return fail_method(flow, st, iteration, start_step);
-                search.j = (search.lo + search.hi) / 2;
-                pol->step = ldexp(search.step, -search.j);
                 continue;
             } else {
                 reason = REJECT_RISE;
@@ -1004,10 +1010,9 @@ cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info)
                 } else {
                     /* between the largest rejected and the smallest
                      * accepted; the latter again when they are adjacent */
-                    search.j = search.hi - search.lo <= 1 ? search.hi : (search.lo + search.hi) / 2;
-                    st = back_to_start(flow);
+                    st = search_probe(flow, &search,
+                                      search.hi - search.lo <= 1 ? search.hi : (search.lo + search.hi) / 2);
                     if (st != CF_OK) return fail_method(flow, st, iteration, start_step);
-                    pol->step = ldexp(search.step, -search.j);
                     continue;
                 }
             }
@@ -1024,11 +1029,10 @@ cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info)
             if (first_order_halvings >= 2 && left >= 2) {
                 /* the rises look as if they persist down to the limit: the
                  * smallest step first (halving_search) */
-                st = back_to_start(flow);
+                double slope = rise_slope(last_rise_before, rise, pol->step);
+                search = (halving_search){1, pol->step, halvings, 0, -1, 0, slope};
+                st = search_probe(flow, &search, left);
                 if (st != CF_OK) return fail_method(flow, st, iteration, start_step);
-                search = (halving_search){1, pol->step, halvings, 0, -1, left, 0.0};
-                search.slope = rise_slope(last_rise_before, rise, pol->step);
-                pol->step = ldexp(search.step, -search.j);
                 continue;
             }
         } else {

@@ -168,6 +168,14 @@ typedef struct cf_spin_willmore_options {
                                 * tau halved while W rises or the excess bound is exceeded) before
                                 * the flow stops as converged. Default 1; 0: the stall stops the
                                 * run (docs/spin.md, "A stall's last variant") */
+    double max_realised_decrease; /* with adaptive: an attempt whose W falls by more than this multiple
+                                * of the decrease its curvature-space model predicts (the
+                                * `realised_decrease` residual; counted only where the prediction is at
+                                * least 1 % of W) is not a realisation of its curvature change: the
+                                * near-kernel modes of X took it over (long thin tubes). The attempt
+                                * is redone at the same tau with `regularization` raised to 1, which
+                                * stays for the rest of the run. Default 2; 0: never (docs/spin.md,
+                                * "Long tubes: damping when a step outruns its model") */
 } cf_spin_willmore_options;
 
 CF_API void cf_spin_willmore_options_default(cf_spin_willmore_options *options);

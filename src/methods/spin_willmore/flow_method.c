@@ -761,6 +761,29 @@ cf_status cfi_spin_begin_step(cf_flow *flow, cf_flow_info *info)
     return step_direction(flow, s, &info->factorize_seconds, &info->solve_seconds);
 }
 
+/* The regularization (in units of 4 pi / area) that an attempt outrunning
+ * its model raises alpha to: the value docs/spin.md measured on long thin
+ * shapes before this was automatic (`-p regularization=1`). */
+#define CFI_SPIN_DAMPED_REGULARIZATION 1.0
+
+/* Whether the attempt just realised lowered W by more than
+ * max_realised_decrease times its curvature-space model's decrease
+ * (predicted_energy), with alpha still below the damped value. Such a W is
+ * not the work of the step's rho: on trefoil tubes the first step at tau
+ * 0.5 realises 3.5-3.8 times its model (rings of the tube crowd to 1e-3 of
+ * their area), while no attempt on the 20 shared meshes, the generated
+ * plates, disks and Loop-subdivided meshes exceeds 1.72. The model's
+ * decrease must be at least 1 % of W: a ratio of two small differences
+ * says nothing (docs/spin.md, "Long tubes: damping when a step outruns its
+ * model"). */
+static int outran_model(const cfi_spin_state *s, double damped_eps)
+{
+    if (!(s->opt.max_realised_decrease > 0.0) || s->fairing_only_step || !(s->eps < damped_eps)) return 0;
+    double predicted = s->energy_before - s->diag.predicted_energy;
+    if (!(predicted >= 0.01 * s->energy_before)) return 0;
+    return s->energy_before - s->energy > s->opt.max_realised_decrease * predicted;
+}
+
 /* IV-VI for tau. While the flow layer backtracks (`adaptive`), an attempt
  * whose lambda changes the log scale across an edge by more than
  * max_scale_change is rejected with tau cut in proportion (the scale change
@@ -775,6 +798,20 @@ cf_status cfi_spin_attempt(cf_flow *flow, double tau, cf_flow_info *info, cfi_st
     cfi_spin_too_large too_large = CFI_SPIN_STEP_OK;
     info->time_step = tau;
     cf_status st = cfi_spin_realise_step(flow, s, tau, &too_large, &t);
+    double damped_eps = CFI_SPIN_DAMPED_REGULARIZATION * 4.0 * CFI_PI / flow->initial_area;
+    if (st == CF_OK && !too_large && cfi_flow_backtracks(flow) && outran_model(s, damped_eps)) {
+        /* the near-kernel modes of X made this step: the same tau again
+         * from the step's start with them damped (alpha raised for the rest
+         * of the run: the tube stays a tube), and the direction renewed,
+         * since X(0) + eps M behind the exactness directions changed */
+        double outran = realised_decrease(s);
+        s->eps = damped_eps;
+        s->x0_renew_pending = 1;
+        memcpy(flow->positions, flow->saved_positions, 3 * (size_t)s->nv * sizeof(double));
+        st = cfi_spin_update_geometry(flow, s, flow->positions);
+        if (st == CF_OK) st = cfi_spin_realise_step(flow, s, tau, &too_large, &t);
+        s->diag.damped_realised = outran;
+    }
     info->assemble_seconds += t.assemble;
     info->factorize_seconds += t.factorize;
     info->solve_seconds += t.solve;

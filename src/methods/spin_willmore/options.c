@@ -37,6 +37,7 @@ void cf_spin_willmore_options_default(cf_spin_willmore_options *o)
     o->max_integrability_error = 0.0;
     o->max_conformal_excess = -1.0; /* automatic: the bound on closed surfaces only */
     o->stall_fairing = 1;
+    o->max_realised_decrease = 2.0;
     o->adaptive = 1;
     o->max_scale_change = 1.2;
     o->input_metric = 1;
@@ -104,6 +105,10 @@ static const cf_param_desc spin_params[] = {
      "adaptive, fairing > 0: a step that raises W at every tau in both metrics is taken as the vertex-scale "
      "fairing of its start alone (tau halved while W rises or the excess bound is exceeded) before the run "
      "stops as converged (0: it stops)"},
+    {"max_realised_decrease", CF_PARAM_DOUBLE, OPT(max_realised_decrease), 0.0, 1000.0, NULL,
+     "adaptive: an attempt that lowers W by more than this multiple of its predicted decrease (which is at least "
+     "1% of W) is redone at the same tau with regularization raised to 1 for the rest of the run (long thin "
+     "tubes; 0: never)"},
     {"regularization", CF_PARAM_DOUBLE, OPT(regularization), 1e-9, 1e6, NULL,
      "weight of |lambda - 1|^2 in units of 4pi/area: damps near-kernel modes of thin shapes"},
     {"growth_ratio", CF_PARAM_DOUBLE, OPT(growth_ratio), 0.0, 1.0, NULL,
@@ -133,6 +138,11 @@ cf_status cfi_spin_validate_options(cf_context *ctx, const cf_mesh *mesh, const 
      * rules a range cannot express. */
     if (!(o->regularization > 0.0) || !isfinite(o->regularization))
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: regularization must be > 0, got %g", o->regularization);
+    if (o->max_realised_decrease != 0.0 && !(o->max_realised_decrease > 1.0))
+        return cfi_error(ctx, CF_ERR_INVALID_ARG,
+                         "spin-willmore: max_realised_decrease must be 0 (never) or above 1 (a step realises its model's "
+                         "decrease at 1), got %g",
+                         o->max_realised_decrease);
     if (o->max_conformal_excess < 0.0 && o->max_conformal_excess != -1.0)
         return cfi_error(ctx, CF_ERR_INVALID_ARG,
                          "spin-willmore: max_conformal_excess must be -1 (automatic), 0 (no bound) or positive, got %g",

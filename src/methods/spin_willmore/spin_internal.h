@@ -161,6 +161,9 @@ typedef struct cfi_spin_diagnostics {
                                        last attempt's */
     int32_t fairing_only;           /* 1: the accepted step was the vertex-scale fairing alone (the spin
                                        step stalled in both metrics) */
+    double damped_realised;         /* an attempt of this step outran its model by more than
+                                       max_realised_decrease: the realised_decrease it had, after which
+                                       regularization was raised (flow_method.c); 0: none */
 } cfi_spin_diagnostics;
 
 /* Nonzero full: the linearised exactness constraint solves X(0) for each of

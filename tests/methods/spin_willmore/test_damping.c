@@ -1,0 +1,244 @@
+/*
+ * Option max_realised_decrease of spin-willmore (docs/spin.md, "Long tubes:
+ * damping when a step outruns its model"): an attempt that lowers W by more
+ * than twice the decrease its curvature-space model predicts is redone at
+ * the same tau with `regularization` raised to 1 for the rest of the run.
+ *
+ * The case is a knotted tube, generated here as bench/bench_unseen_kinds.py
+ * makes it (trefoil centre line, 240 rings of 14 vertices, radius 0.35 +-
+ * 0.1), the kind of issue 13's held-out knot. Measured with the default
+ * regularization alone: its first step at tau 0.5 lowers W 3.5 times as much
+ * as its model says, one ring of the tube shrinks to 1e-3 of its area, and
+ * 10 steps end at W/4pi 8.51 of 10.80 (issue 13's target is half). With the
+ * damping the first step is redone and 10 steps reach 5.26 (mean Q 1.32).
+ * Checked: the trigger and its figure, the target, W non-increasing, mean Q,
+ * the mesh check, the run without the option (the damage), and that an
+ * ordinary shape (the built-in bumpy sphere; spot_3k when ../shared is
+ * there) never triggers it.
+ */
+#include "test.h"
+
+#include "curvflow/flow.h"
+#include "curvflow/generate.h"
+#include "curvflow/io.h"
+#include "curvflow/mesh.h"
+#include "curvflow/metrics.h"
+#include "curvflow/spin_willmore.h"
+#include "methods/spin_willmore/spin_internal.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define PI 3.14159265358979323846
+#define ALONG 240
+#define AROUND 14
+
+/* The trefoil tube: parallel-transport frame along the centre line, its
+ * holonomy spread over the rings so that the tube closes up. */
+static cf_mesh *knotted_tube(cf_context *ctx)
+{
+    double centre[ALONG][3], tangent[ALONG][3], normal[ALONG][3], binormal[ALONG][3];
+    for (int i = 0; i < ALONG; ++i) {
+        double t = 2.0 * PI * i / ALONG;
+        centre[i][0] = sin(t) + 2.0 * sin(2.0 * t);
+        centre[i][1] = cos(t) - 2.0 * cos(2.0 * t);
+        centre[i][2] = -sin(3.0 * t);
+    }
+    for (int i = 0; i < ALONG; ++i) {
+        const double *a = centre[(i + ALONG - 1) % ALONG], *b = centre[(i + 1) % ALONG];
+        double len = 0.0;
+        for (int c = 0; c < 3; ++c) len += (b[c] - a[c]) * (b[c] - a[c]);
+        for (int c = 0; c < 3; ++c) tangent[i][c] = (b[c] - a[c]) / sqrt(len);
+    }
+    for (int i = 0; i < ALONG; ++i) {
+        const double seed[3] = {0.3, 0.5, 0.8};
+        const double *prev = i == 0 ? seed : normal[i - 1];
+        double d = prev[0] * tangent[i][0] + prev[1] * tangent[i][1] + prev[2] * tangent[i][2], len = 0.0;
+        for (int c = 0; c < 3; ++c) {
+            normal[i][c] = prev[c] - d * tangent[i][c];
+            len += normal[i][c] * normal[i][c];
+        }
+        for (int c = 0; c < 3; ++c) normal[i][c] /= sqrt(len);
+        const double *t = tangent[i], *n = normal[i];
+        binormal[i][0] = t[1] * n[2] - t[2] * n[1];
+        binormal[i][1] = t[2] * n[0] - t[0] * n[2];
+        binormal[i][2] = t[0] * n[1] - t[1] * n[0];
+    }
+    const double *last = normal[ALONG - 1], *t0 = tangent[0];
+    double d = last[0] * t0[0] + last[1] * t0[1] + last[2] * t0[2], l[3];
+    for (int c = 0; c < 3; ++c) l[c] = last[c] - d * t0[c];
+    double holonomy = atan2(l[0] * binormal[0][0] + l[1] * binormal[0][1] + l[2] * binormal[0][2],
+                            l[0] * normal[0][0] + l[1] * normal[0][1] + l[2] * normal[0][2]);
+    double *x = malloc(3 * ALONG * AROUND * sizeof(double));
+    int32_t *tri = malloc(6 * ALONG * AROUND * sizeof(int32_t));
+    if (!x || !tri) {
+        free(x);
+        free(tri);
+        return NULL;
+    }
+    for (int i = 0; i < ALONG; ++i) {
+        double radius = 0.35 + 0.1 * sin(5.0 * 2.0 * PI * i / ALONG);
+        for (int j = 0; j < AROUND; ++j) {
+            double angle = 2.0 * PI * j / AROUND - holonomy * i / ALONG;
+            for (int c = 0; c < 3; ++c)
+                x[3 * (i * AROUND + j) + c] =
+                    centre[i][c] + radius * (cos(angle) * normal[i][c] + sin(angle) * binormal[i][c]);
+        }
+    }
+    int32_t *f = tri;
+    for (int i = 0; i < ALONG; ++i)
+        for (int j = 0; j < AROUND; ++j) {
+            int32_t i2 = (i + 1) % ALONG, j2 = (j + 1) % AROUND;
+            int32_t a = i * AROUND + j, b = i * AROUND + j2, c = i2 * AROUND + j, e = i2 * AROUND + j2;
+            *f++ = a, *f++ = b, *f++ = c;
+            *f++ = b, *f++ = e, *f++ = c;
+        }
+    cf_mesh_desc desc = {0};
+    desc.vertex_count = ALONG * AROUND;
+    desc.positions = x;
+    desc.face_count = 2 * ALONG * AROUND;
+    desc.triangles = tri;
+    cf_mesh *mesh = NULL;
+    CHECK_OK(ctx, cf_mesh_create(ctx, &desc, &mesh));
+    free(x);
+    free(tri);
+    return mesh;
+}
+
+/* What a run of spin-willmore measured: W/4pi before and after, the largest
+ * rise over a step, the first step at which the damping was triggered (0:
+ * never) and the realised decrease that triggered it, the steps taken, mean
+ * Q against the input and the mesh check's defects of the result. */
+typedef struct damping_run {
+    double w0, w, worst_rise, trigger_realised, mean_q;
+    int32_t trigger_step, steps, defects;
+} damping_run;
+
+static void run_flow(cf_context *ctx, const cf_mesh *mesh, const char *bound, int steps, damping_run *r)
+{
+    const double four_pi = 4.0 * PI;
+    memset(r, 0, sizeof *r);
+    cf_flow_options o;
+    CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o));
+    if (bound) CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "max_realised_decrease", bound));
+    cf_flow *flow = NULL;
+    CHECK_OK(ctx, cf_flow_create(ctx, mesh, NULL, &o, &flow));
+    if (!flow) return;
+    r->w0 = r->w = cf_flow_energy(flow) / four_pi;
+    r->worst_rise = -INFINITY;
+    while (r->steps < steps && !cf_flow_converged(flow)) {
+        cf_flow_info info;
+        cf_status st = cf_flow_step(flow, &info);
+        CHECK_OK(ctx, st);
+        if (st != CF_OK) break;
+        ++r->steps;
+        cfi_spin_diagnostics d;
+        CHECK_OK(ctx, cfi_spin_willmore_diagnostics(flow, &d));
+        if (d.damped_realised > 0.0 && r->trigger_step == 0) {
+            r->trigger_step = r->steps;
+            r->trigger_realised = d.damped_realised;
+        }
+        double w = cf_flow_energy(flow) / four_pi;
+        r->worst_rise = fmax(r->worst_rise, w - r->w);
+        r->w = w;
+    }
+    cf_stats q = {0};
+    CHECK_OK(ctx, cf_quasi_conformal_error(ctx, mesh, cf_mesh_positions(mesh), cf_flow_positions(flow), NULL, &q));
+    r->mean_q = q.weighted_mean;
+    cf_mesh_report report;
+    cf_mesh_desc desc = {0};
+    desc.vertex_count = cf_mesh_vertex_count(mesh);
+    desc.positions = cf_flow_positions(flow);
+    desc.face_count = cf_mesh_face_count(mesh);
+    desc.triangles = cf_mesh_triangles(mesh);
+    CHECK_OK(ctx, cf_mesh_validate(ctx, &desc, &report));
+    r->defects = report.degenerate_faces + report.nonfinite_coordinates;
+    cf_flow_destroy(&flow);
+}
+
+static void test_knot_reaches_target(void)
+{
+    cf_context *ctx = NULL;
+    CHECK_OK(NULL, cf_context_create(&ctx));
+    cf_mesh *knot = knotted_tube(ctx);
+    if (!knot) {
+        cf_context_destroy(&ctx);
+        return;
+    }
+    damping_run damped, plain;
+    run_flow(ctx, knot, NULL, 10, &damped);
+    run_flow(ctx, knot, "0", 10, &plain);
+    fprintf(stderr, "   knot: W/4pi %.4f -> %.4f (damped from step %d, realised %.3f; largest rise %.3g, mean Q %.4f, "
+                    "%d defects); max_realised_decrease=0: %.4f (mean Q %.4f)\n",
+            damped.w0, damped.w, damped.trigger_step, damped.trigger_realised, damped.worst_rise, damped.mean_q,
+            damped.defects, plain.w, plain.mean_q);
+    CHECK(damped.steps == 10);
+    CHECK(damped.trigger_step == 1);            /* the first step outruns its model */
+    CHECK(damped.trigger_realised > 3.0);       /* measured 3.51 */
+    CHECK_LE(damped.worst_rise, 0.0);
+    CHECK_LE(damped.w, 0.5 * damped.w0);        /* issue 13's target: measured 5.26 of 10.80 */
+    CHECK_LE(damped.mean_q, 1.5);               /* measured 1.32 */
+    CHECK(damped.defects == 0);
+    CHECK(plain.trigger_step == 0);
+    CHECK(plain.w > 0.7 * plain.w0);            /* the damage: measured 8.51 */
+    cf_mesh_destroy(&knot);
+    cf_context_destroy(&ctx);
+}
+
+/* No ordinary shape triggers it: the built-in bumpy sphere, and spot_3k if
+ * ../shared is there (no attempt on the 20 shared meshes exceeds 1.72). */
+static void test_ordinary_shapes_untouched(void)
+{
+    cf_context *ctx = NULL;
+    CHECK_OK(NULL, cf_context_create(&ctx));
+    cf_mesh *bumpy = NULL;
+    CHECK_OK(ctx, cf_generate_bumpy_sphere(ctx, 3, 0.2, 2u, &bumpy));
+    if (bumpy) {
+        damping_run r;
+        run_flow(ctx, bumpy, NULL, 10, &r);
+        fprintf(stderr, "   bumpy sphere: W/4pi %.4f -> %.4f, damped from step %d\n", r.w0, r.w, r.trigger_step);
+        CHECK(r.trigger_step == 0);
+        cf_mesh_destroy(&bumpy);
+    }
+    char path[4096];
+    snprintf(path, sizeof path, "%s/meshes/spot_3k.obj", CF_TEST_SHARED_DIR);
+    cf_mesh *spot = NULL;
+    if (cf_load_mesh(ctx, path, &spot) == CF_OK) {
+        damping_run r;
+        run_flow(ctx, spot, NULL, 10, &r);
+        fprintf(stderr, "   spot_3k: W/4pi %.4f -> %.4f, damped from step %d\n", r.w0, r.w, r.trigger_step);
+        CHECK(r.trigger_step == 0);
+        CHECK_LE(r.w, 1.01); /* issue 13's convergence target, untouched */
+        cf_mesh_destroy(&spot);
+    } else {
+        fprintf(stderr, "   SKIP spot_3k part: %s not readable\n", path);
+    }
+    cf_context_destroy(&ctx);
+}
+
+static void test_bound_validated(void)
+{
+    cf_context *ctx = NULL;
+    CHECK_OK(NULL, cf_context_create(&ctx));
+    cf_mesh *bumpy = NULL;
+    CHECK_OK(ctx, cf_generate_bumpy_sphere(ctx, 2, 0.2, 2u, &bumpy));
+    cf_flow_options o;
+    CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o));
+    CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "max_realised_decrease", "0.5"));
+    cf_flow *flow = NULL;
+    CHECK(cf_flow_create(ctx, bumpy, NULL, &o, &flow) == CF_ERR_INVALID_ARG);
+    CHECK(flow == NULL);
+    CHECK(strstr(cf_context_message(ctx), "max_realised_decrease") != NULL);
+    cf_mesh_destroy(&bumpy);
+    cf_context_destroy(&ctx);
+}
+
+int main(void)
+{
+    CFT_RUN(test_knot_reaches_target);
+    CFT_RUN(test_ordinary_shapes_untouched);
+    CFT_RUN(test_bound_validated);
+    return cft_finish();
+}

@@ -773,14 +773,15 @@ cf_status cfi_spin_begin_step(cf_flow *flow, cf_flow_info *info)
  * 0.5 realises 3.5-3.8 times its model (rings of the tube crowd to 1e-3 of
  * their area), while no attempt on the 20 shared meshes, the generated
  * plates, disks and Loop-subdivided meshes exceeds 1.72. The model's
- * decrease must be at least 1 % of W: a ratio of two small differences
- * says nothing (docs/spin.md, "Long tubes: damping when a step outruns its
- * model"). */
+ * decrease must be at least 1 % of W, and above rounding of a W near 0
+ * (W is scale-free: 1e-9 of a round sphere's): a ratio of two small
+ * differences says nothing (docs/spin.md, "Long tubes: damping when a step
+ * outruns its model"). */
 static int outran_model(const cfi_spin_state *s, double damped_eps)
 {
     if (!(s->opt.max_realised_decrease > 0.0) || s->fairing_only_step || !(s->eps < damped_eps)) return 0;
     double predicted = s->energy_before - s->diag.predicted_energy;
-    if (!(predicted >= 0.01 * s->energy_before)) return 0;
+    if (!(predicted >= 0.01 * s->energy_before) || !(predicted > 1e-9 * 4.0 * CFI_PI)) return 0;
     return s->energy_before - s->energy > s->opt.max_realised_decrease * predicted;
 }
 

@@ -127,12 +127,16 @@ typedef struct spin_run {
     int32_t steps, defects;
 } spin_run;
 
+/* Called after each step taken (step counts from 1) with the flow, for
+ * what a test reads of it (diagnostics); user is the caller's. */
+typedef void (*spin_step_hook)(cf_context *ctx, const cf_flow *flow, int step, void *user);
+
 /* Up to `steps` steps (fewer when the flow converges) of a flow with
  * options o on mesh; w_history (may be NULL; steps + 1 entries) receives
- * W/4pi at the start and after each step taken. Returns 0 when the flow
- * could not be made. */
-static inline int spin_run_steps(cf_context *ctx, const cf_mesh *mesh, const cf_flow_options *o, int steps,
-                                 spin_run *r, double *w_history)
+ * W/4pi at the start and after each step taken; hook (may be NULL) is
+ * called after each step. Returns 0 when the flow could not be made. */
+static inline int spin_run_steps_hooked(cf_context *ctx, const cf_mesh *mesh, const cf_flow_options *o, int steps,
+                                        spin_run *r, double *w_history, spin_step_hook hook, void *user)
 {
     const double four_pi = 4.0 * 3.14159265358979323846;
     cf_flow *flow = NULL;
@@ -152,6 +156,7 @@ static inline int spin_run_steps(cf_context *ctx, const cf_mesh *mesh, const cf_
         r->w = w;
         if (w_history) w_history[r->steps + 1] = w;
         ++r->steps;
+        if (hook) hook(ctx, flow, r->steps, user);
     }
     cf_stats q = {0};
     CHECK_OK(ctx, cf_quasi_conformal_error(ctx, mesh, cf_mesh_positions(mesh), cf_flow_positions(flow), NULL, &q));
@@ -161,6 +166,12 @@ static inline int spin_run_steps(cf_context *ctx, const cf_mesh *mesh, const cf_
     r->defects = report.nonfinite_coordinates + report.degenerate_faces;
     cf_flow_destroy(&flow);
     return 1;
+}
+
+static inline int spin_run_steps(cf_context *ctx, const cf_mesh *mesh, const cf_flow_options *o, int steps,
+                                 spin_run *r, double *w_history)
+{
+    return spin_run_steps_hooked(ctx, mesh, o, steps, r, w_history, NULL, NULL);
 }
 
 #endif /* CF_TESTS_SPIN_TEST_UTIL_H */

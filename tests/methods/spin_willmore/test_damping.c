@@ -25,6 +25,7 @@
 #include "curvflow/metrics.h"
 #include "curvflow/spin_willmore.h"
 #include "methods/spin_willmore/spin_internal.h"
+#include "spin_test_util.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -107,55 +108,35 @@ static cf_mesh *knotted_tube(cf_context *ctx)
     return mesh;
 }
 
-/* What a run of spin-willmore measured: W/4pi before and after, the largest
- * rise over a step, the first step at which the damping was triggered (0:
- * never) and the realised decrease that triggered it, the steps taken, mean
- * Q against the input and the mesh check's defects of the result. */
-typedef struct damping_run {
-    double w0, w, worst_rise, trigger_realised, mean_q;
-    int32_t trigger_step, steps, defects;
-} damping_run;
+/* The first step at which the damping was triggered (0: never) and the
+ * realised decrease that triggered it (a spin_step_hook). */
+typedef struct damping_trigger {
+    int32_t step;
+    double realised;
+} damping_trigger;
 
-static void run_flow(cf_context *ctx, const cf_mesh *mesh, const char *bound, int steps, damping_run *r)
+static void record_trigger(cf_context *ctx, const cf_flow *flow, int step, void *user)
 {
-    const double four_pi = 4.0 * PI;
+    damping_trigger *t = user;
+    cfi_spin_diagnostics d;
+    CHECK_OK(ctx, cfi_spin_willmore_diagnostics(flow, &d));
+    if (d.damped_realised > 0.0 && t->step == 0) {
+        t->step = step;
+        t->realised = d.damped_realised;
+    }
+}
+
+/* `steps` default steps of spin-willmore on mesh, with
+ * max_realised_decrease=bound if bound is not NULL (spin_run_steps). */
+static void run_flow(cf_context *ctx, const cf_mesh *mesh, const char *bound, int steps, spin_run *r,
+                     damping_trigger *trigger)
+{
     memset(r, 0, sizeof *r);
+    memset(trigger, 0, sizeof *trigger);
     cf_flow_options o;
     CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o));
     if (bound) CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "max_realised_decrease", bound));
-    cf_flow *flow = NULL;
-    CHECK_OK(ctx, cf_flow_create(ctx, mesh, NULL, &o, &flow));
-    if (!flow) return;
-    r->w0 = r->w = cf_flow_energy(flow) / four_pi;
-    r->worst_rise = -INFINITY;
-    while (r->steps < steps && !cf_flow_converged(flow)) {
-        cf_flow_info info;
-        cf_status st = cf_flow_step(flow, &info);
-        CHECK_OK(ctx, st);
-        if (st != CF_OK) break;
-        ++r->steps;
-        cfi_spin_diagnostics d;
-        CHECK_OK(ctx, cfi_spin_willmore_diagnostics(flow, &d));
-        if (d.damped_realised > 0.0 && r->trigger_step == 0) {
-            r->trigger_step = r->steps;
-            r->trigger_realised = d.damped_realised;
-        }
-        double w = cf_flow_energy(flow) / four_pi;
-        r->worst_rise = fmax(r->worst_rise, w - r->w);
-        r->w = w;
-    }
-    cf_stats q = {0};
-    CHECK_OK(ctx, cf_quasi_conformal_error(ctx, mesh, cf_mesh_positions(mesh), cf_flow_positions(flow), NULL, &q));
-    r->mean_q = q.weighted_mean;
-    cf_mesh_report report;
-    cf_mesh_desc desc = {0};
-    desc.vertex_count = cf_mesh_vertex_count(mesh);
-    desc.positions = cf_flow_positions(flow);
-    desc.face_count = cf_mesh_face_count(mesh);
-    desc.triangles = cf_mesh_triangles(mesh);
-    CHECK_OK(ctx, cf_mesh_validate(ctx, &desc, &report));
-    r->defects = report.degenerate_faces + report.nonfinite_coordinates;
-    cf_flow_destroy(&flow);
+    spin_run_steps_hooked(ctx, mesh, &o, steps, r, NULL, record_trigger, trigger);
 }
 
 static void test_knot_reaches_target(void)
@@ -167,24 +148,34 @@ static void test_knot_reaches_target(void)
         cf_context_destroy(&ctx);
         return;
     }
-    damping_run damped, plain;
-    run_flow(ctx, knot, NULL, 10, &damped);
-    run_flow(ctx, knot, "0", 10, &plain);
+    spin_run damped, plain;
+    damping_trigger damped_trigger, plain_trigger;
+    run_flow(ctx, knot, NULL, 10, &damped, &damped_trigger);
+    run_flow(ctx, knot, "0", 10, &plain, &plain_trigger);
     fprintf(stderr, "   knot: W/4pi %.4f -> %.4f (damped from step %d, realised %.3f; largest rise %.3g, mean Q %.4f, "
                     "%d defects); max_realised_decrease=0: %.4f (mean Q %.4f)\n",
-            damped.w0, damped.w, damped.trigger_step, damped.trigger_realised, damped.worst_rise, damped.mean_q,
+            damped.w0, damped.w, damped_trigger.step, damped_trigger.realised, damped.worst_rise, damped.mean_q,
             damped.defects, plain.w, plain.mean_q);
     CHECK(damped.steps == 10);
-    CHECK(damped.trigger_step == 1);            /* the first step outruns its model */
-    CHECK(damped.trigger_realised > 3.0);       /* measured 3.51 */
+    CHECK(damped_trigger.step == 1);            /* the first step outruns its model */
+    CHECK(damped_trigger.realised > 3.0);       /* measured 3.51 */
     CHECK_LE(damped.worst_rise, 0.0);
     CHECK_LE(damped.w, 0.5 * damped.w0);        /* issue 13's target: measured 5.26 of 10.80 */
     CHECK_LE(damped.mean_q, 1.5);               /* measured 1.32 */
     CHECK(damped.defects == 0);
-    CHECK(plain.trigger_step == 0);
+    CHECK(plain_trigger.step == 0);
     CHECK(plain.w > 0.7 * plain.w0);            /* the damage: measured 8.51 */
     cf_mesh_destroy(&knot);
     cf_context_destroy(&ctx);
+}
+
+/* 10 default steps on mesh: the damping never triggers. */
+static void check_untouched(cf_context *ctx, const cf_mesh *mesh, const char *name, spin_run *r)
+{
+    damping_trigger trigger;
+    run_flow(ctx, mesh, NULL, 10, r, &trigger);
+    fprintf(stderr, "   %s: W/4pi %.4f -> %.4f, damped from step %d\n", name, r->w0, r->w, trigger.step);
+    CHECK(trigger.step == 0);
 }
 
 /* No ordinary shape triggers it: the built-in bumpy sphere, and spot_3k if
@@ -195,21 +186,14 @@ static void test_ordinary_shapes_untouched(void)
     CHECK_OK(NULL, cf_context_create(&ctx));
     cf_mesh *bumpy = NULL;
     CHECK_OK(ctx, cf_generate_bumpy_sphere(ctx, 3, 0.2, 2u, &bumpy));
-    if (bumpy) {
-        damping_run r;
-        run_flow(ctx, bumpy, NULL, 10, &r);
-        fprintf(stderr, "   bumpy sphere: W/4pi %.4f -> %.4f, damped from step %d\n", r.w0, r.w, r.trigger_step);
-        CHECK(r.trigger_step == 0);
-        cf_mesh_destroy(&bumpy);
-    }
+    spin_run r;
+    if (bumpy) check_untouched(ctx, bumpy, "bumpy sphere", &r);
+    cf_mesh_destroy(&bumpy);
     char path[4096];
     snprintf(path, sizeof path, "%s/meshes/spot_3k.obj", CF_TEST_SHARED_DIR);
     cf_mesh *spot = NULL;
     if (cf_load_mesh(ctx, path, &spot) == CF_OK) {
-        damping_run r;
-        run_flow(ctx, spot, NULL, 10, &r);
-        fprintf(stderr, "   spot_3k: W/4pi %.4f -> %.4f, damped from step %d\n", r.w0, r.w, r.trigger_step);
-        CHECK(r.trigger_step == 0);
+        check_untouched(ctx, spot, "spot_3k", &r);
         CHECK_LE(r.w, 1.01); /* issue 13's convergence target, untouched */
         cf_mesh_destroy(&spot);
     } else {

@@ -782,7 +782,7 @@ static int outran_model(const cfi_spin_state *s, double damped_eps)
     if (!(s->opt.max_realised_decrease > 0.0) || s->fairing_only_step || !(s->eps < damped_eps)) return 0;
     double predicted = s->energy_before - s->diag.predicted_energy;
     if (!(predicted >= 0.01 * s->energy_before) || !(predicted > 1e-9 * 4.0 * CFI_PI)) return 0;
-    return s->energy_before - s->energy > s->opt.max_realised_decrease * predicted;
+    return realised_decrease(s) > s->opt.max_realised_decrease;
 }
 
 /* IV-VI for tau. While the flow layer backtracks (`adaptive`), an attempt

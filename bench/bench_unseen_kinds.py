@@ -2,10 +2,12 @@
 """Flows on generated meshes of the kinds issue 13 checks outside ../shared:
 a knotted tube (genus 1), marching-tetrahedra plates of genus 1-5 (slivers down
 to about 0.1 degrees, staircase noise), a sphere with 7 holes and a disk; with
---subdivided, cow_3k and dino_4k Loop-subdivided twice (curvflow.loop_subdivide).
+--subdivided, cow_3k and dino_4k Loop-subdivided twice (curvflow.loop_subdivide);
+with --stretched, spot_3k stretched 5x and 10x along y and an icosphere
+stretched 8x (elongated shapes, docs/spin.md "Elongated shapes").
 
     BUILD_DIR=build python3 bench/bench_unseen_kinds.py [--curvflow PATH] [--steps N] [--keep DIR]
-        [--subdivided ../shared/meshes] [METHOD ...]
+        [--subdivided ../shared/meshes] [--stretched ../shared/meshes] [METHOD ...]
 
 Writes the meshes (to a temporary directory, or DIR), runs every METHOD
 (default: spin-willmore and conformal-mcf) with its defaults for N steps
@@ -201,6 +203,8 @@ def main():
     parser.add_argument("--subdivided", metavar="MESH_DIR",
                         help="also cow_3k and dino_4k from MESH_DIR (e.g. ../shared/meshes), Loop-subdivided twice "
                              "(46k and 63k vertices, closed: the 50k-vertex kind)")
+    parser.add_argument("--stretched", metavar="MESH_DIR",
+                        help="also spot_3k from MESH_DIR stretched 5x and 10x along y, and an icosphere stretched 8x")
     parser.add_argument("methods", nargs="*", default=["spin-willmore", "conformal-mcf"])
     args = parser.parse_args()
     if not os.path.exists(args.curvflow):
@@ -228,6 +232,19 @@ def main():
                 continue
             vertices, faces, _ = curvflow.load(source)
             add(name + "_loop2", *curvflow.loop_subdivide(vertices, faces, 2))
+        if args.stretched:
+            ico = os.path.join(out_dir, "icosphere_source.obj")
+            subprocess.run([args.curvflow, "generate", "icosphere", "--subdivisions", "4", "-o", ico, "-f"],
+                           check=True, capture_output=True)
+            vertices, faces, _ = curvflow.load(ico)
+            add("icosphere_y8", vertices * np.array([1.0, 8.0, 1.0]), faces)
+            source = os.path.join(args.stretched, "spot_3k.obj")
+            if os.path.exists(source):
+                vertices, faces, _ = curvflow.load(source)
+                for factor in (5, 10):
+                    add("spot_3k_y%d" % factor, vertices * np.array([1.0, factor, 1.0]), faces)
+            else:
+                print("skip spot_3k: %s is absent" % source, file=sys.stderr)
         print("mesh\tmethod\texit\tW0/4pi\tW/4pi\tQ_mean\tQ_max\tmin_angle\tms_per_step")
         for mesh in meshes:
             for method in args.methods:

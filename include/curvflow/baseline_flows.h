@@ -80,8 +80,9 @@ typedef struct cf_baseline_options {
  *    patch with its border given. The default of the two bi-Laplacian
  *    flows: with a free boundary their step is not a descent of their
  *    energy at a boundary (a flat sheet's energy, all of it in the boundary
- *    rows of L x, rises at first order in the step: plane_841 failed step
- *    1 at every step size). On closed meshes both are the same. */
+ *    rows of L x, rises at first order in the step: plane_841's goes
+ *    139.98 -> 481.88 in 10 explicit steps; the implicit flow stops at step
+ *    1). On closed meshes both are the same. */
 typedef enum cf_baseline_boundary {
     CF_BASELINE_BOUNDARY_FREE = 0,
     CF_BASELINE_BOUNDARY_FIXED = 1

@@ -26,7 +26,8 @@ static void test_automatic_step(void)
 {
     CHECK_RUN("generate sheet -o sheet.obj", 0);
     /* the default, boundary=fixed: nothing to fair, 10 clean steps */
-    CHECK_RUN("flow sheet.obj -o fixed.obj --method explicit-bilaplacian -q", 0);
+    CHECK_RUN("flow sheet.obj -o fixed.obj --method explicit-bilaplacian", 0);
+    CHECK(!cft_err_has("warning"));
     /* boundary=free: the energy of the moved sheet rises (64.5 -> 97.19 in
      * 10 steps), the steps are stable and are taken */
     CHECK_RUN("flow sheet.obj -o auto.obj --method explicit-bilaplacian -p boundary=free", 0);
@@ -36,6 +37,10 @@ static void test_automatic_step(void)
     CHECK_RUN("generate torus -o torus.obj", 0);
     CHECK_RUN("flow torus.obj -o torus_out.obj --method explicit-bilaplacian", 0);
     CHECK(cft_err_has("10 steps, energy 53.55"));
+    /* said once, at the first rise */
+    CHECK(cft_err_has("warning: iteration 1: explicit-bilaplacian: the energy rose (53.5418681 -> 53.5426813) in a "
+                      "stable step (the energy of the L and M the step was taken with fell)"));
+    CHECK(!cft_err_has("warning: iteration 2:"));
 
     /* a given step above the limit: refused at step 1, with what helps */
     CHECK_RUN("flow sheet.obj -o big.obj --method explicit-bilaplacian -p boundary=free --time-step 1 -q", 3);

@@ -69,6 +69,7 @@ typedef struct baseline_state {
     /* explicit bi-Laplacian with energy_check: its stability test, on the
      * energy of the operator the step was taken with (explicit_step) */
     int32_t frozen_rise_check;
+    int32_t rise_reported;  /* explicit bi-Laplacian: a stable step raised the energy (said once) */
 } baseline_state;
 
 static const char *const mass_choices[] = {"barycentric", "voronoi", NULL};
@@ -608,7 +609,18 @@ static cf_status explicit_step(cf_flow *flow, cf_flow_info *info)
                              "Euler's stability limit; try a smaller time_step, or 0 (automatic)",
                              flow->method->name, frozen_before, frozen_after, flow->policy.blowup_factor, s->tau);
     }
-    return finish_step(flow, s, info, s->tau);
+    st = finish_step(flow, s, info, s->tau);
+    if (st == CF_OK && kind_of(flow) == CF_FLOW_EXPLICIT_BILAPLACIAN && !s->rise_reported &&
+        cfi_step_policy_rose(&flow->policy, frozen_before, info->energy)) {
+        /* taken (stable), but a user watching the energy should know why it rose */
+        s->rise_reported = 1;
+        cfi_log(flow->ctx, CF_LOG_WARNING,
+                "iteration %lld: %s: the energy rose (%.9g -> %.9g) in a stable step (the energy of the L and M the "
+                "step was taken with fell): with L and M following the mesh this step is no descent of it (a thin "
+                "tube shrinks, a free boundary moves in); later rises are not reported",
+                (long long)info->iteration, flow->method->name, frozen_before, info->energy);
+    }
+    return st;
 }
 
 static cf_status implicit_step(cf_flow *flow, cf_flow_info *info)

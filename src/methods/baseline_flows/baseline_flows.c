@@ -66,9 +66,6 @@ typedef struct baseline_state {
     double centroid0[3];
     const uint8_t *held;    /* boundary=fixed on a mesh with boundary: the held vertices; else NULL */
     double *held_positions; /* 3 nv: the held vertices' positions (written back after each solve) */
-    /* explicit bi-Laplacian with energy_check: its stability test, on the
-     * energy of the operator the step was taken with (explicit_step) */
-    int32_t frozen_rise_check;
     int32_t rise_reported;  /* explicit bi-Laplacian: a stable step raised the energy (said once) */
 } baseline_state;
 
@@ -384,11 +381,9 @@ static cf_status baseline_create(cf_flow *flow, const void *options)
      * boundary). A rise of the layer's energy therefore does not show
      * instability. The energy of the operator the step was taken with does:
      * below forward Euler's limit it falls at every step (explicit_step),
-     * so that is the test, and the layer's own rise test is off. */
-    if (kind == CF_FLOW_EXPLICIT_BILAPLACIAN) {
-        s->frozen_rise_check = flow->policy.rise_check;
-        cfi_flow_policy_restrict(flow, 0, 1);
-    }
+     * so that is the test (explicit_step, under the same energy_check),
+     * and the layer's own rise test is off. */
+    if (kind == CF_FLOW_EXPLICIT_BILAPLACIAN) cfi_flow_policy_restrict(flow, 0, 1);
 
     cf_cholesky_options copt;
     cf_cholesky_options_default(&copt);
@@ -548,6 +543,7 @@ static cf_status explicit_step(cf_flow *flow, cf_flow_info *info)
 {
     baseline_state *s = flow->impl;
     int32_t nv = s->nv;
+    int bilaplacian = kind_of(flow) == CF_FLOW_EXPLICIT_BILAPLACIAN;
     double frozen_before = 0.0; /* the bi-Laplacian energy at the step start */
     double t0 = cfi_now_seconds();
     cf_status st = assemble(flow, s);
@@ -559,7 +555,7 @@ static cf_status explicit_step(cf_flow *flow, cf_flow_info *info)
                              flow->method->name, s->tau);
     }
     double t1 = t0;
-    if (kind_of(flow) == CF_FLOW_EXPLICIT_MCF) {
+    if (!bilaplacian) {
         info->assemble_seconds = cfi_now_seconds() - t0;
         t1 = cfi_now_seconds();
         /* r = L x, one coordinate column at a time */
@@ -582,11 +578,11 @@ static cf_status explicit_step(cf_flow *flow, cf_flow_info *info)
         for (int c = 0; c < 3; ++c) flow->positions[3 * (size_t)i + c] -= s->tau * s->r[(size_t)c * nv + i] / s->mass[i];
     }
     info->solve_seconds = cfi_now_seconds() - t1;
-    if (kind_of(flow) == CF_FLOW_EXPLICIT_BILAPLACIAN) {
+    if (bilaplacian) {
         /* the step's energy with the L and M it was taken with (not yet
          * reassembled): forward Euler lowers it below its stability limit */
         double frozen_after = bilaplacian_energy(flow, s);
-        if (s->frozen_rise_check && cfi_step_policy_rose(&flow->policy, frozen_before, frozen_after))
+        if (flow->policy.opt.energy_check && cfi_step_policy_rose(&flow->policy, frozen_before, frozen_after))
             return cfi_error(
                 flow->ctx, CF_ERR_NUMERICAL,
                 "%s: unstable step: the energy of the mesh before the step, with its L and M held, rose from %.9g to "
@@ -610,7 +606,7 @@ static cf_status explicit_step(cf_flow *flow, cf_flow_info *info)
                              flow->method->name, frozen_before, frozen_after, flow->policy.blowup_factor, s->tau);
     }
     st = finish_step(flow, s, info, s->tau);
-    if (st == CF_OK && kind_of(flow) == CF_FLOW_EXPLICIT_BILAPLACIAN && !s->rise_reported &&
+    if (st == CF_OK && bilaplacian && !s->rise_reported &&
         cfi_step_policy_rose(&flow->policy, frozen_before, info->energy)) {
         /* taken (stable), but a user watching the energy should know why it rose */
         s->rise_reported = 1;

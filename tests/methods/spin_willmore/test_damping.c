@@ -20,7 +20,6 @@
 
 #include "curvflow/flow.h"
 #include "curvflow/generate.h"
-#include "curvflow/io.h"
 #include "curvflow/mesh.h"
 #include "curvflow/metrics.h"
 #include "curvflow/spin_willmore.h"
@@ -189,17 +188,12 @@ static void test_ordinary_shapes_untouched(void)
     spin_run r;
     if (bumpy) check_untouched(ctx, bumpy, "bumpy sphere", &r);
     cf_mesh_destroy(&bumpy);
-    char path[4096];
-    snprintf(path, sizeof path, "%s/meshes/spot_3k.obj", CF_TEST_SHARED_DIR);
-    cf_mesh *spot = NULL;
-    if (cf_load_mesh(ctx, path, &spot) == CF_OK) {
-        check_untouched(ctx, spot, "spot_3k", &r);
-        CHECK_LE(r.w, 1.01); /* issue 13's convergence target, untouched */
-        cf_mesh_destroy(&spot);
-    } else {
-        fprintf(stderr, "   SKIP spot_3k part: %s not readable\n", path);
-    }
     cf_context_destroy(&ctx);
+    cft_shared_case spot;
+    if (!cft_shared_case_open(&spot, "spot_3k.obj", 0)) return;
+    check_untouched(spot.ctx, spot.mesh, "spot_3k", &r);
+    CHECK_LE(r.w, 1.01); /* issue 13's convergence target, untouched */
+    cft_shared_case_close(&spot);
 }
 
 static void test_bound_validated(void)

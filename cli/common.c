@@ -181,6 +181,20 @@ static void log_to_stderr(void *user, cf_log_level level, const char *line)
     else if (level < CF_LOG_WARNING) fprintf(stderr, "curvflow: %s\n", line);
 }
 
+bool cli_threads_from_environment(int32_t *threads)
+{
+    *threads = 1;
+    const char *text = getenv("CURVFLOW_THREADS");
+    if (!text) return true;
+    /* digits only (strtol alone would take signs and leading blanks), as the Python package */
+    size_t length = strlen(text);
+    if (length == 0 || length > 5 || strspn(text, "0123456789") != length) return false;
+    long value = strtol(text, NULL, 10);
+    if (value > 1024) return false;
+    *threads = (int32_t)value;
+    return true;
+}
+
 cf_context *cli_context(bool verbose)
 {
     cf_context *ctx = NULL;
@@ -188,6 +202,9 @@ cf_context *cli_context(bool verbose)
         fprintf(stderr, "curvflow: out of memory\n");
         return NULL;
     }
+    /* the solver threads (cf_context_set_threads; main checked the value) */
+    int32_t threads = 1;
+    if (cli_threads_from_environment(&threads)) cf_context_set_threads(ctx, threads);
     /* Errors are reported by the tool from the context message; warnings
      * (e.g. polygons fan-triangulated) go to stderr as they happen. */
     cf_context_set_log(ctx, log_to_stderr, NULL, verbose ? CF_LOG_INFO : CF_LOG_WARNING);

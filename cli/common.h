@@ -61,7 +61,14 @@ bool cli_parse_doubles(const char *command, const char *option, const char *text
 bool cli_parse_size(const char *command, const char *option, const char *text, long long max_side, int32_t *width,
                     int32_t *height);
 
-/* A context with warnings from the library forwarded to stderr. */
+/* The solver threads asked for by the environment variable CURVFLOW_THREADS
+ * (cf_context_set_threads: 1 serial, the default when it is unset; 0
+ * OpenMP and OpenBLAS as the process set them; n > 1 parallel). false (and
+ * 1) when it is set to anything but an integer in 0..1024. */
+bool cli_threads_from_environment(int32_t *threads);
+
+/* A context with warnings from the library forwarded to stderr and the
+ * solver threads of CURVFLOW_THREADS. */
 cf_context *cli_context(bool verbose);
 
 /* Loads a validated mesh; on failure prints the message and returns the

@@ -121,21 +121,35 @@ CF_API void cf_context_fail_allocation(cf_context *ctx, int64_t n, int sticky);
 /* Number of allocations made through the context so far. */
 CF_API int64_t cf_context_allocation_count(const cf_context *ctx);
 
-/* Threads of the library's OpenMP parallel regions (those of CHOLMOD's
- * factorisations) for work done with this context:
+/* Threads of the library's solver work done with this context: CHOLMOD's
+ * OpenMP parallel regions and OpenBLAS's threads inside the factorisations
+ * and solves (CHOLMOD, UMFPACK):
  *   1 (default): serial. Debian's CHOLMOD 3.0.14 opens its regions with 4
  *     threads, which on small machines fight OpenBLAS's threads
- *     (factorisations about 2x slower on 2 cores, docs/linalg.md);
- *   0: the library leaves the OpenMP runtime as the process set it
- *     (OMP_THREAD_LIMIT, OMP_MAX_ACTIVE_LEVELS, the application's omp_*
- *     calls): for applications that manage OpenMP themselves;
+ *     (factorisations about 2x slower on 2 cores, docs/linalg.md); and on a
+ *     machine whose cores are busy with other work every threaded BLAS call
+ *     waits for a worker thread to be scheduled (spot_3k's spin-willmore
+ *     factorisation 16 ms -> 1.9 s beside two busy processes on 2 cores;
+ *     on an idle machine one thread is as fast up to ~26k vertices and
+ *     10-16 % slower at 41k-164k; docs/linalg.md, "OpenBLAS's threads");
+ *   0: the library leaves the OpenMP runtime and OpenBLAS as the process
+ *     set them (OMP_THREAD_LIMIT, OMP_MAX_ACTIVE_LEVELS,
+ *     OPENBLAS_NUM_THREADS, the application's own calls): for applications
+ *     that manage threads themselves;
  *   n > 1: parallel regions allowed (CHOLMOD picks its own count, capped
- *     by OMP_THREAD_LIMIT; n itself is not a count CHOLMOD can take).
- * The setting is applied through OpenMP's max-active-levels ICV (0 for 1,
+ *     by OMP_THREAD_LIMIT; n itself is not a count CHOLMOD can take), and
+ *     OpenBLAS keeps the count the process gave it (OPENBLAS_NUM_THREADS,
+ *     else one per core).
+ * OpenMP's setting is applied through its max-active-levels ICV (0 for 1,
  * 1 for n > 1) of the calling thread just before each call into CHOLMOD
- * made with this context, never at load time, never with 0. Results do not
- * depend on it; OpenBLAS's own threads (OPENBLAS_NUM_THREADS) are not
- * affected. Statuses: CF_ERR_INVALID_ARG (NULL ctx, threads < 0). */
+ * made with this context, never at load time, never with 0. OpenBLAS's
+ * count is process-wide: with 1 it is lowered to one thread for the
+ * duration of each factorisation or solve and handed back after it, so a
+ * BLAS call that another thread of the application makes meanwhile runs on
+ * one thread too. Results do not depend on the setting beyond rounding (the
+ * order of OpenBLAS's reductions: last bits). The command-line tool and the
+ * Python package take it from the environment variable CURVFLOW_THREADS.
+ * Statuses: CF_ERR_INVALID_ARG (NULL ctx, threads < 0). */
 CF_API cf_status cf_context_set_threads(cf_context *ctx, int32_t threads);
 /* The context's setting (1 for a NULL ctx). */
 CF_API int32_t cf_context_threads(const cf_context *ctx);

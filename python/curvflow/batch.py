@@ -151,7 +151,9 @@ def run_job(spec):
     env = dict(os.environ)
     env["PYTHONPATH"] = os.pathsep.join(filter(None, [_package_parent(), env.get("PYTHONPATH")]))
     threads = str(spec.get("job_threads") or 1)
-    env.update(OPENBLAS_NUM_THREADS=threads, OMP_NUM_THREADS=threads, OMP_THREAD_LIMIT="1")
+    # CURVFLOW_THREADS: the library's own setting (cf_context_set_threads),
+    # which would otherwise keep a job's solvers on one thread
+    env.update(OPENBLAS_NUM_THREADS=threads, OMP_NUM_THREADS=threads, OMP_THREAD_LIMIT="1", CURVFLOW_THREADS=threads)
     try:
         lib_dir = os.path.dirname(curvflow.library_path())
         env.setdefault("CURVFLOW_LIB_DIR", lib_dir)

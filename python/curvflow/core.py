@@ -51,6 +51,20 @@ def _log_line(user, level, line):
 _LOG_CALLBACK = _lib.LOG_FN(_log_line)
 
 
+def solver_threads():
+    """The solver threads that CURVFLOW_THREADS asks for: 1 (serial, the
+    default) when it is unset, 0 (OpenMP and OpenBLAS as the process set
+    them) or n > 1 (parallel); see cf_context_set_threads in curvflow.h.
+    Raises UsageError for anything but an integer from 0 to 1024."""
+    text = os.environ.get("CURVFLOW_THREADS")
+    if text is None:
+        return 1
+    value = int(text) if 0 < len(text) <= 5 and all(c in "0123456789" for c in text) else None
+    if value is None or value > 1024:
+        raise UsageError("CURVFLOW_THREADS must be an integer from 0 to 1024, got %r" % text)
+    return value
+
+
 class _Context:
     """A cf_context for one call; every object made with it is destroyed
     before it (in reverse order of creation)."""
@@ -63,6 +77,11 @@ class _Context:
             raise error_class(st)("cannot create a curvflow context", status_name(st), st)
         self.L.cf_context_set_log(self.ptr, _LOG_CALLBACK, None, 2)  # warnings and errors
         self._cleanup = []
+        # the solver threads, as the CLI takes them (cf_context_set_threads;
+        # the library's default, 1, when CURVFLOW_THREADS is unset)
+        threads = solver_threads()
+        if threads != 1:
+            self.L.cf_context_set_threads(self.ptr, threads)
 
     def __enter__(self):
         return self

@@ -49,7 +49,7 @@ struct cf_context {
     bool fail_sticky;
     void *linalg_state;
     cfi_state_destroy_fn linalg_state_destroy;
-    int32_t threads;      /* cf_context_set_threads: OpenMP regions (1 serial, 0 untouched) */
+    int32_t threads;      /* cf_context_set_threads: OpenMP regions and OpenBLAS (1 serial, 0 untouched) */
 };
 
 /* Allocation. Sizes are in bytes; counts times element size are

@@ -53,6 +53,7 @@
 /* Weak references: resolved when the process has OpenBLAS (and its
  * LAPACK), NULL with another BLAS, which needs no warm-up that we know of. */
 extern int openblas_get_num_threads(void) __attribute__((weak));
+extern void openblas_set_num_threads(int threads) __attribute__((weak));
 extern void dpotrf_(const char *uplo, const int *n, double *a, const int *lda, int *info) __attribute__((weak));
 
 /* The calling thread has its OpenBLAS buffer (or the BLAS is not OpenBLAS). */
@@ -168,3 +169,25 @@ cf_status cfi_blas_reserve(cf_context *ctx, const char *what)
     if (before > 0 && address_space_in_use() >= before + CFI_BLAS_BUFFER_BYTES) atomic_fetch_add(&warmed_threads, 1);
     return CF_OK;
 }
+
+static _Thread_local int last_entered;
+
+int cfi_blas_threads_enter(const cf_context *ctx)
+{
+    if (!openblas_get_num_threads || !openblas_set_num_threads) return 0;
+    int current = openblas_get_num_threads();
+    if (!ctx || ctx->threads != 1 || current <= 1) {
+        last_entered = current;
+        return 0;
+    }
+    openblas_set_num_threads(1);
+    last_entered = openblas_get_num_threads();
+    return current;
+}
+
+void cfi_blas_threads_leave(int saved)
+{
+    if (saved > 1 && openblas_set_num_threads) openblas_set_num_threads(saved);
+}
+
+int cfi_blas_threads_last_entered(void) { return last_entered; }

@@ -460,7 +460,9 @@ static cf_status factorize_view(cf_cholesky *chol, cholmod_sparse *view, double 
      * (LAPACK potrf, syrk/herk, gemm, trsm): OpenBLAS's buffer first */
     if (chol->factor->is_super && (st = cfi_blas_reserve(ctx, "cholesky factorise")) != CF_OK) return st;
     double beta[2] = {shift, 0.0};
+    int blas_threads = cfi_blas_threads_enter(ctx); /* one OpenBLAS thread by default (cf_context_set_threads) */
     int ok = cholmod_factorize_p(view, beta, NULL, 0, chol->factor, c);
+    cfi_blas_threads_leave(blas_threads);
     chol->timings.factorize_seconds = cfi_now_seconds() - t0;
     if (c->status == CHOLMOD_NOT_POSDEF || (ok && chol->factor->minor < chol->factor->n)) {
         /* L->minor is the column (in the permuted order) where the pivot
@@ -600,7 +602,9 @@ cf_status cf_cholesky_solve(cf_cholesky *chol, int32_t nrhs, const double *b, do
         bd.xtype = CHOLMOD_COMPLEX;
     }
     /* x, y, e keep their storage between calls (reallocated only when nrhs grows) */
+    int blas_threads = cfi_blas_threads_enter(ctx);
     int ok = cholmod_solve2(CHOLMOD_A, chol->factor, &bd, NULL, &chol->x, NULL, &chol->y, &chol->e, c);
+    cfi_blas_threads_leave(blas_threads);
     cf_status st = cfi_cholmod_check(ctx, c, ok, "cholesky solve");
     if (st != CF_OK) return st;
     if (chol->complex_form)

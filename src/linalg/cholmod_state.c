@@ -73,7 +73,8 @@ static void destroy_state(cf_context *ctx, void *state)
  * of OMP_THREAD_LIMIT=1), 1 lets them run in parallel. libgomp is already
  * loaded (CHOLMOD needs it), so the symbol is looked up at run time (once
  * per context) instead of linking libgomp ourselves. threads = 0 leaves the
- * runtime alone. OpenBLAS (pthreads) keeps its own threads. */
+ * runtime alone. OpenBLAS's threads follow the same setting around each
+ * factorisation and solve (cfi_blas_threads_enter, blas_buffers.c). */
 static void apply_threads(cf_context *ctx, linalg_state *s)
 {
     if (ctx->threads == 0) return;

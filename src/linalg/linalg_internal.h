@@ -72,6 +72,23 @@ void cfi_lu_set_refinement_steps(cf_lu *lu, int32_t steps);
  * address-space limit, or OpenBLAS's worker threads are stuck without
  * theirs: the message names the need and the limit). */
 cf_status cfi_blas_reserve(cf_context *ctx, const char *what);
+/* OpenBLAS's thread count for the library's own BLAS work (supernodal
+ * factorisations and solves, UMFPACK), from the context's thread setting
+ * (cf_context_set_threads): with 1 (the default) the call runs on one
+ * OpenBLAS thread, and the process's count is handed back after it; with 0
+ * or n > 1 OpenBLAS keeps the count the process gave it. Why: on a machine
+ * whose cores are busy, each threaded BLAS call of a factorisation waits for
+ * a worker that has to be scheduled first (spot_3k's factorisation 16 ms ->
+ * 1.9 s with two busy processes on 2 cores; docs/linalg.md, "OpenBLAS's
+ * threads"). OpenBLAS's count is process-wide: another application thread's
+ * BLAS call made meanwhile runs on one thread too (results do not depend on
+ * it beyond rounding). Returns what cfi_blas_threads_leave needs; never
+ * fails, a no-op with another BLAS. */
+int cfi_blas_threads_enter(const cf_context *ctx);
+void cfi_blas_threads_leave(int saved);
+/* The OpenBLAS thread count in effect at the calling thread's last
+ * cfi_blas_threads_enter (0: none yet, or not OpenBLAS); for the tests. */
+int cfi_blas_threads_last_entered(void);
 /* "address-space limit (RLIMIT_AS) 288 MB, 270 MB in use" (or "no
  * address-space limit, ... mapped") into buf, for out-of-memory messages. */
 void cfi_address_space_note(char *buf, size_t size);

@@ -111,7 +111,9 @@ cf_status cf_lu_factorize(cf_lu *lu, const cf_sparse *a)
     /* UMFPACK's numeric factorisation and solves call BLAS: OpenBLAS's buffer first */
     if ((st = cfi_blas_reserve(ctx, "LU factorise")) != CF_OK) return st;
     const cf_sparse *m = umf_matrix(lu, a);
+    int blas_threads = cfi_blas_threads_enter(ctx); /* one OpenBLAS thread by default (cf_context_set_threads) */
     int ust = umfpack_di_numeric(m->colptr, m->rowind, m->values, lu->symbolic, &lu->numeric, lu->control, lu->info);
+    cfi_blas_threads_leave(blas_threads);
     if (ust != UMFPACK_OK && lu->numeric && ust != UMFPACK_WARNING_determinant_underflow &&
         ust != UMFPACK_WARNING_determinant_overflow) {
         umfpack_di_free_numeric(&lu->numeric);
@@ -174,8 +176,10 @@ cf_status cf_lu_solve(cf_lu *lu, const double *b, double *x)
     if (sr != CF_OK) return sr;
     const cf_sparse *m = lu->full;
     memcpy(lu->bcopy, b, (size_t)lu->n * sizeof *b); /* x may alias b */
+    int blas_threads = cfi_blas_threads_enter(ctx);
     int ust = umfpack_di_wsolve(UMFPACK_A, m->colptr, m->rowind, m->values, x, lu->bcopy, lu->numeric, lu->control,
                                 lu->info, lu->wi, lu->w);
+    cfi_blas_threads_leave(blas_threads);
     cf_status st = check_umfpack(ctx, ust, "LU solve");
     if (st != CF_OK) return st;
     bad = cfi_first_nonfinite(x, lu->n);

@@ -13,6 +13,7 @@
 #include <dirent.h>
 #include <fcntl.h>
 #include <jansson.h>
+#include <math.h>
 #include <signal.h>
 #include <stdlib.h>
 #include <string.h>
@@ -785,6 +786,45 @@ static void test_signals_remove_temp_files(void)
     }
 }
 
+/* CURVFLOW_THREADS: the solver threads (cf_context_set_threads). A value
+ * other than an integer 0..1024 is a usage error before any command runs;
+ * 0 and 2 give the default's result up to rounding (OpenBLAS's reductions). */
+static void test_threads_variable(void)
+{
+    CHECK_RUN("generate bumpy-sphere --subdivisions 3 -o threads_in.obj", 0);
+    const char *bad[] = {"CURVFLOW_THREADS=abc", "CURVFLOW_THREADS=-1", "CURVFLOW_THREADS=' 2'", "CURVFLOW_THREADS=1025",
+                         "CURVFLOW_THREADS="};
+    for (int i = 0; i < 5; ++i) {
+        cft_cli_env = bad[i];
+        CHECK_RUN("info threads_in.obj", 1);
+        CHECK(strstr(cft_err, "CURVFLOW_THREADS must be an integer from 0 to 1024, got '") != NULL);
+        CHECK(count_lines(cft_err) == 1);
+    }
+    const char *good[] = {"", "CURVFLOW_THREADS=0", "CURVFLOW_THREADS=2"};
+    const char *out[] = {"threads_default.obj", "threads_0.obj", "threads_2.obj"};
+    for (int i = 0; i < 3; ++i) {
+        cft_cli_env = good[i];
+        char args[160];
+        snprintf(args, sizeof args, "flow threads_in.obj -o %s --method spin-willmore -n 3 -q", out[i]);
+        CHECK_RUN(args, 0);
+    }
+    cft_cli_env = "";
+    cf_context *ctx = cft_context();
+    cf_mesh *m[3] = {NULL, NULL, NULL};
+    for (int i = 0; i < 3; ++i) CHECK_OK(ctx, cf_load_mesh(ctx, cft_in_dir(out[i]), &m[i]));
+    if (m[0] && m[1] && m[2]) {
+        const double *x0 = cf_mesh_positions(m[0]);
+        double d = 0.0;
+        for (int i = 1; i < 3; ++i) {
+            const double *x = cf_mesh_positions(m[i]);
+            for (int32_t k = 0; k < 3 * cf_mesh_vertex_count(m[0]); ++k) d = fmax(d, fabs(x[k] - x0[k]));
+        }
+        CHECK_LE(d, 1e-9);
+    }
+    for (int i = 0; i < 3; ++i) cf_mesh_destroy(&m[i]);
+    cf_context_destroy(&ctx);
+}
+
 int main(void)
 {
     if (cft_cli_setup("cli")) return 1;
@@ -801,5 +841,6 @@ int main(void)
     CFT_RUN(test_stale_temp_files);
     CFT_RUN(test_signals_remove_temp_files);
     CFT_RUN(test_no_temp_files);
+    CFT_RUN(test_threads_variable);
     return cft_cli_finish();
 }

@@ -1,18 +1,29 @@
 /* cf_context_set_threads: CHOLMOD's OpenMP regions follow the context's
  * setting (max-active-levels 0 for 1 thread, 1 for more) at each
  * factorisation, the runtime is left alone with 0, and the factor does not
- * depend on the setting. */
+ * depend on the setting. OpenBLAS runs the factorisations and solves on one
+ * thread with the default 1 and hands the process's count back after them;
+ * with 0 and n > 1 it keeps the process's count. */
 #define _GNU_SOURCE 1 /* RTLD_DEFAULT */
 #include "curvflow/linalg.h"
 #include "test.h"
 
 #include <dlfcn.h>
+#include <stdio.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
+/* linalg_internal.h (blas_buffers.c); that header needs CHOLMOD's, which
+ * the tests do not see */
+int cfi_blas_threads_last_entered(void);
+
 static int (*get_levels)(void);
 static void (*set_levels)(int);
+static int (*blas_get_threads)(void);
+static void (*blas_set_threads)(int);
+/* OpenBLAS's count during the last factorisation / solve of factor_with */
+static int blas_in_factorize, blas_in_solve;
 
 static cf_sparse *grid(cf_context *ctx, int32_t m)
 {
@@ -50,7 +61,9 @@ static int factor_with(int32_t threads, double *x)
     cf_cholesky *chol = NULL;
     CHECK_OK(ctx, cf_cholesky_create(ctx, a, NULL, &chol));
     CHECK_OK(ctx, cf_cholesky_factorize(chol, a));
+    blas_in_factorize = cfi_blas_threads_last_entered();
     CHECK_OK(ctx, cf_cholesky_solve(chol, 1, b, x));
+    blas_in_solve = cfi_blas_threads_last_entered();
     int levels = get_levels();
     cf_cholesky_destroy(&chol);
     cf_sparse_destroy(&a);
@@ -81,6 +94,56 @@ static void test_setting_applied(void)
     set_levels(0);
 }
 
+/* OpenBLAS: one thread inside the library's calls with the default, the
+ * process's count (2 here) after them and with 0 or 2; UMFPACK's LU too */
+static void test_openblas_threads(void)
+{
+    void *g = dlsym(RTLD_DEFAULT, "openblas_get_num_threads"), *s = dlsym(RTLD_DEFAULT, "openblas_set_num_threads");
+    if (!g || !s) {
+        printf("SKIP openblas_threads: the BLAS of this process is not OpenBLAS\n");
+        return;
+    }
+    memcpy(&blas_get_threads, &g, sizeof blas_get_threads);
+    memcpy(&blas_set_threads, &s, sizeof blas_set_threads);
+    int process = blas_get_threads();
+    blas_set_threads(2);
+    CHECK(blas_get_threads() == 2);
+    double x1[900], x2[900], x0[900];
+    factor_with(1, x1);
+    CHECK(blas_in_factorize == 1 && blas_in_solve == 1);
+    CHECK(blas_get_threads() == 2); /* handed back */
+    factor_with(2, x2);
+    CHECK(blas_in_factorize == 2 && blas_in_solve == 2);
+    factor_with(0, x0);
+    CHECK(blas_in_factorize == 2 && blas_in_solve == 2);
+    CHECK(blas_get_threads() == 2);
+    double d = 0.0;
+    for (int i = 0; i < 900; ++i) d = fmax(d, fmax(fabs(x1[i] - x2[i]), fabs(x1[i] - x0[i])));
+    CHECK_LE(d, 1e-12);
+
+    /* the LU (UMFPACK) of the same matrix: factorisation and solve */
+    for (int32_t threads = 1; threads >= 0; --threads) {
+        cf_context *ctx = cft_context();
+        CHECK_OK(ctx, cf_context_set_threads(ctx, threads));
+        cf_sparse *a = grid(ctx, 30);
+        cf_lu *lu = NULL;
+        CHECK_OK(ctx, cf_lu_create(ctx, a, &lu));
+        CHECK(cfi_blas_threads_last_entered() == (threads == 1 ? 1 : 2));
+        double b[900], x[900];
+        for (int i = 0; i < 900; ++i) b[i] = 1.0;
+        CHECK_OK(ctx, cf_lu_solve(lu, b, x));
+        CHECK(cfi_blas_threads_last_entered() == (threads == 1 ? 1 : 2));
+        CHECK(blas_get_threads() == 2);
+        double e = 0.0;
+        for (int i = 0; i < 900; ++i) e = fmax(e, fabs(x[i] - x1[i]));
+        CHECK_LE(e, 1e-12);
+        cf_lu_destroy(&lu);
+        cf_sparse_destroy(&a);
+        cf_context_destroy(&ctx);
+    }
+    blas_set_threads(process);
+}
+
 static void test_bad_input(void)
 {
     cf_context *ctx = cft_context();
@@ -95,6 +158,7 @@ static void test_bad_input(void)
 int main(void)
 {
     CFT_RUN(test_setting_applied);
+    CFT_RUN(test_openblas_threads);
     CFT_RUN(test_bad_input);
     return cft_finish();
 }

@@ -228,7 +228,6 @@ def _declare(lib):
     f("cf_context_destroy", None, POINTER(c_void_p))
     f("cf_context_set_log", None, P, LOG_FN, P, c_int)
     f("cf_context_set_threads", S, P, I32)
-    f("cf_context_threads", I32, P)
     f("cf_context_message", c_char_p, P)
     f("cf_context_status", S, P)
     f("cf_context_clear_error", None, P)

@@ -253,14 +253,18 @@ done:
     free(grown);
 }
 
-/* A spin_step_hook that keeps the flow's positions after each step. */
+/* The positions after the last step (a spin_step_hook's user). */
+typedef struct last_positions {
+    size_t bytes;
+    double *x;
+} last_positions;
+
 static void keep_positions(cf_context *ctx, const cf_flow *flow, int step, void *user)
 {
     (void)ctx;
     (void)step;
-    const cf_mesh *mesh = ((const cf_mesh **)user)[0];
-    double *x = ((double **)user)[1];
-    memcpy(x, cf_flow_positions(flow), 3 * (size_t)cf_mesh_vertex_count(mesh) * sizeof(double));
+    last_positions *last = user;
+    memcpy(last->x, cf_flow_positions(flow), last->bytes);
 }
 
 /* 10 steps on the tube with `regularization` (NULL: the default) into *c. */
@@ -269,14 +273,14 @@ static void tube_census(cf_context *ctx, const cf_mesh *tube, const char *regula
     cf_flow_options o;
     CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o));
     if (regularization) CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "regularization", regularization));
-    double *x = malloc(3 * (size_t)cf_mesh_vertex_count(tube) * sizeof(double));
+    last_positions last = {3 * (size_t)cf_mesh_vertex_count(tube) * sizeof(double), NULL};
+    double *x = last.x = malloc(last.bytes);
     if (!x) {
         CHECK(!"out of memory");
         return;
     }
-    memcpy(x, cf_mesh_positions(tube), 3 * (size_t)cf_mesh_vertex_count(tube) * sizeof(double));
-    const void *user[2] = {tube, x};
-    spin_run_steps_hooked(ctx, tube, &o, 10, r, NULL, keep_positions, (void *)user);
+    memcpy(x, cf_mesh_positions(tube), last.bytes);
+    spin_run_steps_hooked(ctx, tube, &o, 10, r, NULL, keep_positions, &last);
     count_bubbles(ctx, tube, x, c);
     fprintf(stderr,
             "   tube 0.40 +- 0.1, regularization %s: W/4pi %.4f -> %.4f (target %.4f); %d bubbles of W/4pi %.3f .. %.3f "

@@ -270,6 +270,8 @@ static void keep_positions(cf_context *ctx, const cf_flow *flow, int step, void 
 /* 10 steps on the tube with `regularization` (NULL: the default) into *c. */
 static void tube_census(cf_context *ctx, const cf_mesh *tube, const char *regularization, spin_run *r, bubble_census *c)
 {
+    memset(r, 0, sizeof *r);
+    memset(c, 0, sizeof *c);
     cf_flow_options o;
     CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o));
     if (regularization) CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "regularization", regularization));

@@ -53,8 +53,11 @@ cf_status cf_spin_transform(cf_context *ctx, const cf_mesh *mesh, const double *
     double *lambda = CFI_ALLOC(ctx, double, 4 * (int64_t)nv);
     double *work = CFI_ALLOC(ctx, double, 4 * (int64_t)nv);
     double *edges = CFI_ALLOC(ctx, double, 3 * (int64_t)mesh->ne);
+    /* several components: each one's lambda scale and centroids (7 per component) */
+    int32_t nc = mesh->component_count;
+    double *sums = nc > 1 ? CFI_ALLOC(ctx, double, 7 * (int64_t)nc) : NULL;
     cf_status st = CF_OK;
-    if (!mass || !lambda || !work || !edges) {
+    if (!mass || !lambda || !work || !edges || (nc > 1 && !sums)) {
         st = CF_ERR_NOMEM;
         goto done;
     }
@@ -83,6 +86,7 @@ cf_status cf_spin_transform(cf_context *ctx, const cf_mesh *mesh, const double *
         /* normalised to sum M |lambda|^2 = area (mean |lambda|^2 = 1) */
         st = cf_inverse_iteration_blocks(chol, mass, 4, 1, area, lambda, work);
         if (st != CF_OK) goto done;
+        if (nc > 1) cfi_spin_normalize_components(mesh, mass, lambda, sums);
         double q = cf_rayleigh_quotient_blocks(dirac->x, mass, 4, lambda, work);
         double gamma = isnan(q) ? 0.0 : q - eps;
         if (fabs(gamma - gamma_old) <= 1e-12 * (fabs(gamma) + eps)) break;
@@ -92,15 +96,26 @@ cf_status cf_spin_transform(cf_context *ctx, const cf_mesh *mesh, const double *
     st = cf_edge_poisson_create(ctx, mesh, positions, 0, NULL, &poisson);
     if (st == CF_OK) st = cf_edge_poisson_solve(poisson, edges, NULL, out_positions, NULL);
     if (st != CF_OK) goto done;
-    /* keep the area-weighted centroid */
-    double c_in[3] = {0, 0, 0}, c_out[3] = {0, 0, 0};
-    for (int32_t i = 0; i < nv; ++i)
-        for (int c = 0; c < 3; ++c) {
-            c_in[c] += mass[i] * positions[3 * i + c];
-            c_out[c] += mass[i] * out_positions[3 * i + c];
+    /* keep the area-weighted centroid (of each component: the Poisson
+     * problem fixes each one's positions only up to its own translation) */
+    if (nc > 1) {
+        double *mass_c = sums, *c_in = sums + nc, *c_out = c_in + 3 * (int64_t)nc;
+        cfi_spin_component_centroids(mesh, mass, positions, mass_c, c_in);
+        cfi_spin_component_centroids(mesh, mass, out_positions, mass_c, c_out);
+        for (int32_t i = 0; i < nv; ++i) {
+            int32_t c = mesh->vertex_component[i];
+            for (int d = 0; d < 3; ++d) out_positions[3 * i + d] += c_in[3 * c + d] - c_out[3 * c + d];
         }
-    for (int32_t i = 0; i < nv; ++i)
-        for (int c = 0; c < 3; ++c) out_positions[3 * i + c] += (c_in[c] - c_out[c]) / area;
+    } else {
+        double c_in[3] = {0, 0, 0}, c_out[3] = {0, 0, 0};
+        for (int32_t i = 0; i < nv; ++i)
+            for (int c = 0; c < 3; ++c) {
+                c_in[c] += mass[i] * positions[3 * i + c];
+                c_out[c] += mass[i] * out_positions[3 * i + c];
+            }
+        for (int32_t i = 0; i < nv; ++i)
+            for (int c = 0; c < 3; ++c) out_positions[3 * i + c] += (c_in[c] - c_out[c]) / area;
+    }
 done:
     cf_cholesky_destroy(&chol);
     cfi_dirac_destroy(ctx, &dirac);
@@ -109,5 +124,6 @@ done:
     CFI_FREE(ctx, lambda, 4 * (int64_t)nv);
     CFI_FREE(ctx, work, 4 * (int64_t)nv);
     CFI_FREE(ctx, edges, 3 * (int64_t)mesh->ne);
+    if (sums) CFI_FREE(ctx, sums, 7 * (int64_t)nc);
     return st;
 }

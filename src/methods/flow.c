@@ -507,8 +507,7 @@ static cf_status check_positions(cf_context *ctx, const double *x, int32_t nv, c
     return cfi_error(ctx, status, "vertex %d: %s is not finite", (int)v, what);
 }
 
-/* Area and volume of the current positions into *info, with drifts. */
-static cf_status measure(cf_flow *flow, cf_flow_info *info)
+cf_status cfi_flow_measure(cf_flow *flow, cf_flow_info *info)
 {
     double area = 0.0, volume = 0.0;
     cf_status st = cf_total_area(flow->ctx, flow->mesh, flow->positions, &area);
@@ -588,7 +587,8 @@ void cf_flow_destroy(cf_flow **pflow)
     if (!pflow || !*pflow) return;
     cf_flow *flow = *pflow;
     cf_context *ctx = flow->ctx;
-    if (flow->method && flow->method->destroy) flow->method->destroy(flow);
+    if (flow->parts) cfi_flow_destroy_parts(flow);
+    else if (flow->method && flow->method->destroy) flow->method->destroy(flow);
     int32_t nv = flow->mesh->nv;
     CFI_FREE(ctx, flow->positions, 3 * (size_t)nv);
     CFI_FREE(ctx, flow->saved_positions, 3 * (size_t)nv);
@@ -646,6 +646,15 @@ cf_status cf_flow_create(cf_context *ctx, const cf_mesh *mesh, const double *pos
     /* Only now is the method attached, so that destroy calls its destructor
      * exactly when its create has run (it must accept a partial state). */
     flow->method = m;
+    if (m->per_component && mesh->component_count > 1) {
+        st = cfi_flow_create_parts(flow);
+        if (st != CF_OK) {
+            cf_flow_destroy(&flow);
+            return st;
+        }
+        *out = flow;
+        return CF_OK;
+    }
     st = m->create(flow, flow->options.storage.bytes);
     if (st != CF_OK) {
         cf_flow_destroy(&flow);
@@ -884,6 +893,7 @@ static int rise_halved_as_first_order(double last_rise, double last_rise_step, d
 cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info)
 {
     if (!flow) return CF_ERR_INVALID_ARG;
+    if (flow->parts) return cfi_flow_step_parts(flow, info);
     cf_context *ctx = flow->ctx;
     const cfi_flow_method *m = flow->method;
     int32_t nv = flow->mesh->nv;
@@ -1093,7 +1103,7 @@ cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info)
         step.time_step = 0.0;
         flow->converged = 1;
     }
-    st = measure(flow, &step);
+    st = cfi_flow_measure(flow, &step);
     if (st != CF_OK) return fail_step(flow, st, iteration, start_step);
     if (!isfinite(step.area) || !isfinite(step.volume)) {
         cfi_error(ctx, CF_ERR_NUMERICAL, "area or volume is not finite");
@@ -1111,14 +1121,19 @@ cf_status cf_flow_step(cf_flow *flow, cf_flow_info *info)
             pol->step = fmin(pol->full_step, pol->step * pol->opt.step_growth);
     }
     if (desc->convergence && cfi_step_policy_converged(before, step.energy, pol->tolerance)) flow->converged = 1;
-    step.iteration = iteration;
-    step.time = flow->info.time + step.time_step;
-    step.total_seconds = cfi_now_seconds() - t0;
-    flow->info = step;
-    if (info) *info = step;
+    return cfi_flow_accept_step(flow, &step, info, t0);
+}
+
+cf_status cfi_flow_accept_step(cf_flow *flow, cf_flow_info *step, cf_flow_info *info, double t0)
+{
+    step->iteration = flow->info.iteration + 1;
+    step->time = flow->info.time + step->time_step;
+    step->total_seconds = cfi_now_seconds() - t0;
+    flow->info = *step;
+    if (info) *info = *step;
     if (flow->progress && flow->progress(flow->progress_user, &flow->info) != 0)
-        return cfi_error(ctx, CF_ERR_CANCELLED, "iteration %lld: cancelled by the progress callback",
-                         (long long)iteration);
+        return cfi_error(flow->ctx, CF_ERR_CANCELLED, "iteration %lld: cancelled by the progress callback",
+                         (long long)step->iteration);
     return CF_OK;
 }
 
@@ -1152,10 +1167,11 @@ cf_status cf_flow_set_positions(cf_flow *flow, const double *positions)
     int32_t nv = flow->mesh->nv;
     cf_status bad = check_positions(ctx, positions, nv, CF_ERR_NONFINITE, "position");
     if (bad != CF_OK) return bad;
+    if (flow->parts) return cfi_flow_set_positions_parts(flow, positions);
     memcpy(flow->saved_positions, flow->positions, 3 * (size_t)nv * sizeof(double));
     memcpy(flow->positions, positions, 3 * (size_t)nv * sizeof(double));
     cf_status st = flow->method->reset ? flow->method->reset(flow) : CF_OK;
-    if (st == CF_OK) st = measure(flow, &flow->info);
+    if (st == CF_OK) st = cfi_flow_measure(flow, &flow->info);
     if (st != CF_OK) {
         char message[CF_MESSAGE_CAPACITY];
         memcpy(message, ctx->message, sizeof message);

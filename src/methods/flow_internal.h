@@ -81,7 +81,16 @@ typedef struct cfi_flow_method {
     /* Which checks of the shared step policy apply (methods/step_policy.h);
      * left out (all zero): none, the method accepts its own steps. */
     cfi_step_policy_desc policy;
+    /* 1: on a mesh of several connected components the layer runs one flow
+     * of this method per component, each with its own step policy, and
+     * the flow of the whole mesh gathers them (flow_parts.c): for a method
+     * whose step couples what the mesh does not (spin-willmore's
+     * eigenvector and its whole-surface constraints). */
+    int32_t per_component;
 } cfi_flow_method;
+
+/* One flow per connected component (flow_parts.c). */
+typedef struct cfi_flow_parts cfi_flow_parts;
 
 struct cf_flow {
     cf_context *ctx;
@@ -99,6 +108,7 @@ struct cf_flow {
     void *progress_user;
     cfi_step_policy_state policy; /* the shared step policy (cf_flow_step) */
     int64_t attempts;           /* attempts made since create (tests, benchmarks) */
+    cfi_flow_parts *parts;      /* per_component methods on several components: the flows doing the work */
 };
 
 /* The step policy's time step for the current attempt: the full step
@@ -130,6 +140,26 @@ void cfi_flow_policy_restrict(cf_flow *flow, int keep_rise_check, int keep_backt
  * it off), e.g. spin-willmore's divergence check with prescribed or cmc
  * boundaries, which may raise W by design. */
 void cfi_flow_policy_restrict_checks(cf_flow *flow, int keep_blowup, int keep_divergence);
+
+/* Area and volume of flow->positions into *info, with their drifts
+ * against the flow's start. */
+cf_status cfi_flow_measure(cf_flow *flow, cf_flow_info *info);
+
+/* An accepted step's bookkeeping: iteration, time and the seconds since t0
+ * into *step, which becomes flow->info (and *info when not NULL); then the
+ * progress callback (CF_ERR_CANCELLED when it cancels). */
+cf_status cfi_flow_accept_step(cf_flow *flow, cf_flow_info *step, cf_flow_info *info, double t0);
+
+/* flow_parts.c: the flow of a per_component method on a mesh of several
+ * components. create_parts builds one flow per component from
+ * flow->positions and flow->options (vertex and face arrays sliced) and
+ * fills flow->info; step_parts steps every component that has not
+ * converged; set_positions_parts gives each its part of positions (all or
+ * none); destroy_parts frees them. */
+cf_status cfi_flow_create_parts(cf_flow *flow);
+cf_status cfi_flow_step_parts(cf_flow *flow, cf_flow_info *info);
+cf_status cfi_flow_set_positions_parts(cf_flow *flow, const double *positions);
+void cfi_flow_destroy_parts(cf_flow *flow);
 
 /* The registry entry of a kind, NULL if out of range. */
 const cfi_flow_method *cfi_flow_method_of(cf_flow_kind kind);

@@ -35,20 +35,13 @@ cf_status cfi_spin_apply_constraints(cf_flow *flow, cfi_spin_state *s, const dou
      * it, N is projected out first, the balancing term is added, and then
      * only {1, Z} (App. E.1: "after the inversion constraint ... prior to
      * any remaining constraints"). */
-    /* On several components X is block diagonal and each component is a
-     * closed or bounded surface of its own: App. B's and D's conditions hold
-     * on each, so N^x,y,z and 1 are taken per component (without Moebius
-     * balancing, which options.c refuses there). */
-    const int32_t *component = flow->mesh->vertex_component;
-    int32_t nc = s->components;
     int32_t ncols = 0, count = 0, rank = 0;
     if (s->opt.inversion) {
-        for (int32_t k = 0; k < nc; ++k)
-            for (int c = 0; c < 3; ++c) {
-                double *b = s->basis + (int64_t)ncols * nv;
-                for (int32_t i = 0; i < nv; ++i) b[i] = nc == 1 || component[i] == k ? s->normal[3 * i + c] : 0.0;
-                ++ncols;
-            }
+        for (int c = 0; c < 3; ++c) {
+            double *b = s->basis + (int64_t)ncols * nv;
+            for (int32_t i = 0; i < nv; ++i) b[i] = s->normal[3 * i + c];
+            ++ncols;
+        }
     }
     if (s->opt.mobius) {
         count += ncols;
@@ -57,11 +50,9 @@ cf_status cfi_spin_apply_constraints(cf_flow *flow, cfi_spin_state *s, const dou
         ncols = 0;
     }
     if (s->opt.total_curvature) {
-        for (int32_t k = 0; k < nc; ++k) {
-            double *b = s->basis + (int64_t)ncols * nv;
-            for (int32_t i = 0; i < nv; ++i) b[i] = nc == 1 || component[i] == k ? 1.0 : 0.0;
-            ++ncols;
-        }
+        double *b = s->basis + (int64_t)ncols * nv;
+        for (int32_t i = 0; i < nv; ++i) b[i] = 1.0;
+        ++ncols;
     }
     int32_t pre = 0;
     if (s->harmonic_dim > 0) {

@@ -107,8 +107,7 @@ static cf_status allocate_arrays(cfi_spin_state *s, int32_t dim)
     cfi_workspace *ws = &s->ws;
     int64_t nv = s->nv, ne = s->ne;
     int64_t zcols = s->linearized ? 3 * (int64_t)dim : dim;
-    /* N x,y,z and 1 (per component), and 3 per harmonic form at most (constraints.c) */
-    s->max_cols = 4 * s->components + 3 * dim;
+    s->max_cols = 4 + 3 * dim; /* N x,y,z, 1, and 3 per harmonic form at most (constraints.c) */
     int ok = 1;
 #define WS_ARRAY(field, count) ok = ok && ((field) = CFI_WS_ALLOC(ws, double, (count))) != NULL
     if (s->linearized) WS_ARRAY(s->hweights, ne);
@@ -128,11 +127,6 @@ static cf_status allocate_arrays(cfi_spin_state *s, int32_t dim)
     WS_ARRAY(s->basis, nv * s->max_cols);
     WS_ARRAY(s->edges, 3 * ne);
     WS_ARRAY(s->newpos, 3 * nv);
-    if (s->components > 1) {
-        WS_ARRAY(s->component_area0, s->components);
-        WS_ARRAY(s->component_centroid, 3 * (int64_t)s->components);
-        WS_ARRAY(s->component_sums, 5 * (int64_t)s->components);
-    }
     /* Scratch of one phase each, in one array: rho from IV to the fill of
      * X in V, the recovered positions in VI, L f inside
      * cfi_spin_update_geometry (after VI). */
@@ -224,19 +218,6 @@ static cf_status create_dirac(cf_flow *flow, cfi_spin_state *s)
     return st;
 }
 
-/* The area of each connected component of x (its faces' areas summed). */
-static void component_areas(const cf_mesh *mesh, const double *x, double *out)
-{
-    for (int32_t c = 0; c < mesh->component_count; ++c) out[c] = 0.0;
-    for (int32_t f = 0; f < mesh->nf; ++f) {
-        const int32_t *t = mesh->triangles + 3 * (int64_t)f;
-        const double *a = x + 3 * (int64_t)t[0], *b = x + 3 * (int64_t)t[1], *c = x + 3 * (int64_t)t[2];
-        double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-        double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
-        out[mesh->face_component[f]] += 0.5 * sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-    }
-}
-
 cf_status cfi_spin_create(cf_flow *flow, const void *options)
 {
     cf_context *ctx = flow->ctx;
@@ -260,7 +241,6 @@ cf_status cfi_spin_create(cf_flow *flow, const void *options)
     s->ne = mesh->ne;
     s->nf = mesh->nf;
     s->has_boundary = mesh->boundary_loop_count > 0;
-    s->components = mesh->component_count;
     s->fixed_boundary = o->boundary_mode == CF_SPIN_BOUNDARY_FIXED;
     s->restricted_boundary = o->boundary_mode == CF_SPIN_BOUNDARY_PRESCRIBED || o->boundary_mode == CF_SPIN_BOUNDARY_CMC;
     cfi_flow_policy_restrict(flow, cfi_flow_backtracks(flow) && !s->restricted_boundary, 1);
@@ -318,7 +298,6 @@ cf_status cfi_spin_create(cf_flow *flow, const void *options)
     if (st == CF_OK && s->rest_area) st = cf_vertex_areas(ctx, mesh, mesh->positions, CF_DUAL_AREA_BARYCENTRIC, s->rest_area);
     if (st != CF_OK) goto fail;
     s->eps = o->regularization * 4.0 * CFI_PI / flow->initial_area;
-    if (s->components > 1) component_areas(mesh, flow->positions, s->component_area0);
     st = cfi_spin_boundary_targets(flow, s, o);
     if (st == CF_OK) st = create_dirac(flow, s);
     /* the filter is built on the input: the weak cotan Laplacian is invariant
@@ -390,16 +369,7 @@ static cf_status solve_lambda(cf_flow *flow, cfi_spin_state *s, cfi_spin_timers 
         }
         double total = 0.0; /* lambda normalised to sum M |lambda|^2 = sum M */
         for (int32_t i = 0; i < nv; ++i) total += s->area[i];
-        if (s->components > 1) {
-            /* X is block diagonal: one inverse iteration per component, each
-             * lambda normalised on its own component */
-            for (int32_t k = 0; k < s->opt.power_iterations && st == CF_OK; ++k) {
-                st = cf_inverse_iteration_blocks(s->chol, s->area, 4, 1, total, s->lambda, s->qwork);
-                if (st == CF_OK) cfi_spin_normalize_components(mesh, s->area, s->lambda, s->component_sums);
-            }
-        } else {
-            st = cf_inverse_iteration_blocks(s->chol, s->area, 4, s->opt.power_iterations, total, s->lambda, s->qwork);
-        }
+        st = cf_inverse_iteration_blocks(s->chol, s->area, 4, s->opt.power_iterations, total, s->lambda, s->qwork);
     }
     t->solve += cfi_now_seconds() - tc;
     if (st != CF_OK) return cfi_error(ctx, st, "spin-willmore: eigenvector solve failed");
@@ -534,46 +504,10 @@ typedef struct placement {
     double total;       /* sum of s->area */
 } placement;
 
-/* With several components each one is placed on its own: the Poisson
- * problem fixes each one's positions up to its own translation (and scale),
- * and one placement for all would let the components drift apart and trade
- * area. The start's centroids go to s->component_centroid. */
-static void start_component_placement(const cf_flow *flow, const cfi_spin_state *s, const double *x)
-{
-    cfi_spin_component_centroids(flow->mesh, s->area, x, s->component_sums, s->component_centroid);
-}
-
-static cf_status place_components(cf_flow *flow, const cfi_spin_state *s, const double *src, double *dst)
-{
-    const cf_mesh *mesh = flow->mesh;
-    int32_t nc = s->components;
-    double *mass = s->component_sums, *c_new = mass + nc, *scale = c_new + 3 * (int64_t)nc;
-    cfi_spin_component_centroids(mesh, s->area, src, mass, c_new);
-    for (int32_t c = 0; c < nc; ++c) scale[c] = 1.0;
-    if (s->opt.normalize) {
-        component_areas(mesh, src, scale);
-        for (int32_t c = 0; c < nc; ++c) {
-            if (!(scale[c] > 0.0) || !isfinite(scale[c]))
-                return cfi_error(flow->ctx, CF_ERR_NUMERICAL, "spin-willmore: recovered component %d has no area", c);
-            scale[c] = sqrt(s->component_area0[c] / scale[c]);
-        }
-    }
-    const double *cen = s->component_centroid;
-    for (int32_t i = 0; i < mesh->nv; ++i) {
-        int32_t c = mesh->vertex_component[i];
-        for (int d = 0; d < 3; ++d) dst[3 * i + d] = cen[3 * c + d] + scale[c] * (src[3 * i + d] - c_new[3 * c + d]);
-    }
-    return CF_OK;
-}
-
 static void start_placement(const cf_flow *flow, const cfi_spin_state *s, const double *x, placement *pl)
 {
     memset(pl, 0, sizeof *pl);
     if (s->fixed_boundary) return;
-    if (s->components > 1) {
-        start_component_placement(flow, s, x);
-        return;
-    }
     for (int32_t i = 0; i < flow->mesh->nv; ++i) {
         pl->total += s->area[i];
         for (int c = 0; c < 3; ++c) pl->centroid[c] += s->area[i] * x[3 * i + c];
@@ -590,7 +524,6 @@ static cf_status place(cf_flow *flow, const cfi_spin_state *s, const placement *
         if (dst != src) memcpy(dst, src, 3 * (size_t)nv * sizeof(double));
         return CF_OK;
     }
-    if (s->components > 1) return place_components(flow, s, src, dst);
     double c_new[3] = {0, 0, 0};
     for (int32_t i = 0; i < nv; ++i)
         for (int c = 0; c < 3; ++c) c_new[c] += s->area[i] * src[3 * i + c];

@@ -163,14 +163,6 @@ cf_status cfi_spin_validate_options(cf_context *ctx, const cf_mesh *mesh, const 
                 return cfi_error(ctx, CF_ERR_INVALID_ARG, "spin-willmore: vertex %d: boundary target (%g, %g, %g) is %s",
                                  i, t[0], t[1], t[2], isfinite(len) ? "zero" : "not finite");
         }
-    /* Several components get their own lambda scale, constraints and
-     * placement (flow_method.c); the balancing and the boundary conditions
-     * other than free are written for one surface */
-    if (mesh->component_count > 1 && (o->mobius || o->boundary_mode != CF_SPIN_BOUNDARY_FREE))
-        return cfi_error(ctx, CF_ERR_BAD_MESH,
-                         "spin-willmore: %s needs a connected mesh, and this one has %d components (flow each "
-                         "component on its own, or leave the option at its default)",
-                         o->mobius ? "mobius balancing" : "boundary other than free", mesh->component_count);
     int32_t has_boundary = mesh->boundary_loop_count > 0;
     if (o->boundary_mode != CF_SPIN_BOUNDARY_FREE && !has_boundary)
         return cfi_error(ctx, CF_ERR_BAD_MESH, "spin-willmore: boundary=%s needs a mesh with boundary",
@@ -212,4 +204,7 @@ const cfi_flow_method cfi_spin_willmore_method = {
                .blowup_default = 10.0, .divergence_check = 1, .divergence_default = 1.0,
                .divergence_cause = " is above this mesh's stability limit",
                .divergence_hint = "adaptive=1 or a larger regularization (docs/spin.md)"},
+    /* X(rho)'s eigenvector and the constraints are the whole surface's: on
+     * several components each is flowed on its own (methods/flow_parts.c) */
+    .per_component = 1,
 };

@@ -97,13 +97,6 @@ typedef struct cfi_spin_state {
     double *edges;           /* 3 ne */
     double *newpos;          /* 3 nv */
     double *vtmp;            /* nv, Moebius balancing only */
-    /* A mesh of several connected components: X is block diagonal, so each
-     * component gets its own lambda scale, constraints and placement
-     * (docs/spin.md, "Several connected components"); NULL with one. */
-    int32_t components;
-    double *component_area0;    /* components: each one's area at the start (normalize) */
-    double *component_centroid; /* 3 components: each one's centroid at the step's start */
-    double *component_sums;     /* 5 components: scratch of the placement (mass, centroid, scale) and of lambda's scales */
     double energy;
     double energy_before;    /* W at the start of the current step */
     cfi_spin_diagnostics diag;

@@ -326,6 +326,45 @@ static void test_component_named(void)
     cf_context_destroy(&ctx);
 }
 
+/* Failure injection over creating, stepping twice and destroying a flow of
+ * two components (every allocation of flow_parts.c and of each component's
+ * flow fails in turn): CF_ERR_NOMEM, nothing leaked; the steps allocate
+ * nothing. */
+static cf_status create_step_destroy(cf_context *ctx, void *user)
+{
+    const cf_mesh *both = user;
+    cf_flow_options o;
+    cf_status st = cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o);
+    cf_flow *flow = NULL;
+    if (st == CF_OK) st = cf_flow_create(ctx, both, NULL, &o, &flow);
+    if (st != CF_OK && flow) st = CF_ERR_INVALID_ARG; /* no object on failure */
+    int64_t before = cf_context_allocation_count(ctx);
+    if (st == CF_OK) st = cf_flow_run(flow, 2, NULL);
+    if (st == CF_OK && cf_context_allocation_count(ctx) != before) st = CF_ERR_INVALID_ARG;
+    cf_flow_destroy(&flow);
+    return st;
+}
+
+static void test_allocation_failures(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *a = NULL, *b = NULL;
+    CHECK_OK(ctx, cf_generate_bumpy_sphere(ctx, 1, 0.2, 3u, &a));
+    CHECK_OK(ctx, cf_generate_torus(ctx, 1.0, 0.4, 12, 6, &b));
+    cf_mesh *both = a && b ? merged(ctx, a, b, 3.0) : NULL;
+    if (both) {
+        CHECK_OK(ctx, create_step_destroy(ctx, both)); /* the context's one-off CHOLMOD state first */
+        int64_t n = cft_allocation_sweep(ctx, "two components", create_step_destroy, both, 1);
+        fprintf(stderr, "   two components: %lld allocations swept\n", (long long)n);
+        CHECK(n > 40);
+    }
+    cf_mesh_destroy(&both);
+    cf_mesh_destroy(&a);
+    cf_mesh_destroy(&b);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 int main(void)
 {
     CFT_RUN(test_star_beside_sphere);
@@ -333,5 +372,6 @@ int main(void)
     CFT_RUN(test_arrays_and_start_cut);
     CFT_RUN(test_spin_transform_identity);
     CFT_RUN(test_component_named);
+    CFT_RUN(test_allocation_failures);
     return cft_finish();
 }

@@ -218,14 +218,14 @@ static cf_status create_dirac(cf_flow *flow, cfi_spin_state *s)
     return st;
 }
 
-/* The face thinnest against its size (doubled area over the sum of its
- * squared edges, 0.43 for an equilateral triangle) below which
- * spin-willmore warns: a vertex within about 1e-10 of an edge's length from
- * its neighbour. From 1e-11 on, measured on spot_3k, the cotan weights of
- * 1 / that ratio cost every solve its accuracy and the flow stops far from
- * round (W/4pi 2.8-5.6 after 10 steps instead of 1.002; docs/spin.md,
- * "Near-duplicate vertices"); every shared and generated mesh is above
- * 1e-6. */
+/* The face thinnest against its size (its area over its longest edge
+ * squared, the mesh check's measure, whose zero is CFI_ZERO_AREA_RATIO;
+ * 0.43 for an equilateral triangle) below which spin-willmore warns: a
+ * vertex within about 1e-10 of an edge's length from its neighbour. From
+ * 1e-11 on, measured on spot_3k, the cotan weights of 1 / that ratio cost
+ * every solve its accuracy and the flow stops far from round (W/4pi 2.8-5.6
+ * after 10 steps instead of 1.002; docs/spin.md, "Near-duplicate
+ * vertices"); every shared and generated mesh is above 1e-6. */
 #define CFI_SPIN_THIN_FACE_WARNING 1e-10
 
 static void warn_thin_faces(const cf_flow *flow)
@@ -236,13 +236,9 @@ static void warn_thin_faces(const cf_flow *flow)
     int32_t face = -1, count = 0;
     for (int32_t f = 0; f < mesh->nf; ++f) {
         const int32_t *t = mesh->triangles + 3 * (int64_t)f;
-        const double *a = x + 3 * (int64_t)t[0], *b = x + 3 * (int64_t)t[1], *c = x + 3 * (int64_t)t[2];
-        double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-        double w[3] = {c[0] - b[0], c[1] - b[1], c[2] - b[2]};
-        double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
-        double squared = u[0] * u[0] + u[1] * u[1] + u[2] * u[2] + v[0] * v[0] + v[1] * v[1] + v[2] * v[2] +
-                         w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
-        double ratio = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) / squared;
+        double longest2 = 0.0;
+        double area = cfi_triangle_area(x + 3 * (int64_t)t[0], x + 3 * (int64_t)t[1], x + 3 * (int64_t)t[2], &longest2);
+        double ratio = area / longest2;
         if (!(ratio < CFI_SPIN_THIN_FACE_WARNING)) continue;
         ++count;
         if (ratio < least) {
@@ -252,7 +248,7 @@ static void warn_thin_faces(const cf_flow *flow)
     }
     if (face >= 0)
         cfi_log(flow->ctx, CF_LOG_WARNING,
-                "spin-willmore: face %d is nearly flat (twice its area is %.2g of its squared edges; %d face%s below "
+                "spin-willmore: face %d is nearly flat (its area is %.2g of its longest edge squared; %d face%s below "
                 "%g): a near-duplicate vertex? Its weights cost the solves their accuracy and the flow may stop "
                 "far from its minimum; welding such vertices helps (docs/spin.md, \"Near-duplicate vertices\")",
                 face, least, count, count == 1 ? "" : "s", CFI_SPIN_THIN_FACE_WARNING);

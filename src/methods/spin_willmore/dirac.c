@@ -411,37 +411,6 @@ void cfi_spin_transform_edges(const cf_mesh *mesh, const double *positions, cons
     }
 }
 
-void cfi_spin_component_centroids(const cf_mesh *mesh, const double *weight, const double *x, double *mass,
-                                  double *centroid)
-{
-    int32_t nc = mesh->component_count;
-    for (int32_t c = 0; c < nc; ++c) mass[c] = centroid[3 * c] = centroid[3 * c + 1] = centroid[3 * c + 2] = 0.0;
-    for (int32_t i = 0; i < mesh->nv; ++i) {
-        int32_t c = mesh->vertex_component[i];
-        mass[c] += weight[i];
-        for (int d = 0; d < 3; ++d) centroid[3 * c + d] += weight[i] * x[3 * i + d];
-    }
-    for (int32_t c = 0; c < nc; ++c)
-        for (int d = 0; d < 3; ++d) centroid[3 * c + d] /= mass[c];
-}
-
-void cfi_spin_normalize_components(const cf_mesh *mesh, const double *mass, double *lambda, double *sums)
-{
-    int32_t nc = mesh->component_count;
-    double *component_mass = sums, *component_norm = sums + nc;
-    for (int32_t c = 0; c < nc; ++c) component_mass[c] = component_norm[c] = 0.0;
-    for (int32_t i = 0; i < mesh->nv; ++i) {
-        const double *l = lambda + 4 * (int64_t)i;
-        int32_t c = mesh->vertex_component[i];
-        component_mass[c] += mass[i];
-        component_norm[c] += mass[i] * (l[0] * l[0] + l[1] * l[1] + l[2] * l[2] + l[3] * l[3]);
-    }
-    for (int32_t c = 0; c < nc; ++c)
-        component_norm[c] = component_norm[c] > 0.0 ? sqrt(component_mass[c] / component_norm[c]) : 1.0;
-    for (int32_t i = 0; i < mesh->nv; ++i)
-        for (int k = 0; k < 4; ++k) lambda[4 * (int64_t)i + k] *= component_norm[mesh->vertex_component[i]];
-}
-
 void cfi_dirac_restrict_boundary(cfi_dirac *d, const cf_mesh *mesh, const double *frames)
 {
     cf_sparse *x = d->x;

@@ -109,19 +109,6 @@ void cfi_dirac_restrict_boundary(cfi_dirac *d, const cf_mesh *mesh, const double
  * e~_ij = 1/3 l_i' e l_i + 1/6 l_i' e l_j + 1/6 l_j' e l_i + 1/3 l_j' e l_j
  * (l' = conj(l)), e = f_j - f_i for every edge i < j. out: 3 ne. */
 void cfi_spin_transform_edges(const cf_mesh *mesh, const double *positions, const double *lambda, double *out);
-/* On a mesh of several connected components: lambda (4 nv) rescaled on each
- * component to sum M |lambda|^2 = that component's sum of M. X is block
- * diagonal over the components, so an eigenvector of the whole matrix would
- * put all its weight on the component of the smallest eigenvalue and shrink
- * the others to a point; per component, each keeps its size to first order.
- * sums: 2 * component count doubles of scratch. */
-void cfi_spin_normalize_components(const cf_mesh *mesh, const double *mass, double *lambda, double *sums);
-/* The weighted centroid of each connected component of x (3 per component)
- * and each one's total weight (mass: one per component). */
-void cfi_spin_component_centroids(const cf_mesh *mesh, const double *weight, const double *x, double *mass,
-                                  double *centroid);
-
-
 /* Relative shift of the Dirac eigenproblem: X + eps M with
  * eps = CFI_SPIN_SHIFT * 4 pi / area (a fraction of 1/R^2 of the sphere of
  * equal area), so that the singular X(0) can be factorised. 1e-3 rather than

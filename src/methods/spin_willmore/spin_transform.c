@@ -14,6 +14,46 @@
 
 #define CFI_PI 3.14159265358979323846
 
+/* The weighted centroid of each connected component of x (3 per
+ * component) and each one's total weight (mass: one per component). */
+static void component_centroids(const cf_mesh *mesh, const double *weight, const double *x, double *mass,
+                               double *centroid)
+{
+    int32_t nc = mesh->component_count;
+    for (int32_t c = 0; c < nc; ++c) mass[c] = centroid[3 * c] = centroid[3 * c + 1] = centroid[3 * c + 2] = 0.0;
+    for (int32_t i = 0; i < mesh->nv; ++i) {
+        int32_t c = mesh->vertex_component[i];
+        mass[c] += weight[i];
+        for (int d = 0; d < 3; ++d) centroid[3 * c + d] += weight[i] * x[3 * i + d];
+    }
+    for (int32_t c = 0; c < nc; ++c)
+        for (int d = 0; d < 3; ++d) centroid[3 * c + d] /= mass[c];
+}
+
+/* On a mesh of several connected components: lambda (4 nv) rescaled on each
+ * component to sum M |lambda|^2 = that component's sum of M. X is block
+ * diagonal over the components, so an eigenvector of the whole matrix would
+ * put all its weight on the component of the smallest eigenvalue and shrink
+ * the others to a point; per component, each keeps its size. sums: 2 x the
+ * component count of scratch. (Flows do not need this: the flow layer runs
+ * one flow per component, methods/flow_parts.c.) */
+static void normalize_components(const cf_mesh *mesh, const double *mass, double *lambda, double *sums)
+{
+    int32_t nc = mesh->component_count;
+    double *component_mass = sums, *component_norm = sums + nc;
+    for (int32_t c = 0; c < nc; ++c) component_mass[c] = component_norm[c] = 0.0;
+    for (int32_t i = 0; i < mesh->nv; ++i) {
+        const double *l = lambda + 4 * (int64_t)i;
+        int32_t c = mesh->vertex_component[i];
+        component_mass[c] += mass[i];
+        component_norm[c] += mass[i] * (l[0] * l[0] + l[1] * l[1] + l[2] * l[2] + l[3] * l[3]);
+    }
+    for (int32_t c = 0; c < nc; ++c)
+        component_norm[c] = component_norm[c] > 0.0 ? sqrt(component_mass[c] / component_norm[c]) : 1.0;
+    for (int32_t i = 0; i < mesh->nv; ++i)
+        for (int k = 0; k < 4; ++k) lambda[4 * (int64_t)i + k] *= component_norm[mesh->vertex_component[i]];
+}
+
 cf_status cf_spin_transform(cf_context *ctx, const cf_mesh *mesh, const double *positions, const double *rho,
                             double *out_positions)
 {
@@ -86,7 +126,7 @@ cf_status cf_spin_transform(cf_context *ctx, const cf_mesh *mesh, const double *
         /* normalised to sum M |lambda|^2 = area (mean |lambda|^2 = 1) */
         st = cf_inverse_iteration_blocks(chol, mass, 4, 1, area, lambda, work);
         if (st != CF_OK) goto done;
-        if (nc > 1) cfi_spin_normalize_components(mesh, mass, lambda, sums);
+        if (nc > 1) normalize_components(mesh, mass, lambda, sums);
         double q = cf_rayleigh_quotient_blocks(dirac->x, mass, 4, lambda, work);
         double gamma = isnan(q) ? 0.0 : q - eps;
         if (fabs(gamma - gamma_old) <= 1e-12 * (fabs(gamma) + eps)) break;
@@ -100,8 +140,8 @@ cf_status cf_spin_transform(cf_context *ctx, const cf_mesh *mesh, const double *
      * problem fixes each one's positions only up to its own translation) */
     if (nc > 1) {
         double *mass_c = sums, *c_in = sums + nc, *c_out = c_in + 3 * (int64_t)nc;
-        cfi_spin_component_centroids(mesh, mass, positions, mass_c, c_in);
-        cfi_spin_component_centroids(mesh, mass, out_positions, mass_c, c_out);
+        component_centroids(mesh, mass, positions, mass_c, c_in);
+        component_centroids(mesh, mass, out_positions, mass_c, c_out);
         for (int32_t i = 0; i < nv; ++i) {
             int32_t c = mesh->vertex_component[i];
             for (int d = 0; d < 3; ++d) out_positions[3 * i + d] += c_in[3 * c + d] - c_out[3 * c + d];

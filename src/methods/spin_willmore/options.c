@@ -167,6 +167,21 @@ cf_status cfi_spin_validate_options(cf_context *ctx, const cf_mesh *mesh, const 
     if (o->boundary_mode != CF_SPIN_BOUNDARY_FREE && !has_boundary)
         return cfi_error(ctx, CF_ERR_BAD_MESH, "spin-willmore: boundary=%s needs a mesh with boundary",
                          cfi_spin_boundary_choices[o->boundary_mode]);
+    /* A mesh whose every vertex lies on its boundary (a band of one row of
+     * triangles, a fan) has no vertex that a fixed boundary lets move, and
+     * its W, a sum over interior vertices, is 0: the Poisson and Dirac
+     * systems would have no unknown left. Refused as the edit refuses handles
+     * that hold every vertex; the other boundary modes run (and converge at
+     * once). */
+    if (o->boundary_mode == CF_SPIN_BOUNDARY_FIXED) {
+        int32_t interior = 0;
+        for (int32_t i = 0; i < mesh->nv && !interior; ++i) interior = !mesh->vertex_on_boundary[i];
+        if (!interior)
+            return cfi_error(ctx, CF_ERR_BAD_MESH,
+                             "spin-willmore: boundary=fixed holds all %d vertices of this mesh (every vertex is on its "
+                             "boundary): nothing is left to move",
+                             mesh->nv);
+    }
     return CF_OK;
 }
 

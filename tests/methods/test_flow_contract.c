@@ -7,7 +7,11 @@
  * message naming the parameter; an array parameter of the wrong size is
  * refused naming the parameter and the expected count; create fails
  * cleanly (CF_ERR_NOMEM, nothing leaked) whatever allocation fails; steps
- * do not allocate; a failed step leaves the state it started from.
+ * do not allocate; a failed step leaves the state it started from; and
+ * every scalar parameter at each end of its listed range (both limits, the
+ * other bool, every choice) creates and steps cleanly on four small meshes
+ * (closed, torus, disk, a band without interior vertex), or is refused for
+ * what the mesh cannot take, never as out of range.
  *
  * Fixture hooks (fixture_for): what a kind needs beyond its defaults (the
  * edit flow's handles) and how to make one of its steps fail. A new kind
@@ -263,6 +267,124 @@ static void check_steps(cf_context *ctx, cf_flow_kind kind, fixture *fx, const c
     cf_flow_destroy(&flow);
 }
 
+/* The probes of one scalar parameter at the ends of what its listing
+ * accepts: both limits of a number, the other value of a bool, every other
+ * choice. Text as the CLI takes it; returns the count. */
+static int param_probes(const cf_param_desc *p, const unsigned char *base, char probes[][64])
+{
+    int n = 0;
+    if (p->type == CF_PARAM_DOUBLE || p->type == CF_PARAM_INT) {
+        snprintf(probes[n++], 64, "%.17g", p->min_value);
+        snprintf(probes[n++], 64, "%.17g", p->max_value);
+    } else if (p->type == CF_PARAM_BOOL) {
+        int32_t v;
+        memcpy(&v, base + p->offset, sizeof v);
+        snprintf(probes[n++], 64, "%s", v ? "false" : "true");
+    } else if (p->type == CF_PARAM_CHOICE) {
+        int32_t v;
+        memcpy(&v, base + p->offset, sizeof v);
+        for (int c = 0; c < choice_count(p) && n < 8; ++c)
+            if (c != v) snprintf(probes[n++], 64, "%s", p->choices[c]);
+    }
+    return n;
+}
+
+typedef struct extreme_counts {
+    int runs, refused, failed;
+} extreme_counts;
+
+/* One flow with one parameter at one probe: create, two steps. What may
+ * happen: a refusal at creation for what the mesh cannot take (a boundary
+ * mode on a closed mesh, a filter that does not factorise), never for the
+ * listed value itself; a step that fails numerically, naming its iteration
+ * and keeping its state; otherwise finite positions and energy. Nothing
+ * leaks. */
+static void run_extreme(cf_context *ctx, cf_flow_kind kind, fixture *fx, const char *mesh_name, const char *param,
+                        const char *value, extreme_counts *counts)
+{
+    const char *name = cf_flow_kind_name(kind);
+    cf_flow_options o;
+    CHECK_OK(ctx, cf_flow_options_default(kind, &o));
+    fixture_options(kind, fx, &o);
+    /* every value the listing shows is taken */
+    CHECK_OK(ctx, cf_flow_options_set(ctx, &o, param, value));
+    size_t bytes = cf_context_bytes_in_use(ctx);
+    cf_flow *flow = NULL;
+    cf_status st = cf_flow_create(ctx, fx->mesh, NULL, &o, &flow);
+    ++counts->runs;
+    if (st != CF_OK) {
+        ++counts->refused;
+        char quoted[160];
+        snprintf(quoted, sizeof quoted, "parameter '%s'", param);
+        const char *msg = cf_context_message(ctx);
+        /* what the mesh cannot take, or a conflict of this value with another
+         * parameter's default ("parameters 'rescale' and 'boundary': ...");
+         * a listed value is never refused as out of range, and an internal
+         * error is not a refusal */
+        int fair = (st == CF_ERR_BAD_MESH || st == CF_ERR_UNSUPPORTED || st == CF_ERR_NUMERICAL ||
+                    (st == CF_ERR_INVALID_ARG && strstr(msg, "parameters '") && !strstr(msg, quoted))) &&
+                   msg[0] != '\0';
+        fprintf(stderr, "   %s, %s, %s=%s: refused (%s): %s\n", name, mesh_name, param, value, cf_status_name(st), msg);
+        CHECK(fair);
+        CHECK(flow == NULL);
+        CHECK(cf_context_bytes_in_use(ctx) == bytes);
+        return;
+    }
+    int32_t nv = cf_mesh_vertex_count(fx->mesh);
+    for (int i = 0; flow && i < 2; ++i) {
+        int64_t before = cf_flow_last_info(flow)->iteration;
+        st = cf_flow_step(flow, NULL);
+        if (st != CF_OK) {
+            ++counts->failed;
+            int named = st == CF_ERR_NUMERICAL && strstr(cf_context_message(ctx), "iteration") != NULL;
+            if (!named)
+                fprintf(stderr, "   %s, %s, %s=%s: step %d: %s: %s\n", name, mesh_name, param, value, i + 1,
+                        cf_status_name(st), cf_context_message(ctx));
+            CHECK(named);
+            CHECK(cf_flow_last_info(flow)->iteration == before);
+        }
+        const double *x = cf_flow_positions(flow);
+        int finite = isfinite(cf_flow_energy(flow));
+        for (int64_t k = 0; k < 3 * (int64_t)nv && finite; ++k) finite = isfinite(x[k]);
+        if (!finite) fprintf(stderr, "   %s, %s, %s=%s: step %d left a non-finite state\n", name, mesh_name, param, value, i + 1);
+        CHECK(finite);
+        if (st != CF_OK) break;
+    }
+    cf_flow_destroy(&flow);
+    CHECK(cf_context_bytes_in_use(ctx) == bytes);
+}
+
+/* Every scalar parameter of the kind and of the common step policy at the
+ * ends of its listed range, on a closed surface, a torus, a disk and a band
+ * whose every vertex is on its boundary (issue
+ * 13: every README promise under hostile input; session 29 found
+ * boundary=fixed on a band without interior vertices failing inside the
+ * Poisson solver, and implicit-mcf listing time_step 0 that it refused). */
+static void check_extremes(cf_context *ctx, cf_flow_kind kind, fixture *fxs, const char *const *mesh_names, int nmesh)
+{
+    const cf_param_desc *tables[2];
+    int32_t counts_of[2];
+    CHECK_OK(ctx, cf_flow_params(kind, &tables[0], &counts_of[0]));
+    CHECK_OK(ctx, cf_flow_common_params(&tables[1], &counts_of[1]));
+    extreme_counts counts = {0, 0, 0};
+    for (int t = 0; t < 2; ++t)
+        for (int32_t i = 0; i < counts_of[t]; ++i) {
+            const cf_param_desc *p = &tables[t][i];
+            if (cf_param_type_is_array(p->type)) continue;
+            cf_flow_options o;
+            CHECK_OK(ctx, cf_flow_options_default(kind, &o));
+            const unsigned char *base =
+                t == 0 ? cf_flow_options_method_as(&o, kind) : (const unsigned char *)cf_flow_options_policy(&o);
+            char probes[8][64];
+            int n = param_probes(p, base, probes);
+            for (int k = 0; k < n; ++k)
+                for (int m = 0; m < nmesh; ++m) run_extreme(ctx, kind, &fxs[m], mesh_names[m], p->name, probes[k], &counts);
+        }
+    fprintf(stderr, "   %-22s %d runs at the ends of the listed ranges: %d refused by the mesh, %d failed a step cleanly\n",
+            cf_flow_kind_name(kind), counts.runs, counts.refused, counts.failed);
+    CHECK(counts.runs > 0);
+}
+
 static void test_every_kind(void)
 {
     cf_context *ctx = cft_context();
@@ -291,8 +413,37 @@ static void test_every_kind(void)
     cf_context_destroy(&ctx);
 }
 
+static void test_range_ends(void)
+{
+    cf_context *ctx = cft_context();
+    enum { NMESH = 4 };
+    cf_mesh *meshes[NMESH] = {NULL, NULL, NULL, NULL};
+    static const char *const names[NMESH] = {"bumpy sphere", "torus", "bumpy disk", "band (no interior vertex)"};
+    CHECK_OK(ctx, cf_generate_bumpy_sphere(ctx, 2, 0.25, 1u, &meshes[0]));
+    CHECK_OK(ctx, cf_generate_torus(ctx, 1.0, 0.4, 16, 8, &meshes[1]));
+    CHECK_OK(ctx, cf_generate_bumpy_plane(ctx, 8, 1.0, 0.1, 3u, &meshes[2]));
+    CHECK_OK(ctx, cf_generate_cylinder(ctx, 16, 1, 1.0, 2.0, &meshes[3]));
+    fixture fxs[NMESH];
+    int ok = 1;
+    for (int m = 0; m < NMESH; ++m) {
+        ok = ok && meshes[m];
+        fxs[m] = (fixture){meshes[m], meshes[m] ? make_handles(ctx, meshes[m]) : NULL};
+    }
+    for (int k = 0; ok && k < CF_FLOW_KIND_COUNT; ++k) {
+        fprintf(stderr, "-- kind %d: %s\n", k, cf_flow_kind_name((cf_flow_kind)k));
+        check_extremes(ctx, (cf_flow_kind)k, fxs, names, NMESH);
+    }
+    for (int m = 0; m < NMESH; ++m) {
+        cf_handle_set_destroy(&fxs[m].handles);
+        cf_mesh_destroy(&meshes[m]);
+    }
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 int main(void)
 {
     CFT_RUN(test_every_kind);
+    CFT_RUN(test_range_ends);
     return cft_finish();
 }

@@ -72,24 +72,35 @@ typedef struct baseline_state {
 static const char *const mass_choices[] = {"barycentric", "voronoi", NULL};
 static const char *const boundary_choices[] = {"free", "fixed", NULL};
 
-static const cf_param_desc baseline_params[] = {
+/* The parameters every baseline flow shares after its time step. */
+#define BASELINE_SHARED_PARAMS                                                                                         \
+    {"mass", CF_PARAM_CHOICE, offsetof(cf_baseline_options, mass), 0, 1, mass_choices,                                 \
+     "lumped mass matrix: barycentric or voronoi (mixed Voronoi, Meyer 2003)"},                                        \
+    {"rescale", CF_PARAM_BOOL, offsetof(cf_baseline_options, rescale), 0, 1, NULL,                                     \
+     "keep total area and centroid of the start shape after each step (Kazhdan 2012)"},                                \
+    {"tolerance", CF_PARAM_DOUBLE, offsetof(cf_baseline_options, tolerance), 0, 1, NULL,                               \
+     "converged when a step lowers the energy by less than this fraction (0: never)"},                                 \
+    {"boundary", CF_PARAM_CHOICE, offsetof(cf_baseline_options, boundary), 0, 1, boundary_choices,                     \
+     "free: boundary vertices move (natural boundary; MCF default); fixed: they are held and the bi-Laplacian "        \
+     "energy counts interior vertices only (bi-Laplacian default: with a free boundary its step raises its "           \
+     "energy on flat or nearly flat open meshes)"}
+
+/* The time step's range is each family's: 0 asks the explicit flows for
+ * their automatic step and is refused by the implicit ones, so their listing
+ * starts above it (session 29: implicit-mcf listed [0, 1e6] and refused 0). */
+static const cf_param_desc explicit_params[] = {
     {"time_step", CF_PARAM_DOUBLE, offsetof(cf_baseline_options, time_step), 0.0, 1e6, NULL,
-     "scale-free time step (explicit: units of h^2 or h^4, 0 = auto: 0.9 (MCF) or 0.5 (bi-Laplacian) of "
-     "forward Euler's stability limit on the current mesh, every step; implicit: units of area or area^2). "
-     "implicit-mcf and implicit-bilaplacian move vertices along the normal only and degenerate triangles within "
-     "a few steps on most real meshes (docs/flowcli.md); conformal-mcf or spin-willmore keep them"},
-    {"mass", CF_PARAM_CHOICE, offsetof(cf_baseline_options, mass), 0, 1, mass_choices,
-     "lumped mass matrix: barycentric or voronoi (mixed Voronoi, Meyer 2003)"},
-    {"rescale", CF_PARAM_BOOL, offsetof(cf_baseline_options, rescale), 0, 1, NULL,
-     "keep total area and centroid of the start shape after each step (Kazhdan 2012)"},
-    {"tolerance", CF_PARAM_DOUBLE, offsetof(cf_baseline_options, tolerance), 0, 1, NULL,
-     "converged when a step lowers the energy by less than this fraction (0: never)"},
-    {"boundary", CF_PARAM_CHOICE, offsetof(cf_baseline_options, boundary), 0, 1, boundary_choices,
-     "free: boundary vertices move (natural boundary; MCF default); fixed: they are held and the bi-Laplacian "
-     "energy counts interior vertices only (bi-Laplacian default: with a free boundary its step raises its "
-     "energy on flat or nearly flat open meshes)"},
+     "scale-free time step in units of h^2 (MCF) or h^4 (bi-Laplacian), h the mean edge length; 0 = auto: 0.9 "
+     "(MCF) or 0.5 (bi-Laplacian) of forward Euler's stability limit on the current mesh, every step"},
+    BASELINE_SHARED_PARAMS,
 };
-#define BASELINE_PARAM_COUNT ((int32_t)(sizeof baseline_params / sizeof baseline_params[0]))
+static const cf_param_desc implicit_params[] = {
+    {"time_step", CF_PARAM_DOUBLE, offsetof(cf_baseline_options, time_step), 1e-12, 1e6, NULL,
+     "scale-free time step in units of area (MCF) or area^2 (bi-Laplacian). implicit-mcf and implicit-bilaplacian "
+     "move vertices along the normal only and degenerate triangles within a few steps on most real meshes "
+     "(docs/flowcli.md); conformal-mcf or spin-willmore keep them"},
+    BASELINE_SHARED_PARAMS,
+};
 
 cf_status cf_baseline_options_default(cf_flow_kind kind, cf_baseline_options *o)
 {
@@ -699,15 +710,15 @@ static cf_status implicit_step(cf_flow *flow, cf_flow_info *info)
     "smaller time_step may not cure (energy_check=false accepts rising steps); with a time_step given "       \
     "(units of " unit_ "), a smaller one helps if it was above the stability limit"
 
-#define BASELINE_METHOD(sym, kind_, name_, desc_, defaults_, stepfn_, policy_)                                 \
+#define BASELINE_METHOD(sym, kind_, name_, desc_, defaults_, params_, stepfn_, policy_)                                 \
     const cfi_flow_method sym = {                                                                              \
         .kind = (kind_),                                                                                       \
         .name = (name_),                                                                                       \
         .description = (desc_),                                                                                \
         .options_size = sizeof(cf_baseline_options),                                                          \
         .options_default = (defaults_),                                                                        \
-        .params = baseline_params,                                                                             \
-        .param_count = BASELINE_PARAM_COUNT,                                                                   \
+        .params = (params_),                                                                                   \
+        .param_count = (int32_t)(sizeof(params_) / sizeof((params_)[0])),                                     \
         .create = baseline_create,                                                                             \
         .step = (stepfn_),                                                                                     \
         .reset = baseline_reset,                                                                               \
@@ -733,18 +744,22 @@ static cf_status implicit_step(cf_flow *flow, cf_flow_info *info)
     {.rise_check = 1, .backtrack = 1, .convergence = 1, .unit = (unit_), .blowup_check = 1, .divergence_check = 1}
 
 BASELINE_METHOD(cfi_explicit_mcf_method, CF_FLOW_EXPLICIT_MCF, "explicit-mcf",
-                "explicit (forward Euler) mean curvature flow; energy: area", default_explicit_mcf, explicit_step,
+                "explicit (forward Euler) mean curvature flow; energy: area", default_explicit_mcf, explicit_params,
+                explicit_step,
                 BASELINE_EXPLICIT_POLICY(CFI_ENERGY_UNIT_INITIAL_AREA, BASELINE_EXPLICIT_HINT("0.9", "h^2")));
 BASELINE_METHOD(cfi_implicit_mcf_method, CF_FLOW_IMPLICIT_MCF, "implicit-mcf",
                 "implicit mean curvature flow (Desbrun et al. 1999, backward Euler); energy: area",
-                default_implicit_mcf, implicit_step, BASELINE_IMPLICIT_POLICY(CFI_ENERGY_UNIT_INITIAL_AREA));
+                default_implicit_mcf, implicit_params, implicit_step,
+                BASELINE_IMPLICIT_POLICY(CFI_ENERGY_UNIT_INITIAL_AREA));
 BASELINE_METHOD(cfi_conformal_mcf_method, CF_FLOW_CONFORMAL_MCF, "conformal-mcf",
                 "conformalized mean curvature flow (Kazhdan, Solomon, Ben-Chen 2012); energy: area",
-                default_conformal_mcf, implicit_step, BASELINE_IMPLICIT_POLICY(CFI_ENERGY_UNIT_INITIAL_AREA));
+                default_conformal_mcf, implicit_params, implicit_step,
+                BASELINE_IMPLICIT_POLICY(CFI_ENERGY_UNIT_INITIAL_AREA));
 BASELINE_METHOD(cfi_explicit_bilaplacian_method, CF_FLOW_EXPLICIT_BILAPLACIAN, "explicit-bilaplacian",
                 "explicit bi-Laplacian flow (Taubin-style); energy: (1/2) x^T L M^-1 L x",
-                default_explicit_bilaplacian, explicit_step,
+                default_explicit_bilaplacian, explicit_params, explicit_step,
                 BASELINE_EXPLICIT_POLICY(CFI_ENERGY_UNIT_ONE, BASELINE_EXPLICIT_HINT("0.5", "h^4")));
 BASELINE_METHOD(cfi_implicit_bilaplacian_method, CF_FLOW_IMPLICIT_BILAPLACIAN, "implicit-bilaplacian",
                 "implicit bi-Laplacian flow (backward Euler); energy: (1/2) x^T L M^-1 L x",
-                default_implicit_bilaplacian, implicit_step, BASELINE_IMPLICIT_POLICY(CFI_ENERGY_UNIT_ONE));
+                default_implicit_bilaplacian, implicit_params, implicit_step,
+                BASELINE_IMPLICIT_POLICY(CFI_ENERGY_UNIT_ONE));

@@ -36,16 +36,23 @@ double cfi_spin_periods(const cf_mesh *mesh, const cfi_spin_state *s, const doub
 {
     int32_t dim = s->harmonic_dim, ne = s->ne;
     cfi_spin_transform_edges(mesh, x, lambda, edges);
-    memset(periods, 0, 3 * (size_t)dim * sizeof(double));
     double norm2 = 0.0;
     for (int32_t e = 0; e < ne; ++e) {
-        double w = s->hweights[e];
         const double *t = edges + 3 * (int64_t)e;
-        norm2 += w * (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
-        for (int32_t g = 0; g < dim; ++g) {
-            double wh = w * s->harmonic[(int64_t)g * ne + e];
-            for (int c = 0; c < 3; ++c) periods[3 * g + c] += wh * t[c];
+        norm2 += s->hweights[e] * (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
+    }
+    /* form by form, along its row of s->harmonic (edge by edge over all
+     * forms strided by ne: a cache miss per form and edge, 26 % of a run at
+     * genus 25); each sum keeps its order, so the values are the same */
+    for (int32_t g = 0; g < dim; ++g) {
+        const double *h = s->harmonic + (int64_t)g * ne;
+        double p[3] = {0.0, 0.0, 0.0};
+        for (int32_t e = 0; e < ne; ++e) {
+            double wh = s->hweights[e] * h[e];
+            const double *t = edges + 3 * (int64_t)e;
+            for (int c = 0; c < 3; ++c) p[c] += wh * t[c];
         }
+        for (int c = 0; c < 3; ++c) periods[3 * g + c] = p[c];
     }
     double p2 = 0.0;
     for (int32_t k = 0; k < 3 * dim; ++k) p2 += periods[k] * periods[k];

@@ -1,8 +1,13 @@
 /*
  * Polyline files for the curve flow (curvflow/curve_flow.h):
- * CSV ("x,y" or "x y" per line) and a small SVG subset (first polygon /
- * polyline "points", or first path "d" with M, L, H, V, Z in absolute and
- * relative form). Files are read whole (lines of any length) and checked
+ * CSV ("x,y" or "x y" per line) and a small SVG subset: the first drawn
+ * <polygon> / <polyline> "points" or <path> "d" (M, L, H, V, Z, absolute
+ * and relative) in document order, mapped by the "transform" attributes of
+ * the element and its ancestors; comments, CDATA, processing instructions
+ * and the DOCTYPE are skipped, as are shapes inside elements that are not
+ * drawn (defs, clipPath, mask, symbol, marker, pattern). Further shapes and
+ * further subpaths of the path are ignored with a warning: the flow takes
+ * one closed curve. Files are read whole (lines of any length) and checked
  * by io's cf_text_check as every text input of the library (byte-order mark
  * skipped, NUL bytes refused with their offset); writing goes through the
  * atomic text writer of io.
@@ -142,31 +147,35 @@ static cf_status parse_csv(pbuf *b, const char *path, const char *text, size_t l
     return CF_OK;
 }
 
-/* Value of attribute `name` of the first element `tag` (pointer into text,
- * terminated by the closing quote, which is overwritten). */
-static char *svg_attribute(char *text, const char *tag, const char *name)
+/* ---- SVG ----------------------------------------------------------------- */
+
+/* An affine map of the plane as SVG writes it, matrix(a b c d e f):
+ * x' = a x + c y + e, y' = b x + d y + f. */
+typedef struct affine {
+    double a, b, c, d, e, f;
+} affine;
+
+static const affine identity_map = {1.0, 0.0, 0.0, 1.0, 0.0, 0.0};
+
+/* m after n: (m o n)(p) = m(n(p)) */
+static affine compose(affine m, affine n)
 {
-    size_t tl = strlen(tag), nl = strlen(name);
-    for (char *p = text; (p = strchr(p, '<')) != NULL; ++p) {
-        if (strncmp(p + 1, tag, tl) != 0 || !(isspace((unsigned char)p[1 + tl]) || p[1 + tl] == '/')) continue;
-        char *end = strchr(p, '>');
-        for (char *a = p + 1 + tl; *a && (!end || a < end); ++a) {
-            if (isspace((unsigned char)a[-1]) && strncmp(a, name, nl) == 0) {
-                char *q = a + nl;
-                while (isspace((unsigned char)*q)) ++q;
-                if (*q != '=') continue;
-                ++q;
-                while (isspace((unsigned char)*q)) ++q;
-                if (*q != '"' && *q != '\'') continue;
-                char quote = *q++;
-                char *close = strchr(q, quote);
-                if (!close) return NULL;
-                *close = '\0';
-                return q;
-            }
-        }
-    }
-    return NULL;
+    affine r = {m.a * n.a + m.c * n.b, m.b * n.a + m.d * n.b, m.a * n.c + m.c * n.d,
+                m.b * n.c + m.d * n.d, m.a * n.e + m.c * n.f + m.e, m.b * n.e + m.d * n.f + m.f};
+    return r;
+}
+
+static cf_status push_mapped(pbuf *b, const affine *m, double x, double y)
+{
+    return push(b, m->a * x + m->c * y + m->e, m->b * x + m->d * y + m->f);
+}
+
+/* 1-based line of position p in text (for messages only). */
+static long line_of(const char *text, const char *p)
+{
+    long line = 1;
+    for (const char *q = text; q < p; ++q) line += *q == '\n';
+    return line;
 }
 
 static const char *skip_sep(const char *s)
@@ -175,7 +184,76 @@ static const char *skip_sep(const char *s)
     return s;
 }
 
-static cf_status parse_points(pbuf *b, const char *path, const char *s)
+/* A transform list ("translate(10,20) scale(2)"): functions applied right
+ * to left, as SVG defines it; the value ends at `end` (its closing quote). */
+static cf_status parse_transform(pbuf *b, const char *name, long line, const char *s, const char *end, affine *out)
+{
+    static const struct {
+        const char *name;
+        int min, max; /* argument counts */
+    } kinds[] = {{"matrix", 6, 6}, {"translate", 1, 2}, {"scale", 1, 2}, {"rotate", 1, 3}, {"skewX", 1, 1}, {"skewY", 1, 1}};
+    affine m = identity_map;
+    for (;;) {
+        while (s < end && (isspace((unsigned char)*s) || *s == ',')) ++s;
+        if (s >= end) break;
+        int k = -1;
+        for (int i = 0; i < 6 && k < 0; ++i) {
+            size_t n = strlen(kinds[i].name);
+            if ((size_t)(end - s) > n && strncmp(s, kinds[i].name, n) == 0) {
+                const char *q = s + n;
+                while (q < end && isspace((unsigned char)*q)) ++q;
+                if (q < end && *q == '(') {
+                    k = i;
+                    s = q + 1;
+                }
+            }
+        }
+        if (k < 0)
+            return cfi_error(b->ctx, CF_ERR_PARSE, "%s: line %ld: unsupported transform near \"%.20s\"", name, line, s);
+        double v[6];
+        int n = 0;
+        for (;;) {
+            while (s < end && (isspace((unsigned char)*s) || *s == ',')) ++s;
+            if (s < end && *s == ')') {
+                ++s;
+                break;
+            }
+            char *stop;
+            double x = s < end ? strtod(s, &stop) : 0.0;
+            if (s >= end || stop == s || stop > end || n == 6)
+                return cfi_error(b->ctx, CF_ERR_PARSE, "%s: line %ld: bad %s() in transform near \"%.20s\"", name, line,
+                                 kinds[k].name, s);
+            v[n++] = x;
+            s = stop;
+        }
+        if (n < kinds[k].min || n > kinds[k].max || (k == 3 && n == 2))
+            return cfi_error(b->ctx, CF_ERR_PARSE, "%s: line %ld: %s() takes %s arguments, got %d", name, line,
+                             kinds[k].name, k == 0 ? "6" : k == 3 ? "1 or 3" : k >= 4 ? "1" : "1 or 2", n);
+        affine t = identity_map;
+        const double deg = 3.14159265358979323846 / 180.0;
+        switch (k) {
+        case 0: t = (affine){v[0], v[1], v[2], v[3], v[4], v[5]}; break;
+        case 1: t.e = v[0]; t.f = n > 1 ? v[1] : 0.0; break;
+        case 2: t.a = v[0]; t.d = n > 1 ? v[1] : v[0]; break;
+        case 3: {
+            double c = cos(v[0] * deg), sn = sin(v[0] * deg);
+            t = (affine){c, sn, -sn, c, 0.0, 0.0};
+            if (n == 3) { /* about (cx, cy): translate(cx, cy) rotate(a) translate(-cx, -cy) */
+                affine to = {1.0, 0.0, 0.0, 1.0, v[1], v[2]}, back = {1.0, 0.0, 0.0, 1.0, -v[1], -v[2]};
+                t = compose(to, compose(t, back));
+            }
+            break;
+        }
+        case 4: t.c = tan(v[0] * deg); break;
+        default: t.b = tan(v[0] * deg); break;
+        }
+        m = compose(m, t);
+    }
+    *out = m;
+    return CF_OK;
+}
+
+static cf_status parse_points(pbuf *b, const char *path, const affine *m, const char *s)
 {
     for (;;) {
         s = skip_sep(s);
@@ -185,26 +263,35 @@ static cf_status parse_points(pbuf *b, const char *path, const char *s)
         const char *r = skip_sep(e1);
         double y = strtod(r, &e2);
         if (e1 == s || e2 == r) return cfi_error(b->ctx, CF_ERR_PARSE, "%s: bad number in points attribute near \"%.20s\"", path, s);
-        cf_status st = push(b, x, y);
+        cf_status st = push_mapped(b, m, x, y);
         if (st != CF_OK) return st;
         s = e2;
     }
 }
 
-static cf_status parse_path(pbuf *b, const char *path, const char *s)
+/* The first subpath of path data; *more is set when drawing commands
+ * follow it (further subpaths, ignored by the caller with a warning). */
+static cf_status parse_path(pbuf *b, const char *path, const affine *m, const char *s, int *more)
 {
     char cmd = 0;
     double cx = 0.0, cy = 0.0;
     int started = 0;
+    *more = 0;
     for (;;) {
         s = skip_sep(s);
         if (!*s) return CF_OK;
         if (isalpha((unsigned char)*s)) {
             cmd = *s++;
-            if (cmd == 'Z' || cmd == 'z') return CF_OK;   /* first subpath only */
+            if (cmd == 'Z' || cmd == 'z') {   /* first subpath only */
+                *more = *skip_sep(s) != '\0';
+                return CF_OK;
+            }
             if (!strchr("MmLlHhVv", cmd))
                 return cfi_error(b->ctx, CF_ERR_PARSE, "%s: unsupported path command '%c' (only M L H V Z)", path, cmd);
-            if ((cmd == 'M' || cmd == 'm') && started) return CF_OK;
+            if ((cmd == 'M' || cmd == 'm') && started) {
+                *more = 1;
+                return CF_OK;
+            }
             continue;
         }
         if (!cmd) return cfi_error(b->ctx, CF_ERR_PARSE, "%s: path data must start with a command", path);
@@ -226,7 +313,7 @@ static cf_status parse_path(pbuf *b, const char *path, const char *s)
             ny = rel ? cy + c : c;
         }
         }
-        cf_status st = push(b, nx, ny);
+        cf_status st = push_mapped(b, m, nx, ny);
         if (st != CF_OK) return st;
         started = 1;
         cx = nx;
@@ -234,6 +321,185 @@ static cf_status parse_path(pbuf *b, const char *path, const char *s)
         if (cmd == 'M') cmd = 'L';   /* implicit repeats of moveto are lineto */
         if (cmd == 'm') cmd = 'l';
     }
+}
+
+/* Open elements deeper than this are refused (no real drawing nests so). */
+#define SVG_MAX_DEPTH 256
+
+typedef struct svg_scope {
+    affine m;   /* this element's user coordinates -> the document's */
+    int hidden; /* inside an element that is not drawn */
+} svg_scope;
+
+/* 1 when the element name's local part (after a "svg:" style prefix)
+ * equals `want`. */
+static int name_is(const char *name, size_t len, const char *want)
+{
+    const char *colon = memchr(name, ':', len);
+    if (colon) {
+        len -= (size_t)(colon + 1 - name);
+        name = colon + 1;
+    }
+    return strlen(want) == len && strncmp(name, want, len) == 0;
+}
+
+/* An attribute's value as [*vs, *ve), *ve at its closing quote. */
+typedef struct svg_attr {
+    const char *vs, *ve;
+} svg_attr;
+
+/* Reads the first drawn shape of an SVG text into b. The text is NUL
+ * terminated; a value being parsed is NUL terminated in place for the
+ * moment of its parse. */
+static cf_status parse_svg(pbuf *b, const char *name, char *text)
+{
+    svg_scope *stack = CFI_ALLOC(b->ctx, svg_scope, SVG_MAX_DEPTH);
+    if (!stack) return CF_ERR_NOMEM;
+    int depth = 0, shapes = 0, hidden_shapes = 0;
+    long first_line = 0, subpath_line = 0;
+    const char *first_kind = NULL;
+    cf_status st = CF_OK;
+    char *p = text;
+    while (st == CF_OK && (p = strchr(p, '<')) != NULL) {
+        static const struct {
+            const char *open, *close, *what;
+        } skipped[] = {{"<!--", "-->", "comment"}, {"<![CDATA[", "]]>", "CDATA section"}, {"<?", "?>", "processing instruction"}};
+        int skip = -1;
+        for (int i = 0; i < 3 && skip < 0; ++i)
+            if (strncmp(p, skipped[i].open, strlen(skipped[i].open)) == 0) skip = i;
+        if (skip >= 0) {
+            char *close = strstr(p + strlen(skipped[skip].open), skipped[skip].close);
+            if (!close) {
+                st = cfi_error(b->ctx, CF_ERR_PARSE, "%s: line %ld: %s not closed (no '%s')", name, line_of(text, p),
+                               skipped[skip].what, skipped[skip].close);
+                break;
+            }
+            p = close + strlen(skipped[skip].close);
+            continue;
+        }
+        if (p[1] == '!') { /* <!DOCTYPE ...>, with its internal subset in [ ] */
+            int brackets = 0;
+            char *q = p + 2;
+            for (; *q && (*q != '>' || brackets > 0); ++q) brackets += (*q == '[') - (*q == ']');
+            if (!*q) {
+                st = cfi_error(b->ctx, CF_ERR_PARSE, "%s: line %ld: declaration '<!' not closed", name, line_of(text, p));
+                break;
+            }
+            p = q + 1;
+            continue;
+        }
+        if (p[1] == '/') { /* end tag: leave the innermost element */
+            char *q = strchr(p, '>');
+            if (!q) {
+                st = cfi_error(b->ctx, CF_ERR_PARSE, "%s: line %ld: end tag not closed (file ends inside it)", name,
+                               line_of(text, p));
+                break;
+            }
+            if (depth > 0) --depth;
+            p = q + 1;
+            continue;
+        }
+        /* start tag: name, attributes, then '>' or "/>" */
+        char *tag = p + 1, *q = tag;
+        while (*q && (isalnum((unsigned char)*q) || *q == '_' || *q == ':' || *q == '-' || *q == '.')) ++q;
+        size_t tag_len = (size_t)(q - tag);
+        if (tag_len == 0) { /* a stray '<' in text */
+            ++p;
+            continue;
+        }
+        svg_attr points = {NULL, NULL}, d = {NULL, NULL}, transform = {NULL, NULL};
+        int self_closing = 0;
+        for (;;) {
+            while (isspace((unsigned char)*q)) ++q;
+            if (*q == '>') break;
+            if (q[0] == '/' && q[1] == '>') {
+                self_closing = 1;
+                ++q;
+                break;
+            }
+            const char *an = q;
+            while (*q && !isspace((unsigned char)*q) && *q != '=' && *q != '>' && *q != '/') ++q;
+            size_t an_len = (size_t)(q - an);
+            while (isspace((unsigned char)*q)) ++q;
+            if (an_len == 0 || *q != '=') break; /* malformed: reported below */
+            ++q;
+            while (isspace((unsigned char)*q)) ++q;
+            if (*q != '"' && *q != '\'') break;
+            char quote = *q++;
+            char *close = strchr(q, quote);
+            if (!close) break;
+            svg_attr value = {q, close};
+            if (an_len == 6 && strncmp(an, "points", 6) == 0) points = value;
+            else if (an_len == 1 && an[0] == 'd') d = value;
+            else if (an_len == 9 && strncmp(an, "transform", 9) == 0) transform = value;
+            q = close + 1;
+        }
+        if (*q != '>') {
+            st = cfi_error(b->ctx, CF_ERR_PARSE, "%s: line %ld: malformed or unclosed tag <%.*s", name, line_of(text, p),
+                           (int)(tag_len > 32 ? 32 : tag_len), tag);
+            break;
+        }
+        const svg_scope *parent = depth > 0 ? &stack[depth - 1] : NULL;
+        svg_scope scope = {parent ? parent->m : identity_map, parent ? parent->hidden : 0};
+        static const char *const not_drawn[] = {"defs", "clipPath", "mask", "symbol", "marker", "pattern"};
+        for (int i = 0; i < 6; ++i) scope.hidden |= name_is(tag, tag_len, not_drawn[i]);
+        int is_polygon = name_is(tag, tag_len, "polygon"), is_polyline = name_is(tag, tag_len, "polyline"),
+            is_path = name_is(tag, tag_len, "path");
+        int shape = (is_polygon || is_polyline) ? points.vs != NULL : is_path ? d.vs != NULL : 0;
+        if (shape && scope.hidden) ++hidden_shapes;
+        else if (shape && ++shapes == 1) {
+            long line = line_of(text, p);
+            first_line = line;
+            first_kind = is_polygon ? "polygon" : is_polyline ? "polyline" : "path";
+            if (transform.vs) {
+                affine own;
+                st = parse_transform(b, name, line, transform.vs, transform.ve, &own);
+                if (st != CF_OK) break;
+                scope.m = compose(scope.m, own);
+            }
+            svg_attr v = is_path ? d : points;
+            char *end = (char *)v.ve, saved = *end;
+            *end = '\0';
+            int more = 0;
+            st = is_path ? parse_path(b, name, &scope.m, v.vs, &more) : parse_points(b, name, &scope.m, v.vs);
+            *end = saved;
+            if (st != CF_OK) break;
+            if (more) subpath_line = line;
+        } else if (!self_closing && transform.vs) {
+            affine own;
+            st = parse_transform(b, name, line_of(text, p), transform.vs, transform.ve, &own);
+            if (st != CF_OK) break;
+            scope.m = compose(scope.m, own);
+        }
+        if (!self_closing) {
+            if (depth == SVG_MAX_DEPTH) {
+                st = cfi_error(b->ctx, CF_ERR_PARSE, "%s: line %ld: elements nested deeper than %d", name,
+                               line_of(text, p), SVG_MAX_DEPTH);
+                break;
+            }
+            stack[depth++] = scope;
+        }
+        p = q + 1;
+    }
+    CFI_FREE(b->ctx, stack, SVG_MAX_DEPTH);
+    if (st != CF_OK) return st;
+    if (shapes == 0)
+        return hidden_shapes ? cfi_error(b->ctx, CF_ERR_PARSE,
+                                         "%s: no drawn <polygon>, <polyline> or <path> (%d inside defs, clipPath, mask, "
+                                         "symbol, marker or pattern, which are not drawn)",
+                                         name, hidden_shapes)
+                             : cfi_error(b->ctx, CF_ERR_PARSE, "%s: no <polygon>, <polyline> or <path> found", name);
+    if (subpath_line)
+        cfi_log(b->ctx, CF_LOG_WARNING,
+                "%s: line %ld: the <path> holds more than one subpath; the first is read and the others are ignored "
+                "(the curve flow takes one closed curve)",
+                name, subpath_line);
+    if (shapes > 1)
+        cfi_log(b->ctx, CF_LOG_WARNING,
+                "%s: %d shapes are drawn; the first, the <%s> of line %ld, is read and the other%s ignored (the "
+                "curve flow takes one closed curve)",
+                name, shapes, first_kind, first_line, shapes == 2 ? " one is" : "s are");
+    return CF_OK;
 }
 
 static int has_suffix(const char *path, const char *suffix)
@@ -256,16 +522,7 @@ static cf_status parse_text(cf_context *ctx, char *text, size_t length, const ch
     length -= start;
     pbuf b = {ctx, NULL, 0, 0};
     if (svg) {
-        char *attr = svg_attribute(text, "polygon", "points");
-        if (attr) {
-            st = parse_points(&b, name, attr);
-        } else if ((attr = svg_attribute(text, "polyline", "points")) != NULL) {
-            st = parse_points(&b, name, attr);
-        } else if ((attr = svg_attribute(text, "path", "d")) != NULL) {
-            st = parse_path(&b, name, attr);
-        } else {
-            st = cfi_error(ctx, CF_ERR_PARSE, "%s: no <polygon>, <polyline> or <path> found", name);
-        }
+        st = parse_svg(&b, name, text);
     } else {
         st = parse_csv(&b, name, text, length);
     }

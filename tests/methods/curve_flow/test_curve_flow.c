@@ -8,6 +8,7 @@
 
 #include "curvflow/curve_flow.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -302,6 +303,108 @@ static void test_files(void)
     cf_context_destroy(&ctx);
 }
 
+/* Log lines of a read, for the reader's warnings. */
+typedef struct log_capture {
+    char text[2048];
+} log_capture;
+
+static void capture(void *user, cf_log_level level, const char *line)
+{
+    log_capture *c = user;
+    if (level != CF_LOG_WARNING) return;
+    size_t n = strlen(c->text);
+    snprintf(c->text + n, sizeof c->text - n, "%s\n", line);
+}
+
+/* Reads svg from memory; returns the status, the points in *c. */
+static cf_status read_svg(cf_context *ctx, const char *svg, cf_curve **c, log_capture *log)
+{
+    log->text[0] = '\0';
+    cf_context_set_log(ctx, capture, log, CF_LOG_WARNING);
+    cf_status st = cf_curve_read_memory(ctx, svg, strlen(svg), 1, "t.svg", c);
+    cf_context_set_log(ctx, NULL, NULL, CF_LOG_WARNING);
+    return st;
+}
+
+static int points_are(const cf_curve *c, int32_t n, const double *xy, double tol)
+{
+    if (!c || c->count != n) return 0;
+    for (int32_t i = 0; i < 2 * n; ++i)
+        if (!(fabs(c->points[i] - xy[i]) <= tol)) return 0;
+    return 1;
+}
+
+/* The SVG subset as drawing programs write it (session 29: a <g transform>
+ * was ignored, so scale(2, 1) gave a square instead of a 2 x 1 rectangle;
+ * a shape inside a comment was read; a path's second subpath and every
+ * shape after the first vanished without a word; a <polygon> anywhere
+ * took precedence over an earlier <path>). */
+static void test_svg_reader(void)
+{
+    cf_context *ctx = cft_context();
+    cf_curve *c = NULL;
+    log_capture log;
+    /* transforms of the ancestors and the element, composed as SVG does:
+     * the unit square under translate(10 20) scale(2, 1) rotate(90) */
+    const char *nested = "<?xml version=\"1.0\"?>\n"
+                         "<!DOCTYPE svg PUBLIC \"-//W3C//DTD SVG 1.1//EN\" \"x.dtd\" [ <!ENTITY e \"v\"> ]>\n"
+                         "<svg xmlns=\"http://www.w3.org/2000/svg\">\n"
+                         "<!-- <polygon points=\"9,9 8,8 7,9\"/> -->\n"
+                         "<defs><polygon points=\"0,0 5,0 0,5\"/></defs>\n"
+                         "<g transform=\"translate(10 20) scale(2, 1)\"><g transform='rotate(90)'>\n"
+                         "<polygon points=\"0,0 1,0 1,1 0,1\"/></g></g>\n"
+                         "</svg>\n";
+    const double rotated[8] = {10, 20, 10, 21, 8, 21, 8, 20};
+    CHECK_OK(ctx, read_svg(ctx, nested, &c, &log));
+    CHECK(points_are(c, 4, rotated, 1e-14));
+    CHECK(log.text[0] == '\0');
+    cf_curve_destroy(&c);
+    /* every transform function, on the element itself: matrix, rotate about
+     * a point, skewX, skewY */
+    const char *each = "<svg><path transform=\"matrix(1 0 0 1 5 0) rotate(180 0.5 0.5) skewX(45) skewY(0)\" "
+                       "d=\"M0,0 L1,0 L1,1 Z\"/></svg>";
+    /* skewX(45): (x + y, y); rotate 180 about (0.5, 0.5): (1 - x, 1 - y); then x + 5 */
+    const double each_xy[6] = {6, 1, 5, 1, 4, 0};
+    CHECK_OK(ctx, read_svg(ctx, each, &c, &log));
+    CHECK(points_are(c, 3, each_xy, 1e-14));
+    cf_curve_destroy(&c);
+    /* document order, and a warning for what is not read */
+    const char *two = "<svg>\n<path d=\"M 0 0 h 1 v 1 z m 5 5 h 1 v 1 z\"/>\n<polygon points=\"0,0 3,0 3,3\"/>\n"
+                      "<polyline points=\"0,0 4,0 4,4\"/></svg>";
+    const double first[6] = {0, 0, 1, 0, 1, 1};
+    CHECK_OK(ctx, read_svg(ctx, two, &c, &log));
+    CHECK(points_are(c, 3, first, 0.0));
+    fprintf(stderr, "   warnings: %s", log.text);
+    CHECK(strstr(log.text, "t.svg: line 2: the <path> holds more than one subpath") != NULL);
+    CHECK(strstr(log.text, "t.svg: 3 shapes are drawn; the first, the <path> of line 2, is read and the others are "
+                           "ignored") != NULL);
+    cf_curve_destroy(&c);
+    /* what is refused, and how */
+    static const struct {
+        const char *svg, *message;
+    } bad[] = {
+        {"<svg><!-- <polygon points=\"0,0 1,0 1,1\"/>", "t.svg: line 1: comment not closed (no '-->')"},
+        {"<svg>\n<polygon points=\"0,0 1,0 1,1\"", "t.svg: line 2: malformed or unclosed tag <polygon"},
+        {"<svg><defs><polygon points=\"0,0 1,0 1,1\"/></defs></svg>",
+         "t.svg: no drawn <polygon>, <polyline> or <path> (1 inside defs"},
+        {"<svg><g transform=\"shear(2)\"><polygon points=\"0,0 1,0 1,1\"/></g></svg>",
+         "t.svg: line 1: unsupported transform near \"shear(2)\""},
+        {"<svg><polygon transform=\"rotate(1, 2)\" points=\"0,0 1,0 1,1\"/></svg>",
+         "t.svg: line 1: rotate() takes 1 or 3 arguments, got 2"},
+        {"<svg><polygon transform=\"scale(1e300)\" points=\"0,0 1,0 1,1\"/></svg>", "out of range"},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
+        cf_status st = read_svg(ctx, bad[i].svg, &c, &log);
+        CHECK(st == CF_ERR_PARSE || st == CF_ERR_NONFINITE);
+        CHECK(c == NULL);
+        int named = strstr(cf_context_message(ctx), bad[i].message) != NULL;
+        if (!named) fprintf(stderr, "   case %zu: '%s'\n", i, cf_context_message(ctx));
+        CHECK(named);
+    }
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 int main(void)
 {
     CFT_RUN(test_noisy_polyline_to_circle);
@@ -311,5 +414,6 @@ int main(void)
     CFT_RUN(test_scale_invariance);
     CFT_RUN(test_divergence_detected);
     CFT_RUN(test_files);
+    CFT_RUN(test_svg_reader);
     return cft_finish();
 }

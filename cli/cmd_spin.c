@@ -13,6 +13,7 @@
 #include "curvflow/spin_willmore.h"
 
 #include <getopt.h>
+#include <sys/stat.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -23,7 +24,7 @@ static void usage(FILE *out)
             "Spin transformation (Crane, Pinkall, Schroeder 2013, App. G): the output has mean\n"
             "curvature H + rho (to first order) and is conformal to the input.\n"
             "  --rho FILE|NAME  text file with one value per vertex (1/length), or the name of a\n"
-            "                   PLY vertex property of IN\n"
+            "                   PLY vertex property of IN (a name that is both is refused: ./NAME is the file)\n"
             "  --scale S        multiply rho by S (default 1)\n"
             "  -o OUT           output mesh (.obj, .off or .ply; texture coordinates are kept; a PLY\n"
             "                   also gets rho as a vertex property); must not be IN or the rho file\n"
@@ -91,6 +92,15 @@ int cli_spin(int argc, char **argv)
         goto done;
     }
     const cf_mesh_property *prop = cf_mesh_data_vertex_property(data, rho_arg);
+    struct stat sb;
+    if (prop && stat(rho_arg, &sb) == 0) {
+        /* a property name has no '/', so ./NAME always names the file */
+        code = cli_usage_error(cmd,
+                               "--rho %s: ambiguous: %s has a vertex property '%s' and there is a file of that name; "
+                               "write --rho ./%s to read the file",
+                               rho_arg, argv[optind], rho_arg, rho_arg);
+        goto done;
+    }
     if (prop) {
         memcpy(rho, prop->values, (size_t)nv * sizeof(double));
     } else {

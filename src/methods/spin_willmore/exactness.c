@@ -181,12 +181,16 @@ static cf_status solve_x0_sources(const cf_mesh *mesh, cfi_spin_state *s, const 
 {
     int32_t nv = s->nv, dim = s->harmonic_dim;
     memset(s->zrhs, 0, 4 * (size_t)nv * dim * sizeof(double));
-    for (int32_t e = 0; e < s->ne; ++e) {
-        int32_t i = mesh->edge_vertices[2 * e], j = mesh->edge_vertices[2 * e + 1];
-        double v[3] = {x[3 * j] - x[3 * i], x[3 * j + 1] - x[3 * i + 1], x[3 * j + 2] - x[3 * i + 2]};
-        for (int32_t g = 0; g < dim; ++g) {
-            double wh = s->hweights[e] * s->harmonic[(int64_t)g * s->ne + e];
-            double *r = s->zrhs + (int64_t)g * 4 * nv;
+    /* form by form, along its rows of s->harmonic and zrhs (edge by edge
+     * over all forms touched both strided: a cache miss per form and edge
+     * with 99 forms); each entry sums its edges in the same order */
+    for (int32_t g = 0; g < dim; ++g) {
+        const double *h = s->harmonic + (int64_t)g * s->ne;
+        double *r = s->zrhs + (int64_t)g * 4 * nv;
+        for (int32_t e = 0; e < s->ne; ++e) {
+            int32_t i = mesh->edge_vertices[2 * e], j = mesh->edge_vertices[2 * e + 1];
+            double v[3] = {x[3 * j] - x[3 * i], x[3 * j + 1] - x[3 * i + 1], x[3 * j + 2] - x[3 * i + 2]};
+            double wh = s->hweights[e] * h[e];
             for (int c = 0; c < 3; ++c) {
                 r[4 * i + 1 + c] -= wh * v[c]; /* B_g: the imaginary quaternion -w h_g e */
                 r[4 * j + 1 + c] -= wh * v[c];
@@ -277,26 +281,35 @@ static cf_status exactness_columns_linearized(cf_flow *flow, cfi_spin_state *s, 
         *solve_seconds += cfi_now_seconds() - t1;
         if (st != CF_OK) return st;
     }
-    for (int32_t k = 0; k < ncol; ++k) {
+    /* the three columns of a form in one pass over the faces (they share
+     * X(0)^-1 B_g; the hook's columns one by one) */
+    int32_t per_pass = s->x0_full_solves ? 1 : 3;
+    for (int32_t k0 = 0; k0 < ncol; k0 += per_pass) {
         /* X(0)^-1 B_g, times u_c below (the hook: X(0)^-1 (B_g u_c) itself) */
-        const double *y = s->zsol + (int64_t)(s->x0_full_solves ? k : k / 3) * 4 * nv;
-        int uc = s->x0_full_solves ? -1 : k % 3;
-        double *b = s->basis + (int64_t)(*col) * nv;
-        memset(b, 0, (size_t)nv * sizeof(double));
+        const double *y = s->zsol + (int64_t)(s->x0_full_solves ? k0 : k0 / 3) * 4 * nv;
+        double *b[3];
+        for (int32_t k = 0; k < per_pass; ++k) {
+            b[k] = s->basis + (int64_t)(*col + k) * nv;
+            memset(b[k], 0, (size_t)nv * sizeof(double));
+        }
         /* K^T y: face f adds -(1/6) sum_m <Im y_tri[m], e_m> to each corner */
         for (int32_t f = 0; f < s->nf; ++f) {
             const int32_t *t = mesh->triangles + 3 * f;
-            double sum = 0.0;
-            for (int m = 0; m < 3; ++m) {
-                const double *a = x + 3 * t[(m + 1) % 3], *bb = x + 3 * t[(m + 2) % 3];
-                double ym[4];
-                times_unit(y + 4 * t[m], uc, ym);
-                for (int c = 0; c < 3; ++c) sum += ym[1 + c] * (bb[c] - a[c]);
+            for (int32_t k = 0; k < per_pass; ++k) {
+                int uc = s->x0_full_solves ? -1 : k;
+                double sum = 0.0;
+                for (int m = 0; m < 3; ++m) {
+                    const double *a = x + 3 * t[(m + 1) % 3], *bb = x + 3 * t[(m + 2) % 3];
+                    double ym[4];
+                    times_unit(y + 4 * t[m], uc, ym);
+                    for (int c = 0; c < 3; ++c) sum += ym[1 + c] * (bb[c] - a[c]);
+                }
+                for (int m = 0; m < 3; ++m) b[k][t[m]] -= sum / 6.0;
             }
-            for (int m = 0; m < 3; ++m) b[t[m]] -= sum / 6.0;
         }
-        for (int32_t i = 0; i < nv; ++i) b[i] /= s->area[i];
-        ++*col;
+        for (int32_t k = 0; k < per_pass; ++k)
+            for (int32_t i = 0; i < nv; ++i) b[k][i] /= s->area[i];
+        *col += per_pass;
     }
     return CF_OK;
 }

@@ -83,12 +83,15 @@ def read_manifest(path, allow_missing=False):
             continue  # blank line or no file
         mesh = pathlib.Path(row[column])
         full = mesh if mesh.is_absolute() else base / mesh
-        name = row.get("name") or mesh.stem
+        # the default name is the file's stem with every character outside letters, digits and
+        # "-_." made "_" ("scan 01 (left).obj" -> "scan_01__left_"); a given name must be plain
+        name = row.get("name") or "".join(c if c.isalnum() or c in "-_." else "_" for c in mesh.stem)
         if name in names:
             raise ManifestError("%s: line %d: output name '%s' is already used on line %d (add a 'name' column)"
                                 % (path, lineno, name, names[name]))
         if not name.replace("-", "").replace("_", "").replace(".", "").isalnum():
-            raise ManifestError("%s: line %d: name '%s' is not a plain file stem" % (path, lineno, name))
+            raise ManifestError("%s: line %d: name '%s' is not a plain file stem (letters, digits, '-', '_' and "
+                                "'.' only)" % (path, lineno, name))
         names[name] = lineno
         entry = {"input": str(full), "name": name, "line": lineno, "missing": not full.is_file()}
         for key, conv in (("steps", int), ("time_step", float)):

@@ -27,7 +27,7 @@ def run_batch(*args, env_extra=None, timeout=300):
 
 
 def read_summary(out):
-    with open(out / "summary.csv", newline="") as fp:
+    with open(out / "summary.csv", newline="", encoding="utf-8") as fp:
         return {row["mesh"]: row for row in csv.DictReader(fp)}
 
 
@@ -77,7 +77,7 @@ def test_batch_two_workers(data, meshes):
     # both workers took jobs
     assert len({r["worker"] for r in rows.values()}) == 2
     # one line per mesh in manifest order, every column present
-    with open(out / "summary.csv", newline="") as fp:
+    with open(out / "summary.csv", newline="", encoding="utf-8") as fp:
         reader = csv.reader(fp)
         header = next(reader)
         assert header[:12] == ["mesh", "status", "message", "steps", "energy_before", "energy_after",
@@ -166,6 +166,29 @@ def test_manifest_and_usage_errors(tmp_path, meshes):
     proc = run_batch(m, "--method", "spin-willmore", "-p", "sigmaa=2", "--out", out)
     assert proc.returncode == 1 and "parameter 'sigmaa': unknown for method spin-willmore" in proc.stderr
 
+
+
+def test_file_names_with_spaces(tmp_path, meshes):
+    """A mesh file named as users name them ("scan 01 (left).obj") runs
+    under a default name made of its stem, every character other than
+    letters, digits and -_. made _ (it was refused as "not a plain file
+    stem" unless the manifest gave a name); a given name must still be
+    plain."""
+    d = tmp_path / "my scans"
+    d.mkdir()
+    (d / "scan 01 (left).obj").write_text(meshes["icosphere"].read_text())
+    (d / "ïcö.obj").write_text(meshes["torus"].read_text())
+    m = d / "manifest.csv"
+    m.write_text("path\nscan 01 (left).obj\nïcö.obj\n", encoding="utf-8")
+    out = tmp_path / "out"
+    proc = run_batch(m, "--method", "implicit-mcf", "--steps", "2", "--out", out, "--workers", "1")
+    assert proc.returncode == 0, proc.stderr
+    rows = read_summary(out)
+    assert rows["scan_01__left_"]["status"] == "ok" and rows["ïcö"]["status"] == "ok"
+    assert (out / "scan_01__left_.ply").is_file()
+    m.write_text("path,name\nscan 01 (left).obj,my scan\n", encoding="utf-8")
+    proc = run_batch(m, "--method", "implicit-mcf", "--out", out)
+    assert proc.returncode == 1 and "name 'my scan' is not a plain file stem (letters, digits" in proc.stderr
 
 def test_shared_manifest_tsv_is_read(shared):
     """The shared meshes' MANIFEST.tsv (a `file` column, tab-separated) is a

@@ -257,7 +257,8 @@ static int run_loaded(cf_context *ctx, const cli_flow_job *job, cf_flow_options 
     cli_progress_init(&progress, job->label, job->steps, job->quiet);
     cli_report_log report_log = {0};
     const double *start = NULL;
-    int code = cli_load_mesh(ctx, job->input, &mesh);
+    cli_properties props;
+    int code = cli_load_mesh_properties(ctx, job->input, &mesh, &props);
     if (code == CLI_EXIT_OK && job->start_path && (code = load_start(ctx, job, mesh, &start_mesh)) == CLI_EXIT_OK)
         start = cf_mesh_positions(start_mesh);
     if (code == CLI_EXIT_OK) code = cli_flow_arrays_load(ctx, arrays, options, job->input, mesh, start);
@@ -275,8 +276,8 @@ static int run_loaded(cf_context *ctx, const cli_flow_job *job, cf_flow_options 
     double started = cli_now();
     if (job->report_path && (code = cli_report_log_capture(&report_log, &progress, job->log_path)) != CLI_EXIT_OK)
         goto done;
-    code = cli_run_flow_and_write(ctx, flow, &progress, job->log_path, job->steps, job->input, mesh, job->output,
-                                  &completed);
+    code = cli_run_flow_and_write(ctx, flow, &progress, job->log_path, job->steps, job->input, mesh, &props,
+                                  job->output, &completed);
     if (job->report_path) {
         cli_report_run run;
         cli_report_run_init(&run);
@@ -302,6 +303,7 @@ done:
     cf_flow_destroy(&flow);
     cf_mesh_destroy(&start_mesh);
     cf_mesh_destroy(&mesh);
+    cli_properties_free(&props);
     return code;
 }
 

@@ -4,6 +4,7 @@
 
 #include "curvflow/io.h"
 
+#include <ctype.h>
 #include <errno.h>
 #include <jansson.h>
 #include <limits.h>
@@ -221,6 +222,72 @@ int cli_load_mesh(cf_context *ctx, const char *path, cf_mesh **out)
     return CLI_EXIT_OK;
 }
 
+/* What cf_io's writer accepts as a field name (1-128 of [A-Za-z0-9_.-],
+ * not a name the writer uses itself). */
+static bool writable_field_name(const char *name)
+{
+    static const char *const reserved[] = {"x", "y", "z", "u", "v", "vertex_indices", "texcoord", "index"};
+    size_t n = strlen(name);
+    if (n == 0 || n > 128) return false;
+    for (size_t i = 0; i < n; ++i)
+        if (!isalnum((unsigned char)name[i]) && name[i] != '_' && name[i] != '.' && name[i] != '-') return false;
+    for (size_t i = 0; i < sizeof reserved / sizeof reserved[0]; ++i)
+        if (strcmp(name, reserved[i]) == 0) return false;
+    return true;
+}
+
+int cli_load_mesh_properties(cf_context *ctx, const char *path, cf_mesh **out, cli_properties *props)
+{
+    memset(props, 0, sizeof *props);
+    *out = NULL;
+    cf_mesh_data *data = NULL;
+    cf_status st = cf_read_mesh_file(ctx, path, &data);
+    if (st == CF_OK) {
+        cf_mesh_desc desc;
+        cf_mesh_data_desc(data, &desc);
+        st = cf_mesh_create(ctx, &desc, out);
+    }
+    if (st != CF_OK) {
+        cf_mesh_data_destroy(&data);
+        int code = cli_fail(ctx, path, st);
+        return code == CLI_EXIT_USAGE ? CLI_EXIT_INPUT : code;
+    }
+    int32_t total = data->vertex_property_count + data->face_property_count;
+    props->data = data;
+    props->fields = total > 0 ? calloc((size_t)total, sizeof *props->fields) : NULL;
+    if (total > 0 && !props->fields) {
+        fprintf(stderr, "curvflow: out of memory\n");
+        cli_properties_free(props);
+        cf_mesh_destroy(out);
+        return CLI_EXIT_NUMERICAL;
+    }
+    char skipped[256] = "";
+    for (int32_t i = 0; i < total; ++i) {
+        int vertex = i < data->vertex_property_count;
+        const cf_mesh_property *p =
+            vertex ? &data->vertex_properties[i] : &data->face_properties[i - data->vertex_property_count];
+        if (!writable_field_name(p->name)) {
+            size_t n = strlen(skipped);
+            snprintf(skipped + n, sizeof skipped - n, "%s'%s'", n ? ", " : "", p->name);
+            continue;
+        }
+        props->fields[props->count++] = (cf_field){p->name, vertex ? CF_FIELD_VERTEX : CF_FIELD_FACE, p->values};
+    }
+    if (skipped[0])
+        fprintf(stderr, "curvflow: warning: %s: properties %s cannot be written back (a written name is 1-128 of "
+                        "[A-Za-z0-9_.-]); the others are kept in the output\n",
+                path, skipped);
+    return CLI_EXIT_OK;
+}
+
+void cli_properties_free(cli_properties *props)
+{
+    if (!props) return;
+    free(props->fields);
+    cf_mesh_data_destroy(&props->data);
+    memset(props, 0, sizeof *props);
+}
+
 int cli_make_dir(const char *path)
 {
     struct stat sb;
@@ -247,8 +314,8 @@ void cli_warn_if_unreadable(cf_context *ctx, const cf_mesh *mesh, const double *
 }
 
 int cli_run_flow_and_write(cf_context *ctx, cf_flow *flow, cli_progress *progress, const char *log_path,
-                           int64_t steps, const char *input, const cf_mesh *mesh, const char *output,
-                           bool *completed)
+                           int64_t steps, const char *input, const cf_mesh *mesh, const cli_properties *props,
+                           const char *output, bool *completed)
 {
     *completed = false;
     int code = CLI_EXIT_OK;
@@ -264,7 +331,16 @@ int cli_run_flow_and_write(cf_context *ctx, cf_flow *flow, cli_progress *progres
         fprintf(stderr, "curvflow: writing the last good state (iteration %lld) to %s\n",
                 (long long)cf_flow_last_info(flow)->iteration, output);
     }
-    cf_status st = cf_write_mesh_file(ctx, output, mesh, cf_flow_positions(flow), NULL, 0);
+    /* the input's properties ride along: the connectivity is the input's */
+    const cf_field *fields = props ? props->fields : NULL;
+    int32_t nfields = props ? props->count : 0;
+    cf_mesh_format format;
+    if (nfields > 0 && cf_mesh_format_from_path(ctx, output, &format) == CF_OK && format == CF_FORMAT_OFF) {
+        fprintf(stderr, "curvflow: warning: %s: OFF holds no properties: the %d of %s are not written (write PLY)\n",
+                output, (int)nfields, input);
+        nfields = 0;
+    }
+    cf_status st = cf_write_mesh_file(ctx, output, mesh, cf_flow_positions(flow), fields, nfields);
     if (st != CF_OK) {
         int wcode = cli_fail(ctx, output, st);
         if (code == CLI_EXIT_OK) code = wcode == CLI_EXIT_USAGE ? CLI_EXIT_INPUT : wcode;

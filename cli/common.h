@@ -75,6 +75,20 @@ cf_context *cli_context(bool verbose);
  * exit code (2), else 0. */
 int cli_load_mesh(cf_context *ctx, const char *path, cf_mesh **out);
 
+/* The scalar vertex and face properties of a mesh file (a PLY's colours,
+ * quality, labels), kept to be written with a result of the same
+ * connectivity: fields point into `data`. */
+typedef struct cli_properties {
+    cf_mesh_data *data;
+    cf_field *fields;
+    int32_t count;
+} cli_properties;
+
+/* cli_load_mesh that also keeps the file's properties (every property whose
+ * name a written field may have; the others are named in one warning). */
+int cli_load_mesh_properties(cf_context *ctx, const char *path, cf_mesh **out, cli_properties *props);
+void cli_properties_free(cli_properties *props);
+
 /* Removes the temporary files of atomic writes in progress when the tool
  * gets SIGINT, SIGTERM or SIGHUP, then dies of the signal as it would have
  * (a signal the tool was started with ignored, e.g. SIGHUP under nohup,
@@ -165,10 +179,12 @@ int cli_progress_finish(cli_progress *p);
  * state, with a message naming the iteration). Returns the exit code: 0,
  * 2 (log or output unwritable), 3 (numerical failure). *completed is set
  * when the run succeeded and the output was written, so the caller can
- * print its summary line. Shared by `flow` and `edit`. */
+ * print its summary line. Shared by `flow` and `edit`. The input's
+ * properties (props, may be NULL) are written with it: as PLY properties,
+ * as OBJ side CSV files; an OFF output holds none and says so. */
 int cli_run_flow_and_write(cf_context *ctx, cf_flow *flow, cli_progress *progress, const char *log_path,
-                           int64_t steps, const char *input, const cf_mesh *mesh, const char *output,
-                           bool *completed);
+                           int64_t steps, const char *input, const cf_mesh *mesh, const cli_properties *props,
+                           const char *output, bool *completed);
 
 /* Wall-clock seconds (monotonic). */
 double cli_now(void);

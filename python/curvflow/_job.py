@@ -14,9 +14,14 @@ the library would), "hang:NAME" makes it sleep (for --timeout).
 import json
 import math
 import os
+import re
 import signal
 import sys
 import time
+
+# what the writer accepts as a field name (docs/io.md)
+_WRITABLE_NAME = re.compile(r"[A-Za-z0-9_.-]{1,128}")
+_RESERVED_NAMES = {"x", "y", "z", "u", "v", "vertex_indices", "texcoord", "index"}
 
 
 def _fault(name):
@@ -85,7 +90,13 @@ def run(spec):
         curvflow.write_log(res["log"], log)
     if state is not None:
         path = os.path.join(out_dir, name + ("." if res["status"] == "ok" else ".last_good.") + fmt)
-        curvflow.save(path, state, F, uv=extras["uv"], uv_faces=extras["uv_faces"])
+        # the input's properties (a PLY's colours, quality, labels) ride along, as with the CLI's
+        # flow, where the output format and the names allow
+        keep = {}
+        for where in ("vertex_fields", "face_fields"):
+            keep[where] = {k: v for k, v in (extras.get(where) or {}).items()
+                           if fmt != "off" and _WRITABLE_NAME.fullmatch(k) and k not in _RESERVED_NAMES}
+        curvflow.save(path, state, F, uv=extras["uv"], uv_faces=extras["uv_faces"], **keep)
         res["output" if res["status"] == "ok" else "last_good"] = path
         res["willmore_over_4pi_after"] = _closed_willmore(state, F)
         try:

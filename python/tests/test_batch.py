@@ -173,7 +173,8 @@ def test_file_names_with_spaces(tmp_path, meshes):
     under a default name made of its stem, every character other than
     letters, digits and -_. made _ (it was refused as "not a plain file
     stem" unless the manifest gave a name); a given name must still be
-    plain."""
+    plain. A PLY's vertex and face properties reach the output (they were
+    dropped)."""
     d = tmp_path / "my scans"
     d.mkdir()
     (d / "scan 01 (left).obj").write_text(meshes["icosphere"].read_text())
@@ -186,6 +187,18 @@ def test_file_names_with_spaces(tmp_path, meshes):
     rows = read_summary(out)
     assert rows["scan_01__left_"]["status"] == "ok" and rows["ïcö"]["status"] == "ok"
     assert (out / "scan_01__left_.ply").is_file()
+    # a PLY's properties ride along to the output, as with the CLI's flow
+    V, F, _ = curvflow.load(str(meshes["icosphere"]))
+    red = (np.arange(len(V)) * 7 % 256).astype(float)
+    label = (np.arange(len(F)) % 3).astype(float)
+    curvflow.save(str(d / "coloured.ply"), V, F, vertex_fields={"red": red}, face_fields={"label": label})
+    m.write_text("path\ncoloured.ply\n", encoding="utf-8")
+    proc = run_batch(m, "--method", "spin-willmore", "--steps", "2", "--out", out, "--workers", "1")
+    assert proc.returncode == 0, proc.stderr
+    V2, _, extras = curvflow.load(str(out / "coloured.ply"))
+    assert np.array_equal(extras["vertex_fields"]["red"], red)
+    assert np.array_equal(extras["face_fields"]["label"], label)
+    assert not np.array_equal(V2, V)
     m.write_text("path,name\nscan 01 (left).obj,my scan\n", encoding="utf-8")
     proc = run_batch(m, "--method", "implicit-mcf", "--out", out)
     assert proc.returncode == 1 and "name 'my scan' is not a plain file stem (letters, digits" in proc.stderr

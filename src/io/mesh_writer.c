@@ -107,7 +107,36 @@ typedef struct write_job {
     int32_t field_count;
     int32_t nvf, nff;     /* vertex / face field counts */
     bool use_uv;
+    uint8_t *uchar;       /* PLY: per field, 1 when it is written as uchar (a colour channel) */
 } write_job;
+
+/* A colour channel: named red, green, blue or alpha, and every value a
+ * whole number in [0, 255]. PLY viewers read colours from uchar
+ * properties, so these are written as uchar (the values read back the
+ * same); every other field is written as double. */
+static bool is_colour_channel(const cf_field *f, int32_t n)
+{
+    static const char *const names[] = {"red", "green", "blue", "alpha"};
+    bool named = false;
+    for (size_t i = 0; i < sizeof names / sizeof names[0]; ++i) named = named || strcmp(f->name, names[i]) == 0;
+    for (int32_t k = 0; named && k < n; ++k) {
+        double v = f->values[k];
+        named = v >= 0.0 && v <= 255.0 && v == floor(v);
+    }
+    return named;
+}
+
+static const char *ply_type(const write_job *j, int32_t i) { return j->uchar && j->uchar[i] ? "uchar" : "double"; }
+
+/* A field's value in its PLY type (ply_type). */
+static unsigned char *put_field(const write_job *j, int32_t i, unsigned char *p, double v, bool big)
+{
+    if (j->uchar && j->uchar[i]) {
+        *p++ = (unsigned char)v;
+        return p;
+    }
+    return put_f64(p, v, big);
+}
 
 static cf_status write_ply_body(write_job *j, FILE *fp, cf_ply_encoding enc, int32_t *map)
 {
@@ -126,11 +155,11 @@ static cf_status write_ply_body(write_job *j, FILE *fp, cf_ply_encoding enc, int
     fputs("property double x\nproperty double y\nproperty double z\n", fp);
     if (layout == UV_PER_VERTEX) fputs("property double u\nproperty double v\n", fp);
     for (int32_t i = 0; i < j->field_count; ++i)
-        if (j->fields[i].location == CF_FIELD_VERTEX) fprintf(fp, "property double %s\n", j->fields[i].name);
+        if (j->fields[i].location == CF_FIELD_VERTEX) fprintf(fp, "property %s %s\n", ply_type(j, i), j->fields[i].name);
     fprintf(fp, "element face %d\nproperty list uchar int vertex_indices\n", nf);
     if (layout == UV_PER_CORNER) fputs("property list uchar double texcoord\n", fp);
     for (int32_t i = 0; i < j->field_count; ++i)
-        if (j->fields[i].location == CF_FIELD_FACE) fprintf(fp, "property double %s\n", j->fields[i].name);
+        if (j->fields[i].location == CF_FIELD_FACE) fprintf(fp, "property %s %s\n", ply_type(j, i), j->fields[i].name);
     fputs("end_header\n", fp);
 
     if (enc == CF_PLY_ASCII) {
@@ -166,7 +195,7 @@ static cf_status write_ply_body(write_job *j, FILE *fp, cf_ply_encoding enc, int
             p = put_f64(p, uv[2 * map[v] + 1], big);
         }
         for (int32_t i = 0; i < j->field_count; ++i)
-            if (j->fields[i].location == CF_FIELD_VERTEX) p = put_f64(p, j->fields[i].values[v], big);
+            if (j->fields[i].location == CF_FIELD_VERTEX) p = put_field(j, i, p, j->fields[i].values[v], big);
         fwrite(rec, 1, (size_t)(p - rec), fp);
     }
     for (int32_t f = 0; f < nf; ++f) {
@@ -181,7 +210,7 @@ static cf_status write_ply_body(write_job *j, FILE *fp, cf_ply_encoding enc, int
             }
         }
         for (int32_t i = 0; i < j->field_count; ++i)
-            if (j->fields[i].location == CF_FIELD_FACE) p = put_f64(p, j->fields[i].values[f], big);
+            if (j->fields[i].location == CF_FIELD_FACE) p = put_field(j, i, p, j->fields[i].values[f], big);
         fwrite(rec, 1, (size_t)(p - rec), fp);
     }
     cfi_free(ctx, rec, rec_bytes);
@@ -194,11 +223,16 @@ static cf_status write_ply(write_job *j, cf_ply_encoding enc)
     cfi_atomic_file af;
     cf_status st = cfi_atomic_open(ctx, j->path, &af);
     if (st != CF_OK) return st;
-    int32_t nv = cf_mesh_vertex_count(j->mesh);
+    int32_t nv = cf_mesh_vertex_count(j->mesh), nf = cf_mesh_face_count(j->mesh);
     int32_t *map = NULL;
     if (j->use_uv && !(map = CFI_ALLOC(ctx, int32_t, nv))) st = CF_ERR_NOMEM;
+    if (st == CF_OK && j->field_count > 0 && !(j->uchar = CFI_ALLOC(ctx, uint8_t, j->field_count))) st = CF_ERR_NOMEM;
+    for (int32_t i = 0; st == CF_OK && i < j->field_count; ++i)
+        j->uchar[i] = is_colour_channel(&j->fields[i], j->fields[i].location == CF_FIELD_VERTEX ? nv : nf);
     if (st == CF_OK) st = write_ply_body(j, af.fp, enc, map);
     if (map) CFI_FREE(ctx, map, nv);
+    if (j->uchar) CFI_FREE(ctx, j->uchar, j->field_count);
+    j->uchar = NULL;
     if (st != CF_OK) {
         cfi_atomic_abort(ctx, &af);
         return st;
@@ -317,7 +351,7 @@ cf_status cf_write_mesh_file_ex(cf_context *ctx, const char *path, const cf_mesh
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "%s: bad PLY encoding %d", path, (int)opts.ply_encoding);
     if ((st = check_fields(ctx, path, fields, field_count)) != CF_OK) return st;
     write_job j = {ctx, path, mesh, positions ? positions : cf_mesh_positions(mesh), fields, field_count, 0, 0,
-                   false};
+                   false, NULL};
     int32_t nv = cf_mesh_vertex_count(mesh);
     for (int32_t v = 0; v < nv; ++v)
         if (!isfinite(j.x[3 * v]) || !isfinite(j.x[3 * v + 1]) || !isfinite(j.x[3 * v + 2]))

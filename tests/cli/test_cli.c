@@ -335,6 +335,74 @@ static void test_flow(void)
     CHECK(cft_exists("blown.obj"));
 }
 
+/* The input's vertex and face properties are written with the result of
+ * `flow` (and `edit`: same path): colours as uchar, other properties as
+ * double, in PLY; an OBJ output gets them in its side CSV files; an OFF
+ * output cannot hold them and says so; a name that cannot be written is
+ * named in a warning (session 29: every property was dropped without a
+ * word). */
+static void test_flow_keeps_properties(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *m = NULL;
+    CHECK_OK(ctx, cf_generate_bumpy_sphere(ctx, 2, 0.2, 4u, &m));
+    if (!m) return;
+    int32_t nv = cf_mesh_vertex_count(m), nf = cf_mesh_face_count(m);
+    double *red = malloc((size_t)nv * sizeof *red), *quality = malloc((size_t)nv * sizeof *quality);
+    double *label = malloc((size_t)nf * sizeof *label);
+    for (int32_t i = 0; i < nv; ++i) {
+        red[i] = (double)((7 * i) % 256);
+        quality[i] = 0.25 + 1.0 / (i + 3.0);
+    }
+    for (int32_t f = 0; f < nf; ++f) label[f] = f % 5;
+    cf_field fields[3] = {{"red", CF_FIELD_VERTEX, red}, {"quality", CF_FIELD_VERTEX, quality},
+                          {"label", CF_FIELD_FACE, label}};
+    CHECK_OK(ctx, cf_write_mesh_file(ctx, cft_in_dir("props.ply"), m, NULL, fields, 3));
+    CHECK_RUN("flow props.ply -o props_out.ply --method spin-willmore --steps 2 -q", 0);
+    cf_mesh_data *d = NULL;
+    CHECK_OK(ctx, cf_read_mesh_file(ctx, cft_in_dir("props_out.ply"), &d));
+    if (d) {
+        const cf_mesh_property *p = cf_mesh_data_vertex_property(d, "red");
+        CHECK(p && memcmp(p->values, red, (size_t)nv * sizeof *red) == 0);
+        p = cf_mesh_data_vertex_property(d, "quality");
+        CHECK(p && memcmp(p->values, quality, (size_t)nv * sizeof *quality) == 0);
+        p = cf_mesh_data_face_property(d, "label");
+        CHECK(p && memcmp(p->values, label, (size_t)nf * sizeof *label) == 0);
+        /* and the positions did move */
+        CHECK(memcmp(d->positions, cf_mesh_positions(m), 3 * (size_t)nv * sizeof(double)) != 0);
+        cf_mesh_data_destroy(&d);
+    }
+    char text[4096];
+    cft_read_small(cft_in_dir("props_out.ply"), text, sizeof text);
+    CHECK(strstr(text, "property uchar red\nproperty double quality\n") != NULL);
+    CHECK_RUN("flow props.ply -o props_out.obj --method implicit-mcf --steps 1 -q", 0);
+    cft_read_small(cft_in_dir("props_out.vertex.csv"), text, sizeof text);
+    CHECK(strncmp(text, "index,red,quality\n0,0,", 22) == 0);
+    EXPECT("flow props.ply -o props_out.off --method implicit-mcf --steps 1 -q", 0,
+           "props_out.off: OFF holds no properties: the 3 of props.ply are not written (write PLY)");
+    /* a property name the writer cannot use: named, the others kept */
+    FILE *f = fopen(cft_in_dir("odd.ply"), "w");
+    fprintf(f, "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+               "property float conf(1)\nproperty float k\nelement face 4\nproperty list uchar int vertex_indices\n"
+               "end_header\n0 0 0 1 2\n1 0 0 1 2\n0 1 0 1 2\n0 0 1 1 2\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n");
+    fclose(f);
+    EXPECT("flow odd.ply -o odd_out.ply --method implicit-mcf --steps 1 -q", 0,
+           "odd.ply: properties 'conf(1)' cannot be written back");
+    CHECK_OK(ctx, cf_read_mesh_file(ctx, cft_in_dir("odd_out.ply"), &d));
+    CHECK(d && cf_mesh_data_vertex_property(d, "k") && !cf_mesh_data_vertex_property(d, "conf(1)"));
+    cf_mesh_data_destroy(&d);
+    CHECK(cft_exists("props_out.off") && cft_exists("props_out.face.csv"));
+    /* test_no_temp_files lists what the other tests leave */
+    static const char *const made[] = {"props.ply", "props_out.ply", "props_out.obj", "props_out.vertex.csv",
+                                       "props_out.face.csv", "props_out.off", "odd.ply", "odd_out.ply"};
+    for (size_t i = 0; i < sizeof made / sizeof made[0]; ++i) remove(cft_in_dir(made[i]));
+    free(red);
+    free(quality);
+    free(label);
+    cf_mesh_destroy(&m);
+    cf_context_destroy(&ctx);
+}
+
 static void test_compare(void)
 {
     CHECK_RUN("compare bumpy.obj smooth.obj", 0);
@@ -845,6 +913,7 @@ int main(void)
     CFT_RUN(test_generate);
     CFT_RUN(test_info);
     CFT_RUN(test_flow);
+    CFT_RUN(test_flow_keeps_properties);
     CFT_RUN(test_compare);
     CFT_RUN(test_demo);
     CFT_RUN(test_render);

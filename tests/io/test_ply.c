@@ -388,6 +388,57 @@ static void test_write_options(void)
     cf_context_destroy(&ctx);
 }
 
+/* Colour channels (fields named red, green, blue or alpha whose values are
+ * all whole numbers in [0, 255]) are written as uchar, as PLY viewers read
+ * colours, and read back the same in every encoding; a "red" with a value
+ * outside stays double (session 29: the flow now carries an input's
+ * properties to its output, colours included). */
+static void test_colour_channels(void)
+{
+    cf_context *ctx = cft_context();
+    static const cf_ply_encoding encs[3] = {CF_PLY_BINARY_LITTLE_ENDIAN, CF_PLY_BINARY_BIG_ENDIAN, CF_PLY_ASCII};
+    cf_mesh *m = iot_octahedron_mesh(ctx, 0);
+    double red[IOT_NV], green[IOT_NV], alpha[IOT_NF], other[IOT_NV];
+    for (int i = 0; i < IOT_NV; ++i) {
+        red[i] = (i * 51) % 256;
+        green[i] = i == 0 ? 255.0 : 0.0;
+        other[i] = i == 1 ? 0.5 : 7.0; /* not whole: double */
+    }
+    for (int i = 0; i < IOT_NF; ++i) alpha[i] = 128 + i;
+    for (int e = 0; m && e < 3; ++e) {
+        cf_field fields[4] = {{"red", CF_FIELD_VERTEX, red},
+                              {"green", CF_FIELD_VERTEX, green},
+                              {"alpha", CF_FIELD_FACE, alpha},
+                              {"blue", CF_FIELD_VERTEX, other}};
+        cf_write_options o;
+        cf_write_options_default(&o);
+        o.ply_encoding = encs[e];
+        const char *path = cft_temp_path(".ply");
+        CHECK_OK(ctx, cf_write_mesh_file_ex(ctx, path, m, NULL, fields, 4, &o));
+        size_t size = 0;
+        char *text = iot_read(path, &size);
+        CHECK(text && strstr(text, "property uchar red\nproperty uchar green\nproperty double blue\n"));
+        CHECK(text && strstr(text, "property uchar alpha\n"));
+        free(text);
+        cf_mesh_data *d = NULL;
+        CHECK_OK(ctx, cf_read_mesh_file(ctx, path, &d));
+        remove(path);
+        if (!d) continue;
+        const cf_mesh_property *p = cf_mesh_data_vertex_property(d, "red");
+        CHECK(p && memcmp(p->values, red, sizeof red) == 0);
+        p = cf_mesh_data_vertex_property(d, "green");
+        CHECK(p && memcmp(p->values, green, sizeof green) == 0);
+        p = cf_mesh_data_vertex_property(d, "blue");
+        CHECK(p && memcmp(p->values, other, sizeof other) == 0);
+        p = cf_mesh_data_face_property(d, "alpha");
+        CHECK(p && memcmp(p->values, alpha, sizeof alpha) == 0);
+        cf_mesh_data_destroy(&d);
+    }
+    cf_mesh_destroy(&m);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 int main(void)
 {
     CFT_RUN(test_round_trip_all_encodings);
@@ -397,5 +448,6 @@ int main(void)
     CFT_RUN(test_huge_binary_list_count);
     CFT_RUN(test_allocation_failures);
     CFT_RUN(test_write_options);
+    CFT_RUN(test_colour_channels);
     return cft_finish();
 }

@@ -266,6 +266,13 @@ int cli_load_mesh_properties(cf_context *ctx, const char *path, cf_mesh **out, c
         int vertex = i < data->vertex_property_count;
         const cf_mesh_property *p =
             vertex ? &data->vertex_properties[i] : &data->face_properties[i - data->vertex_property_count];
+        /* vertex normals describe the input's shape, not the result's:
+         * left out, as before, for viewers to recompute */
+        static const char *const normals[] = {"nx", "ny", "nz", "normal_x", "normal_y", "normal_z"};
+        bool normal = false;
+        for (size_t k = 0; k < sizeof normals / sizeof normals[0]; ++k)
+            normal = normal || strcmp(p->name, normals[k]) == 0;
+        if (normal) continue;
         if (!writable_field_name(p->name)) {
             size_t n = strlen(skipped);
             snprintf(skipped + n, sizeof skipped - n, "%s'%s'", n ? ", " : "", p->name);

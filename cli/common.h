@@ -85,7 +85,8 @@ typedef struct cli_properties {
 } cli_properties;
 
 /* cli_load_mesh that also keeps the file's properties (every property whose
- * name a written field may have; the others are named in one warning). */
+ * name a written field may have, the others named in one warning; vertex
+ * normals nx ny nz / normal_x .. left out: they are the input's shape). */
 int cli_load_mesh_properties(cf_context *ctx, const char *path, cf_mesh **out, cli_properties *props);
 void cli_properties_free(cli_properties *props);
 

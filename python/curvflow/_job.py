@@ -21,7 +21,9 @@ import time
 
 # what the writer accepts as a field name (docs/io.md)
 _WRITABLE_NAME = re.compile(r"[A-Za-z0-9_.-]{1,128}")
-_RESERVED_NAMES = {"x", "y", "z", "u", "v", "vertex_indices", "texcoord", "index"}
+_RESERVED_NAMES = {"x", "y", "z", "u", "v", "vertex_indices", "texcoord", "index",
+                   # vertex normals describe the input's shape, not the result's
+                   "nx", "ny", "nz", "normal_x", "normal_y", "normal_z"}
 
 
 def _fault(name):

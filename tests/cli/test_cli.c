@@ -383,13 +383,16 @@ static void test_flow_keeps_properties(void)
     /* a property name the writer cannot use: named, the others kept */
     FILE *f = fopen(cft_in_dir("odd.ply"), "w");
     fprintf(f, "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
-               "property float conf(1)\nproperty float k\nelement face 4\nproperty list uchar int vertex_indices\n"
-               "end_header\n0 0 0 1 2\n1 0 0 1 2\n0 1 0 1 2\n0 0 1 1 2\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n");
+               "property float conf(1)\nproperty float k\nproperty float nx\nelement face 4\n"
+               "property list uchar int vertex_indices\nend_header\n0 0 0 1 2 -1\n1 0 0 1 2 1\n0 1 0 1 2 0\n"
+               "0 0 1 1 2 0\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n");
     fclose(f);
     EXPECT("flow odd.ply -o odd_out.ply --method implicit-mcf --steps 1 -q", 0,
            "odd.ply: properties 'conf(1)' cannot be written back");
     CHECK_OK(ctx, cf_read_mesh_file(ctx, cft_in_dir("odd_out.ply"), &d));
     CHECK(d && cf_mesh_data_vertex_property(d, "k") && !cf_mesh_data_vertex_property(d, "conf(1)"));
+    /* a normal describes the input's shape: not written */
+    CHECK(d && !cf_mesh_data_vertex_property(d, "nx"));
     cf_mesh_data_destroy(&d);
     CHECK(cft_exists("props_out.off") && cft_exists("props_out.face.csv"));
     /* test_no_temp_files lists what the other tests leave */

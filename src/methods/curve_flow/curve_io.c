@@ -185,8 +185,11 @@ static const char *skip_sep(const char *s)
 }
 
 /* A transform list ("translate(10,20) scale(2)"): functions applied right
- * to left, as SVG defines it; the value ends at `end` (its closing quote). */
-static cf_status parse_transform(pbuf *b, const char *name, long line, const char *s, const char *end, affine *out)
+ * to left, as SVG defines it; the value ends at `end` (its closing quote).
+ * Messages name the line of `tag` in `text`, counted only for a message
+ * (counting for every element made large files quadratic). */
+static cf_status parse_transform(pbuf *b, const char *name, const char *text, const char *tag, const char *s,
+                                 const char *end, affine *out)
 {
     static const struct {
         const char *name;
@@ -209,7 +212,8 @@ static cf_status parse_transform(pbuf *b, const char *name, long line, const cha
             }
         }
         if (k < 0)
-            return cfi_error(b->ctx, CF_ERR_PARSE, "%s: line %ld: unsupported transform near \"%.20s\"", name, line, s);
+            return cfi_error(b->ctx, CF_ERR_PARSE, "%s: line %ld: unsupported transform near \"%.20s\"", name,
+                             line_of(text, tag), s);
         double v[6];
         int n = 0;
         for (;;) {
@@ -221,14 +225,15 @@ static cf_status parse_transform(pbuf *b, const char *name, long line, const cha
             char *stop;
             double x = s < end ? strtod(s, &stop) : 0.0;
             if (s >= end || stop == s || stop > end || n == 6)
-                return cfi_error(b->ctx, CF_ERR_PARSE, "%s: line %ld: bad %s() in transform near \"%.20s\"", name, line,
-                                 kinds[k].name, s);
+                return cfi_error(b->ctx, CF_ERR_PARSE, "%s: line %ld: bad %s() in transform near \"%.20s\"", name,
+                                 line_of(text, tag), kinds[k].name, s);
             v[n++] = x;
             s = stop;
         }
         if (n < kinds[k].min || n > kinds[k].max || (k == 3 && n == 2))
-            return cfi_error(b->ctx, CF_ERR_PARSE, "%s: line %ld: %s() takes %s arguments, got %d", name, line,
-                             kinds[k].name, k == 0 ? "6" : k == 3 ? "1 or 3" : k >= 4 ? "1" : "1 or 2", n);
+            return cfi_error(b->ctx, CF_ERR_PARSE, "%s: line %ld: %s() takes %s arguments, got %d", name,
+                             line_of(text, tag), kinds[k].name, k == 0 ? "6" : k == 3 ? "1 or 3" : k >= 4 ? "1" : "1 or 2",
+                             n);
         affine t = identity_map;
         const double deg = 3.14159265358979323846 / 180.0;
         switch (k) {
@@ -453,7 +458,7 @@ static cf_status parse_svg(pbuf *b, const char *name, char *text)
             first_kind = is_polygon ? "polygon" : is_polyline ? "polyline" : "path";
             if (transform.vs) {
                 affine own;
-                st = parse_transform(b, name, line, transform.vs, transform.ve, &own);
+                st = parse_transform(b, name, text, p, transform.vs, transform.ve, &own);
                 if (st != CF_OK) break;
                 scope.m = compose(scope.m, own);
             }
@@ -467,7 +472,7 @@ static cf_status parse_svg(pbuf *b, const char *name, char *text)
             if (more) subpath_line = line;
         } else if (!self_closing && transform.vs) {
             affine own;
-            st = parse_transform(b, name, line_of(text, p), transform.vs, transform.ve, &own);
+            st = parse_transform(b, name, text, p, transform.vs, transform.ve, &own);
             if (st != CF_OK) break;
             scope.m = compose(scope.m, own);
         }

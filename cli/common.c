@@ -320,6 +320,69 @@ void cli_warn_if_unreadable(cf_context *ctx, const cf_mesh *mesh, const double *
             output, r.first_message, (int)r.degenerate_faces);
 }
 
+/* The directory part of a path as a canonical name (malloc'd), or NULL. */
+static char *canonical_dir(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    char dir[PATH_MAX];
+    if (!slash) snprintf(dir, sizeof dir, ".");
+    else if (slash == path) snprintf(dir, sizeof dir, "/");
+    else snprintf(dir, sizeof dir, "%.*s", (int)(slash - path), path);
+    return realpath(dir, NULL);
+}
+
+/* An OBJ input's materials for an OBJ output: its mtllib lines (a relative
+ * library made absolute when the output is written to another directory,
+ * so that it still names the file beside the input) and each face's usemtl.
+ * Another output format holds none: a warning. Returns the strings made
+ * (*made, free with free_made). */
+static void material_options(cf_context *ctx, const cli_properties *props, const char *input, const char *output,
+                             cf_write_options *o, char ***made)
+{
+    *made = NULL;
+    const cf_mesh_data *d = props ? props->data : NULL;
+    if (!d || (d->material_library_count == 0 && d->material_count == 0)) return;
+    cf_mesh_format format;
+    if (cf_mesh_format_from_path(ctx, output, &format) != CF_OK || format != CF_FORMAT_OBJ) {
+        fprintf(stderr,
+                "curvflow: warning: %s: the materials of %s (mtllib / usemtl) are not written: only OBJ holds them\n",
+                output, input);
+        return;
+    }
+    char *in_dir = canonical_dir(input), *out_dir = canonical_dir(output);
+    bool same_dir = in_dir && out_dir && strcmp(in_dir, out_dir) == 0;
+    char **libs = calloc((size_t)d->material_library_count + 1, sizeof *libs);
+    for (int32_t l = 0; libs && l < d->material_library_count; ++l) {
+        const char *lib = d->material_libraries[l];
+        if (same_dir || lib[0] == '/' || !in_dir) {
+            libs[l] = strdup(lib);
+        } else {
+            size_t n = strlen(in_dir) + strlen(lib) + 2;
+            libs[l] = malloc(n);
+            if (libs[l]) snprintf(libs[l], n, "%s/%s", in_dir, lib);
+        }
+        if (!libs[l]) { /* out of memory: no libraries rather than a part of them */
+            for (int32_t k = 0; k < l; ++k) free(libs[k]);
+            free(libs);
+            libs = NULL;
+        }
+    }
+    free(in_dir);
+    free(out_dir);
+    o->material_library_count = libs ? d->material_library_count : 0;
+    o->material_libraries = (const char *const *)libs;
+    o->material_count = d->material_count;
+    o->material_names = (const char *const *)d->material_names;
+    o->face_materials = d->face_materials;
+    *made = libs;
+}
+
+static void free_made(char **made)
+{
+    for (int32_t i = 0; made && made[i]; ++i) free(made[i]);
+    free(made);
+}
+
 int cli_run_flow_and_write(cf_context *ctx, cf_flow *flow, cli_progress *progress, const char *log_path,
                            int64_t steps, const char *input, const cf_mesh *mesh, const cli_properties *props,
                            const char *output, bool *completed)
@@ -347,7 +410,12 @@ int cli_run_flow_and_write(cf_context *ctx, cf_flow *flow, cli_progress *progres
                 output, (int)nfields, input);
         nfields = 0;
     }
-    cf_status st = cf_write_mesh_file(ctx, output, mesh, cf_flow_positions(flow), fields, nfields);
+    cf_write_options wo;
+    cf_write_options_default(&wo);
+    char **made = NULL;
+    material_options(ctx, props, input, output, &wo, &made);
+    cf_status st = cf_write_mesh_file_ex(ctx, output, mesh, cf_flow_positions(flow), fields, nfields, &wo);
+    free_made(made);
     if (st != CF_OK) {
         int wcode = cli_fail(ctx, output, st);
         if (code == CLI_EXIT_OK) code = wcode == CLI_EXIT_USAGE ? CLI_EXIT_INPUT : wcode;

@@ -76,6 +76,15 @@ typedef struct cf_mesh_data {
      * a warning was logged). */
     int32_t polygon_count;
     cf_context *context;        /* owner, used by cf_mesh_data_destroy */
+    /* OBJ materials (session 29): the text after each `mtllib` in file
+     * order, the `usemtl` names in order of first use, and each triangle's
+     * material (an index into material_names, -1 before the first usemtl;
+     * NULL when the file has no usemtl). 0 / NULL for other formats. */
+    int32_t material_library_count;
+    char **material_libraries;
+    int32_t material_count;
+    char **material_names;
+    int32_t *face_materials;
 } cf_mesh_data;
 
 /* Frees the data; accepts NULL and *data == NULL; sets *data to NULL. */
@@ -178,6 +187,14 @@ typedef struct cf_write_options {
     cf_mesh_format format;        /* CF_FORMAT_AUTO: from the extension */
     cf_ply_encoding ply_encoding; /* PLY only */
     int32_t write_uv;             /* write the mesh's texture coordinates if it has any (default 1) */
+    /* OBJ only (default none): `mtllib` lines, and `usemtl` before each run
+     * of faces of one material (material_names[face_materials[f]]; -1: the
+     * faces before the first usemtl). Names: no line breaks. */
+    int32_t material_library_count;
+    const char *const *material_libraries;
+    int32_t material_count;
+    const char *const *material_names;
+    const int32_t *face_materials;
 } cf_write_options;
 
 CF_API void cf_write_options_default(cf_write_options *options);

@@ -190,6 +190,14 @@ static void destroy_props(cf_context *ctx, cf_mesh_property *props, int32_t coun
     cfi_free(ctx, props, (size_t)count * sizeof *props);
 }
 
+void cfi_free_strings(cf_context *ctx, char **strings, int32_t count)
+{
+    if (!strings) return;
+    for (int32_t i = 0; i < count; ++i)
+        if (strings[i]) cfi_free(ctx, strings[i], strlen(strings[i]) + 1);
+    cfi_free(ctx, strings, (size_t)count * sizeof *strings);
+}
+
 void cf_mesh_data_destroy(cf_mesh_data **data)
 {
     if (!data || !*data) return;
@@ -202,6 +210,9 @@ void cf_mesh_data_destroy(cf_mesh_data **data)
     cfi_free(ctx, d->uv_triangles, 3 * nf * sizeof(int32_t));
     destroy_props(ctx, d->vertex_properties, d->vertex_property_count, d->vertex_count);
     destroy_props(ctx, d->face_properties, d->face_property_count, d->face_count);
+    cfi_free_strings(ctx, d->material_libraries, d->material_library_count);
+    cfi_free_strings(ctx, d->material_names, d->material_count);
+    cfi_free(ctx, d->face_materials, nf * sizeof(int32_t));
     cfi_free(ctx, d, sizeof *d);
     *data = NULL;
 }

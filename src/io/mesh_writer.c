@@ -60,6 +60,28 @@ static cf_status check_fields(cf_context *ctx, const char *path, const cf_field 
     return CF_OK;
 }
 
+/* A material name or library: non-empty, on one line. */
+static bool material_text_ok(const char *t) { return t && *t && !strpbrk(t, "\r\n"); }
+
+static cf_status check_materials(cf_context *ctx, const char *path, const cf_write_options *o, int32_t nf)
+{
+    if (o->material_library_count < 0 || (o->material_library_count > 0 && !o->material_libraries) ||
+        o->material_count < 0 || (o->material_count > 0 && !o->material_names) ||
+        (o->face_materials && o->material_count == 0))
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "%s: bad material lists", path);
+    for (int32_t l = 0; l < o->material_library_count; ++l)
+        if (!material_text_ok(o->material_libraries[l]))
+            return cfi_error(ctx, CF_ERR_INVALID_ARG, "%s: material library %d is empty or holds a line break", path, l);
+    for (int32_t m = 0; m < o->material_count; ++m)
+        if (!material_text_ok(o->material_names[m]))
+            return cfi_error(ctx, CF_ERR_INVALID_ARG, "%s: material %d's name is empty or holds a line break", path, m);
+    for (int32_t f = 0; o->face_materials && f < nf; ++f)
+        if (o->face_materials[f] < -1 || o->face_materials[f] >= o->material_count)
+            return cfi_error(ctx, CF_ERR_INVALID_ARG, "%s: face %d: material %d out of range (%d materials)", path, f,
+                             o->face_materials[f], o->material_count);
+    return CF_OK;
+}
+
 /* ---- texture coordinate layout ------------------------------------------------ */
 
 typedef enum uv_layout { UV_NONE = 0, UV_PER_VERTEX = 1, UV_PER_CORNER = 2 } uv_layout;
@@ -108,6 +130,7 @@ typedef struct write_job {
     int32_t nvf, nff;     /* vertex / face field counts */
     bool use_uv;
     uint8_t *uchar;       /* PLY: per field, 1 when it is written as uchar (a colour channel) */
+    const cf_write_options *opts;
 } write_job;
 
 /* A colour channel: named red, green, blue or alpha, and every value a
@@ -299,11 +322,17 @@ static cf_status write_obj(write_job *j)
     const int32_t *tri = cf_mesh_triangles(mesh), *uvt = cf_mesh_uv_triangles(mesh);
     const double *uv = cf_mesh_uv(mesh);
     fprintf(fp, "# written by curvflow %s: %d vertices, %d triangles\n", cf_version_string(), nv, nf);
+    const cf_write_options *o = j->opts;
+    for (int32_t l = 0; l < o->material_library_count; ++l) fprintf(fp, "mtllib %s\n", o->material_libraries[l]);
+    int32_t material = -1;
     for (int32_t v = 0; v < nv; ++v) fprintf(fp, "v %.17g %.17g %.17g\n", j->x[3 * v], j->x[3 * v + 1], j->x[3 * v + 2]);
     if (j->use_uv)
         for (int32_t t = 0; t < nuv; ++t) fprintf(fp, "vt %.17g %.17g\n", uv[2 * t], uv[2 * t + 1]);
     for (int32_t f = 0; f < nf; ++f) {
         const int32_t *c = tri + 3 * f;
+        if (o->face_materials && o->face_materials[f] != material && o->face_materials[f] >= 0)
+            fprintf(fp, "usemtl %s\n", o->material_names[o->face_materials[f]]);
+        if (o->face_materials) material = o->face_materials[f];
         if (j->use_uv) {
             const int32_t *t = uvt + 3 * f;
             fprintf(fp, "f %d/%d %d/%d %d/%d\n", c[0] + 1, t[0] + 1, c[1] + 1, t[1] + 1, c[2] + 1, t[2] + 1);
@@ -350,8 +379,9 @@ cf_status cf_write_mesh_file_ex(cf_context *ctx, const char *path, const cf_mesh
         opts.ply_encoding != CF_PLY_BINARY_BIG_ENDIAN)
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "%s: bad PLY encoding %d", path, (int)opts.ply_encoding);
     if ((st = check_fields(ctx, path, fields, field_count)) != CF_OK) return st;
+    if ((st = check_materials(ctx, path, &opts, cf_mesh_face_count(mesh))) != CF_OK) return st;
     write_job j = {ctx, path, mesh, positions ? positions : cf_mesh_positions(mesh), fields, field_count, 0, 0,
-                   false, NULL};
+                   false, NULL, &opts};
     int32_t nv = cf_mesh_vertex_count(mesh);
     for (int32_t v = 0; v < nv; ++v)
         if (!isfinite(j.x[3 * v]) || !isfinite(j.x[3 * v + 1]) || !isfinite(j.x[3 * v + 2]))

@@ -1,7 +1,9 @@
 /*
  * Wavefront OBJ reader: v, vt and f (v, v/vt, v/vt/vn, v//vn, negative
  * relative indices); polygons are fan-triangulated with one warning.
- * vn, vp, comments, o, g, s, usemtl, mtllib are ignored; any other keyword
+ * mtllib and usemtl are kept (cf_mesh_data's materials: the libraries, the
+ * names, each triangle's material), so that writers can carry them.
+ * vn, vp, comments, o, g, s are ignored; any other keyword
  * is ignored with a single warning, as are v lines with values beyond
  * x y z [w] / x y z r g b. Lines come from the shared text input
  * (io/text.h: any length, byte-order mark skipped, NUL bytes refused).
@@ -41,7 +43,12 @@ typedef struct obj_reader {
     bool uv_dropped;
     bool warned_unknown;
     bool warned_vertex_values;
+    cfi_buf libraries;      /* char *: the text after each mtllib */
+    cfi_buf materials;      /* char *: usemtl names, in order of first use */
+    cfi_buf face_materials; /* int32_t per triangle, from the first usemtl on (earlier ones -1) */
+    int32_t material;       /* current: index into materials, -1 before any usemtl */
 } obj_reader;
+
 
 /* Records an error for the current line; a malformed (CF_ERR_PARSE) last
  * line without newline becomes CF_ERR_TRUNCATED. */
@@ -57,6 +64,123 @@ static cf_status fail(obj_reader *r, const obj_line *ln, cf_status st, const cha
         return cfi_error(r->ctx, CF_ERR_TRUNCATED, "%s: line %lld: %s (file ends inside a %s line: truncated?)",
                          r->name, (long long)ln->number, msg, ln->keyword);
     return cfi_error(r->ctx, st, "%s: line %lld: %s", r->name, (long long)ln->number, msg);
+}
+
+/* The rest of the line after the keyword, without surrounding blanks, as a
+ * new string in *out (NULL for an empty rest). */
+static cf_status line_rest(obj_reader *r, obj_line *ln, char **out)
+{
+    const char *s = ln->p, *e = ln->end;
+    while (s < e && cfi_is_space(*s)) ++s;
+    while (e > s && cfi_is_space(e[-1])) --e;
+    *out = NULL;
+    if (s == e) return CF_OK;
+    char *t = cfi_malloc(r->ctx, (size_t)(e - s) + 1);
+    if (!t) return CF_ERR_NOMEM;
+    memcpy(t, s, (size_t)(e - s));
+    t[e - s] = '\0';
+    *out = t;
+    return CF_OK;
+}
+
+static cf_status push_string(obj_reader *r, cfi_buf *b, char *t)
+{
+    if (b->count == b->cap && cfi_buf_reserve(r->ctx, b, 1) != CF_OK) {
+        cfi_free(r->ctx, t, strlen(t) + 1);
+        return CF_ERR_NOMEM;
+    }
+    ((char **)b->data)[b->count++] = t;
+    return CF_OK;
+}
+
+static cf_status parse_mtllib(obj_reader *r, obj_line *ln)
+{
+    char *t = NULL;
+    cf_status st = line_rest(r, ln, &t);
+    if (st != CF_OK || !t) return st == CF_OK ? fail(r, ln, CF_ERR_PARSE, "mtllib without a file name") : st;
+    return push_string(r, &r->libraries, t);
+}
+
+/* usemtl NAME: the material of the faces that follow. The triangles before
+ * the first usemtl get -1. */
+static cf_status parse_usemtl(obj_reader *r, obj_line *ln)
+{
+    char *t = NULL;
+    cf_status st = line_rest(r, ln, &t);
+    if (st != CF_OK || !t) return st == CF_OK ? fail(r, ln, CF_ERR_PARSE, "usemtl without a material name") : st;
+    char **names = r->materials.data;
+    for (size_t i = 0; i < r->materials.count; ++i)
+        if (strcmp(names[i], t) == 0) {
+            cfi_free(r->ctx, t, strlen(t) + 1);
+            r->material = (int32_t)i;
+            return CF_OK;
+        }
+    if (r->material < 0 && r->materials.count == 0) { /* the first: earlier triangles have none */
+        size_t nf = r->b.triangles.count / 3;
+        if (nf > 0 && cfi_buf_reserve(r->ctx, &r->face_materials, nf) != CF_OK) {
+            cfi_free(r->ctx, t, strlen(t) + 1);
+            return CF_ERR_NOMEM;
+        }
+        for (size_t f = 0; f < nf; ++f) ((int32_t *)r->face_materials.data)[r->face_materials.count++] = -1;
+    }
+    st = push_string(r, &r->materials, t);
+    if (st == CF_OK) r->material = (int32_t)(r->materials.count - 1);
+    return st;
+}
+
+static void free_string_buf(cf_context *ctx, cfi_buf *b)
+{
+    char **s = b->data;
+    for (size_t i = 0; i < b->count; ++i) cfi_free(ctx, s[i], strlen(s[i]) + 1);
+    cfi_buf_free(ctx, b);
+}
+
+static void free_materials(obj_reader *r)
+{
+    free_string_buf(r->ctx, &r->libraries);
+    free_string_buf(r->ctx, &r->materials);
+    cfi_buf_free(r->ctx, &r->face_materials);
+}
+
+/* The buffer's elements as an array of exactly its count (NULL for none). */
+static cf_status take_exact(cf_context *ctx, cfi_buf *b, void **out)
+{
+    *out = NULL;
+    if (b->count == 0) {
+        cfi_buf_free(ctx, b);
+        return CF_OK;
+    }
+    if (b->count != b->cap) {
+        void *p = cfi_realloc(ctx, b->data, b->cap * b->elem, b->count * b->elem);
+        if (!p) return CF_ERR_NOMEM;
+        b->data = p;
+        b->cap = b->count;
+    }
+    *out = b->data;
+    b->data = NULL;
+    b->count = b->cap = 0;
+    return CF_OK;
+}
+
+/* Moves the materials into the finished data (freeing them on failure). */
+static cf_status give_materials(obj_reader *r, cf_mesh_data *d)
+{
+    int32_t nl = (int32_t)r->libraries.count, nm = (int32_t)r->materials.count;
+    void *libs = NULL, *names = NULL, *faces = NULL;
+    if (take_exact(r->ctx, &r->libraries, &libs) != CF_OK || take_exact(r->ctx, &r->materials, &names) != CF_OK ||
+        (nm > 0 && take_exact(r->ctx, &r->face_materials, &faces) != CF_OK)) {
+        cfi_free_strings(r->ctx, libs, nl);
+        cfi_free_strings(r->ctx, names, nm);
+        free_materials(r);
+        return CF_ERR_NOMEM;
+    }
+    cfi_buf_free(r->ctx, &r->face_materials);
+    d->material_library_count = libs ? nl : 0;
+    d->material_libraries = libs;
+    d->material_count = names ? nm : 0;
+    d->material_names = names;
+    d->face_materials = faces;
+    return CF_OK;
 }
 
 /* Next whitespace-separated token of the line; false at the end. */
@@ -217,6 +341,12 @@ static cf_status parse_face(obj_reader *r, obj_line *ln)
         } else if (corners >= 2) {
             if (r->b.triangles.count / 3 >= CFI_MAX_ELEMENTS) return fail(r, ln, CF_ERR_PARSE, "too many faces");
             if (cfi_push_int3(ctx, &r->b.triangles, v0, vp, v) != CF_OK) return CF_ERR_NOMEM;
+            if (r->materials.count > 0) {
+                if (r->face_materials.count == r->face_materials.cap &&
+                    cfi_buf_reserve(ctx, &r->face_materials, 1) != CF_OK)
+                    return CF_ERR_NOMEM;
+                ((int32_t *)r->face_materials.data)[r->face_materials.count++] = r->material;
+            }
             if (r->uv_mode == 1 && !r->uv_dropped && face_uv == 1 &&
                 cfi_push_int3(ctx, &r->b.uv_triangles, t0, tp, t) != CF_OK)
                 return CF_ERR_NOMEM;
@@ -252,6 +382,10 @@ cf_status cfi_read_obj(cf_context *ctx, const char *buf, size_t size, const char
     r.ctx = ctx;
     r.name = name;
     r.uv_mode = -1;
+    r.material = -1;
+    cfi_buf_init(&r.libraries, sizeof(char *));
+    cfi_buf_init(&r.materials, sizeof(char *));
+    cfi_buf_init(&r.face_materials, sizeof(int32_t));
     cf_status st = cfi_text_check_nul(ctx, name, buf, 0, size);
     if (st != CF_OK) return st;
     cfi_builder_init(&r.b, ctx);
@@ -275,8 +409,14 @@ cf_status cfi_read_obj(cf_context *ctx, const char *buf, size_t size, const char
         } else if (is_word(s, e, "f")) {
             ln.keyword = "face";
             st = parse_face(&r, &ln);
+        } else if (is_word(s, e, "mtllib")) {
+            ln.keyword = "mtllib";
+            st = parse_mtllib(&r, &ln);
+        } else if (is_word(s, e, "usemtl")) {
+            ln.keyword = "usemtl";
+            st = parse_usemtl(&r, &ln);
         } else if (is_word(s, e, "vn") || is_word(s, e, "vp") || is_word(s, e, "o") || is_word(s, e, "g") ||
-                   is_word(s, e, "s") || is_word(s, e, "usemtl") || is_word(s, e, "mtllib")) {
+                   is_word(s, e, "s")) {
             continue;
         } else if (!r.warned_unknown) {
             cfi_log(ctx, CF_LOG_WARNING, "%s: line %lld: unknown keyword '%.*s' ignored (further ones silently)", name,
@@ -286,6 +426,7 @@ cf_status cfi_read_obj(cf_context *ctx, const char *buf, size_t size, const char
     }
     if (st != CF_OK) {
         cfi_builder_free(&r.b);
+        free_materials(&r);
         return st;
     }
     if (r.uv_mode == 1 && !r.uv_dropped) {
@@ -298,5 +439,12 @@ cf_status cfi_read_obj(cf_context *ctx, const char *buf, size_t size, const char
     if (r.b.polygon_count > 0)
         cfi_log(ctx, CF_LOG_WARNING, "%s: %d polygons with more than 3 vertices were fan-triangulated", name,
                 r.b.polygon_count);
-    return cfi_builder_finish(&r.b, out);
+    st = cfi_builder_finish(&r.b, out);
+    if (st != CF_OK) {
+        free_materials(&r);
+        return st;
+    }
+    st = give_materials(&r, *out);
+    if (st != CF_OK) cf_mesh_data_destroy(out);
+    return st;
 }

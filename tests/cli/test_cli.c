@@ -4,7 +4,7 @@
  * 3 numerical failure), messages, that outputs exist and parse, and that no
  * temporary files are left behind (atomic writes).
  */
-#define _POSIX_C_SOURCE 200809L
+#define _XOPEN_SOURCE 700 /* POSIX 2008 with XSI: realpath */
 #include "curvflow/generate.h"
 #include "curvflow/io.h"
 #include "curvflow/mesh.h"
@@ -402,6 +402,52 @@ static void test_flow_keeps_properties(void)
     free(red);
     free(quality);
     free(label);
+    cf_mesh_destroy(&m);
+    cf_context_destroy(&ctx);
+}
+
+/* An OBJ's materials reach the output OBJ: its mtllib (made absolute when
+ * the output goes to another directory, so it still names the library
+ * beside the input) and a usemtl before each run of faces; a PLY output
+ * says it drops them (session 29: a textured OBJ lost its material). */
+static void test_flow_keeps_materials(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *m = NULL;
+    CHECK_OK(ctx, cf_generate_bumpy_sphere(ctx, 2, 0.2, 5u, &m));
+    if (!m) return;
+    int32_t nf = cf_mesh_face_count(m);
+    int32_t *mat = malloc((size_t)nf * sizeof *mat);
+    for (int32_t f = 0; f < nf; ++f) mat[f] = f < nf / 2 ? 0 : 1;
+    const char *libs[1] = {"skin.mtl"}, *names[2] = {"skin", "spots"};
+    cf_write_options o;
+    cf_write_options_default(&o);
+    o.material_library_count = 1, o.material_libraries = libs;
+    o.material_count = 2, o.material_names = names, o.face_materials = mat;
+    CHECK_OK(ctx, cf_write_mesh_file_ex(ctx, cft_in_dir("textured.obj"), m, NULL, NULL, 0, &o));
+    CHECK_RUN("flow textured.obj -o textured_out.obj --method spin-willmore --steps 2 -q", 0);
+    cf_mesh_data *d = NULL;
+    CHECK_OK(ctx, cf_read_mesh_file(ctx, cft_in_dir("textured_out.obj"), &d));
+    CHECK(d && d->material_library_count == 1 && strcmp(d->material_libraries[0], "skin.mtl") == 0);
+    CHECK(d && d->material_count == 2 && d->face_materials && memcmp(d->face_materials, mat, (size_t)nf * 4) == 0);
+    CHECK(d && d->uv_count > 0); /* and the texture coordinates, as before */
+    cf_mesh_data_destroy(&d);
+    CHECK(cft_shell("mkdir -p other") == 0);
+    CHECK_RUN("flow textured.obj -o other/textured_out.obj --method spin-willmore --steps 2 -q", 0);
+    CHECK_OK(ctx, cf_read_mesh_file(ctx, cft_in_dir("other/textured_out.obj"), &d));
+    char expected[1200];
+    char *dir = realpath(cft_dir, NULL);
+    snprintf(expected, sizeof expected, "%s/skin.mtl", dir ? dir : cft_dir);
+    free(dir);
+    CHECK(d && d->material_library_count == 1 && strcmp(d->material_libraries[0], expected) == 0);
+    cf_mesh_data_destroy(&d);
+    EXPECT("flow textured.obj -o textured_out.ply --method spin-willmore --steps 1 -q", 0,
+           "textured_out.ply: the materials of textured.obj (mtllib / usemtl) are not written: only OBJ holds them");
+    static const char *const made[] = {"textured.obj", "textured_out.obj", "textured_out.ply",
+                                       "other/textured_out.obj"};
+    for (size_t i = 0; i < sizeof made / sizeof made[0]; ++i) remove(cft_in_dir(made[i]));
+    rmdir(cft_in_dir("other"));
+    free(mat);
     cf_mesh_destroy(&m);
     cf_context_destroy(&ctx);
 }
@@ -917,6 +963,7 @@ int main(void)
     CFT_RUN(test_info);
     CFT_RUN(test_flow);
     CFT_RUN(test_flow_keeps_properties);
+    CFT_RUN(test_flow_keeps_materials);
     CFT_RUN(test_compare);
     CFT_RUN(test_demo);
     CFT_RUN(test_render);

@@ -65,6 +65,11 @@ static void test_polygons_and_ignored_lines(void)
         /* fan (v0, v_i, v_i+1) */
         static const int32_t expect[18] = {0, 1, 2, 0, 2, 3, 0, 3, 4, 0, 4, 1, 0, 1, 2, 1, 2, 3};
         CHECK(memcmp(d->triangles, expect, sizeof expect) == 0);
+        /* the materials are kept (session 29): every triangle is 'red' */
+        CHECK(d->material_library_count == 1 && strcmp(d->material_libraries[0], "a.mtl") == 0);
+        CHECK(d->material_count == 1 && strcmp(d->material_names[0], "red") == 0);
+        for (int32_t f = 0; d->face_materials && f < d->face_count; ++f) CHECK(d->face_materials[f] == 0);
+        CHECK(d->face_materials != NULL);
     }
     /* one warning for the unknown keywords, one for the polygons */
     CHECK(log.warnings == 2);
@@ -237,6 +242,75 @@ static void test_allocation_failures(void)
     cf_context_destroy(&ctx);
 }
 
+/* mtllib and usemtl are kept (session 29: they were dropped, so a textured
+ * OBJ's output lost its material): libraries in file order, names in order
+ * of first use, -1 for the faces before the first usemtl, each triangle of
+ * a fan-triangulated polygon with its polygon's material; written back as
+ * OBJ with a usemtl before each run; a bad list is refused. */
+static void test_materials(void)
+{
+    cf_context *ctx = cft_context();
+    const char *text = "mtllib  lib one.mtl \nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\n"
+                       "f 1 2 5\nusemtl skin\nf 1 4 3 2\nusemtl eye\nf 2 3 5\nusemtl skin\nf 3 4 5\nmtllib two.mtl\n"
+                       "f 4 1 5\n";
+    cf_mesh_data *d = read_text(ctx, text);
+    static const int32_t expect[6] = {-1, 0, 0, 1, 0, 0};
+    if (d) {
+        CHECK(d->face_count == 6);
+        CHECK(d->material_library_count == 2 && strcmp(d->material_libraries[0], "lib one.mtl") == 0 &&
+              strcmp(d->material_libraries[1], "two.mtl") == 0);
+        CHECK(d->material_count == 2 && strcmp(d->material_names[0], "skin") == 0 &&
+              strcmp(d->material_names[1], "eye") == 0);
+        CHECK(d->face_materials && memcmp(d->face_materials, expect, sizeof expect) == 0);
+        cf_mesh_desc desc;
+        cf_mesh_data_desc(d, &desc);
+        cf_mesh *m = NULL;
+        CHECK_OK(ctx, cf_mesh_create(ctx, &desc, &m));
+        cf_write_options o;
+        cf_write_options_default(&o);
+        o.material_library_count = d->material_library_count;
+        o.material_libraries = (const char *const *)d->material_libraries;
+        o.material_count = d->material_count;
+        o.material_names = (const char *const *)d->material_names;
+        o.face_materials = d->face_materials;
+        const char *path = cft_temp_path(".obj");
+        if (m) CHECK_OK(ctx, cf_write_mesh_file_ex(ctx, path, m, NULL, NULL, 0, &o));
+        size_t size = 0;
+        char *written = iot_read(path, &size);
+        CHECK(written && strstr(written, "mtllib lib one.mtl\nmtllib two.mtl\n"));
+        CHECK(written && strstr(written, "f 1 2 5\nusemtl skin\nf 1 4 3\nf 1 3 2\nusemtl eye\nf 2 3 5\nusemtl skin\n"
+                                         "f 3 4 5\nf 4 1 5\n"));
+        free(written);
+        cf_mesh_data *back = NULL;
+        CHECK_OK(ctx, cf_read_mesh_file(ctx, path, &back));
+        CHECK(back && back->face_materials && memcmp(back->face_materials, expect, sizeof expect) == 0);
+        cf_mesh_data_destroy(&back);
+        /* a face material out of range, a name with a line break: refused */
+        int32_t bad[6] = {0, 0, 2, 0, 0, 0};
+        o.face_materials = bad;
+        if (m) CHECK_STATUS(cf_write_mesh_file_ex(ctx, path, m, NULL, NULL, 0, &o), CF_ERR_INVALID_ARG);
+        CHECK(strstr(cf_context_message(ctx), "face 2: material 2 out of range (2 materials)") != NULL);
+        const char *broken[2] = {"skin", "e\nye"};
+        o.face_materials = d->face_materials;
+        o.material_names = broken;
+        if (m) CHECK_STATUS(cf_write_mesh_file_ex(ctx, path, m, NULL, NULL, 0, &o), CF_ERR_INVALID_ARG);
+        remove(path);
+        cf_mesh_destroy(&m);
+    }
+    cf_mesh_data_destroy(&d);
+    /* usemtl without a name */
+    cf_mesh_data *e = NULL;
+    const char *bad_text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl\nf 1 2 3\n";
+    CHECK_STATUS(cf_read_mesh_memory(ctx, bad_text, strlen(bad_text), CF_FORMAT_OBJ, "m.obj", &e), CF_ERR_PARSE);
+    CHECK(strstr(cf_context_message(ctx), "m.obj: line 4: usemtl without a material name") != NULL);
+    /* allocation failures while reading materials: NOMEM, nothing leaked */
+    cf_context_set_log(ctx, NULL, NULL, CF_LOG_ERROR);
+    int failures = iot_nomem_sweep(ctx, text, strlen(text), CF_FORMAT_OBJ);
+    CHECK(failures >= 8);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 int main(void)
 {
     CFT_RUN(test_face_syntaxes);
@@ -247,5 +321,6 @@ int main(void)
     CFT_RUN(test_round_trip_with_uv_and_csv);
     CFT_RUN(test_load_mesh);
     CFT_RUN(test_allocation_failures);
+    CFT_RUN(test_materials);
     return cft_finish();
 }

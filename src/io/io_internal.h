@@ -24,6 +24,9 @@ void cfi_buf_init(cfi_buf *b, size_t elem);
 /* Makes room for `extra` more elements (geometric growth). CF_ERR_NOMEM on failure. */
 cf_status cfi_buf_reserve(cf_context *ctx, cfi_buf *b, size_t extra);
 void cfi_buf_free(cf_context *ctx, cfi_buf *b);
+/* Hands over the buffer's elements as an array of exactly its count (NULL
+ * when empty) and leaves the buffer empty. CF_ERR_NOMEM on failure. */
+cf_status cfi_buf_take(cf_context *ctx, cfi_buf *b, void **out);
 /* Frees `count` NUL-terminated strings and their array (each allocated
  * through the context at strlen + 1 bytes); NULL is fine. */
 void cfi_free_strings(cf_context *ctx, char **strings, int32_t count);

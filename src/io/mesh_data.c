@@ -46,7 +46,7 @@ void cfi_buf_free(cf_context *ctx, cfi_buf *b)
 
 /* Detaches the buffer's array resized to exactly count elements (NULL when
  * empty). On failure the buffer is unchanged. */
-static cf_status buf_take(cf_context *ctx, cfi_buf *b, void **out)
+cf_status cfi_buf_take(cf_context *ctx, cfi_buf *b, void **out)
 {
     *out = NULL;
     if (b->count == 0) {
@@ -131,7 +131,7 @@ static cf_status take_props(cf_context *ctx, cfi_buf *props, int32_t *count_out,
     cfi_prop *p = props->data;
     for (size_t i = 0; i < props->count; ++i) {
         void *values = NULL;
-        if (buf_take(ctx, &p[i].values, &values) != CF_OK) return CF_ERR_NOMEM;
+        if (cfi_buf_take(ctx, &p[i].values, &values) != CF_OK) return CF_ERR_NOMEM;
         arr[i].values = values;
         arr[i].name = p[i].name;
         p[i].name = NULL;
@@ -150,19 +150,19 @@ cf_status cfi_builder_finish(cfi_mesh_builder *b, cf_mesh_data **out)
     d->context = ctx;
     int32_t nv = (int32_t)(b->positions.count / 3), nf = (int32_t)(b->triangles.count / 3);
     void *p = NULL;
-    if (buf_take(ctx, &b->positions, &p) != CF_OK) goto fail;
+    if (cfi_buf_take(ctx, &b->positions, &p) != CF_OK) goto fail;
     d->positions = p;
     d->vertex_count = nv;
-    if (buf_take(ctx, &b->triangles, &p) != CF_OK) goto fail;
+    if (cfi_buf_take(ctx, &b->triangles, &p) != CF_OK) goto fail;
     d->triangles = p;
     d->face_count = nf;
     if (b->uv.count > 0) {
         int32_t nuv = (int32_t)(b->uv.count / 2);
         if (b->uv_per_corner) {
-            if (buf_take(ctx, &b->uv_triangles, &p) != CF_OK) goto fail;
+            if (cfi_buf_take(ctx, &b->uv_triangles, &p) != CF_OK) goto fail;
             d->uv_triangles = p;
         }
-        if (buf_take(ctx, &b->uv, &p) != CF_OK) goto fail;
+        if (cfi_buf_take(ctx, &b->uv, &p) != CF_OK) goto fail;
         d->uv = p;
         d->uv_count = nuv;
     }

@@ -142,33 +142,14 @@ static void free_materials(obj_reader *r)
     cfi_buf_free(r->ctx, &r->face_materials);
 }
 
-/* The buffer's elements as an array of exactly its count (NULL for none). */
-static cf_status take_exact(cf_context *ctx, cfi_buf *b, void **out)
-{
-    *out = NULL;
-    if (b->count == 0) {
-        cfi_buf_free(ctx, b);
-        return CF_OK;
-    }
-    if (b->count != b->cap) {
-        void *p = cfi_realloc(ctx, b->data, b->cap * b->elem, b->count * b->elem);
-        if (!p) return CF_ERR_NOMEM;
-        b->data = p;
-        b->cap = b->count;
-    }
-    *out = b->data;
-    b->data = NULL;
-    b->count = b->cap = 0;
-    return CF_OK;
-}
-
 /* Moves the materials into the finished data (freeing them on failure). */
 static cf_status give_materials(obj_reader *r, cf_mesh_data *d)
 {
     int32_t nl = (int32_t)r->libraries.count, nm = (int32_t)r->materials.count;
     void *libs = NULL, *names = NULL, *faces = NULL;
-    if (take_exact(r->ctx, &r->libraries, &libs) != CF_OK || take_exact(r->ctx, &r->materials, &names) != CF_OK ||
-        (nm > 0 && take_exact(r->ctx, &r->face_materials, &faces) != CF_OK)) {
+    if (cfi_buf_take(r->ctx, &r->libraries, &libs) != CF_OK ||
+        cfi_buf_take(r->ctx, &r->materials, &names) != CF_OK ||
+        (nm > 0 && cfi_buf_take(r->ctx, &r->face_materials, &faces) != CF_OK)) {
         cfi_free_strings(r->ctx, libs, nl);
         cfi_free_strings(r->ctx, names, nm);
         free_materials(r);

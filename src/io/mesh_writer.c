@@ -71,7 +71,8 @@ static cf_status check_materials(cf_context *ctx, const char *path, const cf_wri
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "%s: bad material lists", path);
     for (int32_t l = 0; l < o->material_library_count; ++l)
         if (!material_text_ok(o->material_libraries[l]))
-            return cfi_error(ctx, CF_ERR_INVALID_ARG, "%s: material library %d is empty or holds a line break", path, l);
+            return cfi_error(ctx, CF_ERR_INVALID_ARG, "%s: material library %d is empty or holds a line break", path,
+                             l);
     for (int32_t m = 0; m < o->material_count; ++m)
         if (!material_text_ok(o->material_names[m]))
             return cfi_error(ctx, CF_ERR_INVALID_ARG, "%s: material %d's name is empty or holds a line break", path, m);
@@ -178,7 +179,8 @@ static cf_status write_ply_body(write_job *j, FILE *fp, cf_ply_encoding enc, int
     fputs("property double x\nproperty double y\nproperty double z\n", fp);
     if (layout == UV_PER_VERTEX) fputs("property double u\nproperty double v\n", fp);
     for (int32_t i = 0; i < j->field_count; ++i)
-        if (j->fields[i].location == CF_FIELD_VERTEX) fprintf(fp, "property %s %s\n", ply_type(j, i), j->fields[i].name);
+        if (j->fields[i].location == CF_FIELD_VERTEX)
+            fprintf(fp, "property %s %s\n", ply_type(j, i), j->fields[i].name);
     fprintf(fp, "element face %d\nproperty list uchar int vertex_indices\n", nf);
     if (layout == UV_PER_CORNER) fputs("property list uchar double texcoord\n", fp);
     for (int32_t i = 0; i < j->field_count; ++i)

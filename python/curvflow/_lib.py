@@ -49,7 +49,9 @@ class MeshData(Structure):
                 ("triangles", POINTER(c_int32)), ("uv_count", c_int32), ("uv", POINTER(c_double)),
                 ("uv_triangles", POINTER(c_int32)), ("vertex_property_count", c_int32),
                 ("vertex_properties", POINTER(MeshProperty)), ("face_property_count", c_int32),
-                ("face_properties", POINTER(MeshProperty)), ("polygon_count", c_int32), ("context", c_void_p)]
+                ("face_properties", POINTER(MeshProperty)), ("polygon_count", c_int32), ("context", c_void_p),
+                ("material_library_count", c_int32), ("material_libraries", c_void_p), ("material_count", c_int32),
+                ("material_names", c_void_p), ("face_materials", c_void_p)]
 
 
 class MeshReport(Structure):
@@ -65,7 +67,11 @@ class Field(Structure):
 
 
 class WriteOptions(Structure):
-    _fields_ = [("format", c_int), ("ply_encoding", c_int), ("write_uv", c_int32)]
+    # cf_write_options (curvflow/io.h) field for field: cf_write_options_default writes the whole
+    # C struct, so a shorter one here would be overwritten past its end
+    _fields_ = [("format", c_int), ("ply_encoding", c_int), ("write_uv", c_int32),
+                ("material_library_count", c_int32), ("material_libraries", c_void_p),
+                ("material_count", c_int32), ("material_names", c_void_p), ("face_materials", c_void_p)]
 
 
 class Stats(Structure):

@@ -4,7 +4,6 @@
 
 #include "curvflow/io.h"
 
-#include <ctype.h>
 #include <errno.h>
 #include <jansson.h>
 #include <limits.h>
@@ -222,20 +221,6 @@ int cli_load_mesh(cf_context *ctx, const char *path, cf_mesh **out)
     return CLI_EXIT_OK;
 }
 
-/* What cf_io's writer accepts as a field name (1-128 of [A-Za-z0-9_.-],
- * not a name the writer uses itself). */
-static bool writable_field_name(const char *name)
-{
-    static const char *const reserved[] = {"x", "y", "z", "u", "v", "vertex_indices", "texcoord", "index"};
-    size_t n = strlen(name);
-    if (n == 0 || n > 128) return false;
-    for (size_t i = 0; i < n; ++i)
-        if (!isalnum((unsigned char)name[i]) && name[i] != '_' && name[i] != '.' && name[i] != '-') return false;
-    for (size_t i = 0; i < sizeof reserved / sizeof reserved[0]; ++i)
-        if (strcmp(name, reserved[i]) == 0) return false;
-    return true;
-}
-
 int cli_load_mesh_properties(cf_context *ctx, const char *path, cf_mesh **out, cli_properties *props)
 {
     memset(props, 0, sizeof *props);
@@ -253,6 +238,11 @@ int cli_load_mesh_properties(cf_context *ctx, const char *path, cf_mesh **out, c
         return code == CLI_EXIT_USAGE ? CLI_EXIT_INPUT : code;
     }
     int32_t total = data->vertex_property_count + data->face_property_count;
+    if (total == 0 && data->material_library_count == 0 && data->material_count == 0) {
+        /* nothing to carry: not a second copy of the mesh for the whole run */
+        cf_mesh_data_destroy(&data);
+        return CLI_EXIT_OK;
+    }
     props->data = data;
     props->fields = total > 0 ? calloc((size_t)total, sizeof *props->fields) : NULL;
     if (total > 0 && !props->fields) {
@@ -273,7 +263,7 @@ int cli_load_mesh_properties(cf_context *ctx, const char *path, cf_mesh **out, c
         for (size_t k = 0; k < sizeof normals / sizeof normals[0]; ++k)
             normal = normal || strcmp(p->name, normals[k]) == 0;
         if (normal) continue;
-        if (!writable_field_name(p->name)) {
+        if (!cf_field_name_valid(p->name)) {
             size_t n = strlen(skipped);
             snprintf(skipped + n, sizeof skipped - n, "%s'%s'", n ? ", " : "", p->name);
             continue;
@@ -336,14 +326,13 @@ static char *canonical_dir(const char *path)
  * so that it still names the file beside the input) and each face's usemtl.
  * Another output format holds none: a warning. Returns the strings made
  * (*made, free with free_made). */
-static void material_options(cf_context *ctx, const cli_properties *props, const char *input, const char *output,
-                             cf_write_options *o, char ***made)
+static void material_options(const cli_properties *props, const char *input, const char *output,
+                             cf_mesh_format format, cf_write_options *o, char ***made)
 {
     *made = NULL;
     const cf_mesh_data *d = props ? props->data : NULL;
     if (!d || (d->material_library_count == 0 && d->material_count == 0)) return;
-    cf_mesh_format format;
-    if (cf_mesh_format_from_path(ctx, output, &format) != CF_OK || format != CF_FORMAT_OBJ) {
+    if (format != CF_FORMAT_OBJ) {
         fprintf(stderr,
                 "curvflow: warning: %s: the materials of %s (mtllib / usemtl) are not written: only OBJ holds them\n",
                 output, input);
@@ -404,8 +393,9 @@ int cli_run_flow_and_write(cf_context *ctx, cf_flow *flow, cli_progress *progres
     /* the input's properties ride along: the connectivity is the input's */
     const cf_field *fields = props ? props->fields : NULL;
     int32_t nfields = props ? props->count : 0;
-    cf_mesh_format format;
-    if (nfields > 0 && cf_mesh_format_from_path(ctx, output, &format) == CF_OK && format == CF_FORMAT_OFF) {
+    cf_mesh_format format = CF_FORMAT_AUTO; /* the output's name was checked before the run */
+    (void)cf_mesh_format_from_path(ctx, output, &format);
+    if (nfields > 0 && format == CF_FORMAT_OFF) {
         fprintf(stderr, "curvflow: warning: %s: OFF holds no properties: the %d of %s are not written (write PLY)\n",
                 output, (int)nfields, input);
         nfields = 0;
@@ -413,7 +403,7 @@ int cli_run_flow_and_write(cf_context *ctx, cf_flow *flow, cli_progress *progres
     cf_write_options wo;
     cf_write_options_default(&wo);
     char **made = NULL;
-    material_options(ctx, props, input, output, &wo, &made);
+    material_options(props, input, output, format, &wo, &made);
     cf_status st = cf_write_mesh_file_ex(ctx, output, mesh, cf_flow_positions(flow), fields, nfields, &wo);
     free_made(made);
     if (st != CF_OK) {

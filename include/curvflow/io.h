@@ -217,6 +217,12 @@ CF_API void cf_write_options_default(cf_write_options *options);
 CF_API cf_status cf_write_mesh_file(cf_context *ctx, const char *path, const cf_mesh *mesh,
                                     const double *positions, const cf_field *fields, int32_t field_count);
 
+/* 1 when `name` may name a written field: 1-128 characters of
+ * [A-Za-z0-9_.-], not one the writers use themselves (x y z u v
+ * vertex_indices texcoord index); 0 otherwise (also for NULL). The rule
+ * cf_write_mesh_file checks, for callers that pass fields on from a file. */
+CF_API int32_t cf_field_name_valid(const char *name);
+
 /* As cf_write_mesh_file with options (NULL = defaults). */
 CF_API cf_status cf_write_mesh_file_ex(cf_context *ctx, const char *path, const cf_mesh *mesh,
                                        const double *positions, const cf_field *fields, int32_t field_count,

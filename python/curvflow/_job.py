@@ -14,16 +14,12 @@ the library would), "hang:NAME" makes it sleep (for --timeout).
 import json
 import math
 import os
-import re
 import signal
 import sys
 import time
 
-# what the writer accepts as a field name (docs/io.md)
-_WRITABLE_NAME = re.compile(r"[A-Za-z0-9_.-]{1,128}")
-_RESERVED_NAMES = {"x", "y", "z", "u", "v", "vertex_indices", "texcoord", "index",
-                   # vertex normals describe the input's shape, not the result's
-                   "nx", "ny", "nz", "normal_x", "normal_y", "normal_z"}
+# vertex normals describe the input's shape, not the result's
+_NORMALS = {"nx", "ny", "nz", "normal_x", "normal_y", "normal_z"}
 
 
 def _fault(name):
@@ -97,7 +93,8 @@ def run(spec):
         keep = {}
         for where in ("vertex_fields", "face_fields"):
             keep[where] = {k: v for k, v in (extras.get(where) or {}).items()
-                           if fmt != "off" and _WRITABLE_NAME.fullmatch(k) and k not in _RESERVED_NAMES}
+                           if fmt != "off" and k not in _NORMALS
+                           and curvflow._lib.lib().cf_field_name_valid(k.encode())}
         curvflow.save(path, state, F, uv=extras["uv"], uv_faces=extras["uv_faces"], **keep)
         res["output" if res["status"] == "ok" else "last_good"] = path
         res["willmore_over_4pi_after"] = _closed_willmore(state, F)

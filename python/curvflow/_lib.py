@@ -259,6 +259,7 @@ def _declare(lib):
     f("cf_write_mesh_file_ex", S, P, c_char_p, P, P, POINTER(Field), I32, POINTER(WriteOptions))
     f("cf_write_text_file_atomic", S, P, c_char_p, c_char_p, c_size_t)
     f("cf_mesh_format_from_path", S, P, c_char_p, POINTER(c_int))
+    f("cf_field_name_valid", I32, c_char_p)
     # flow.h
     f("cf_flow_kind_name", c_char_p, c_int)
     f("cf_flow_kind_description", c_char_p, c_int)

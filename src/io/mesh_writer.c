@@ -22,9 +22,10 @@ void cf_write_options_default(cf_write_options *options)
 
 /* ---- argument checks ------------------------------------------------------ */
 
-static bool field_name_ok(const char *name)
+int32_t cf_field_name_valid(const char *name)
 {
     static const char *const reserved[] = {"x", "y", "z", "u", "v", "vertex_indices", "texcoord", "index"};
+    if (!name) return 0;
     size_t n = strlen(name);
     if (n == 0 || n > 128) return false;
     for (size_t i = 0; i < n; ++i) {
@@ -44,7 +45,7 @@ static cf_status check_fields(cf_context *ctx, const char *path, const cf_field 
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "%s: bad field list (%d fields)", path, count);
     for (int32_t i = 0; i < count; ++i) {
         const cf_field *f = &fields[i];
-        if (!f->name || !field_name_ok(f->name))
+        if (!cf_field_name_valid(f->name))
             return cfi_error(ctx, CF_ERR_INVALID_ARG,
                              "%s: field %d: name '%s' must be 1-128 characters of [A-Za-z0-9_.-] and not one of "
                              "x y z u v vertex_indices texcoord index",

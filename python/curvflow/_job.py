@@ -41,6 +41,21 @@ def _closed_willmore(V, F):
     return i.get("willmore_over_4pi")
 
 
+def _materials(extras, input_path, out_dir, fmt):
+    """An OBJ input's materials for an OBJ output, as the CLI's flow carries
+    them: a relative `mtllib` made absolute (it names a file beside the
+    input) unless the output goes to the input's directory. Other output
+    formats have no place for them."""
+    if fmt != "obj" or not (extras.get("material_libraries") or extras.get("material_names")):
+        return {}
+    in_dir = os.path.dirname(os.path.realpath(input_path))
+    same = in_dir == os.path.realpath(out_dir)
+    libs = [lib if same or os.path.isabs(lib) else os.path.join(in_dir, lib)
+            for lib in extras["material_libraries"]]
+    return {"material_libraries": libs, "material_names": extras["material_names"],
+            "face_materials": extras["face_materials"]}
+
+
 def run(spec):
     import curvflow
     t0 = time.perf_counter()
@@ -95,7 +110,8 @@ def run(spec):
             keep[where] = {k: v for k, v in (extras.get(where) or {}).items()
                            if fmt != "off" and k not in _NORMALS
                            and curvflow._lib.lib().cf_field_name_valid(k.encode())}
-        curvflow.save(path, state, F, uv=extras["uv"], uv_faces=extras["uv_faces"], **keep)
+        curvflow.save(path, state, F, uv=extras["uv"], uv_faces=extras["uv_faces"], **keep,
+                      **_materials(extras, spec["input"], out_dir, fmt))
         res["output" if res["status"] == "ok" else "last_good"] = path
         res["willmore_over_4pi_after"] = _closed_willmore(state, F)
         try:

@@ -606,8 +606,14 @@ def _extras(d):
           for i in range(d.vertex_property_count)}
     ff = {d.face_properties[i].name.decode(): _copy_out(d.face_properties[i].values, (d.face_count,))
           for i in range(d.face_property_count)}
+    libs = ctypes.cast(d.material_libraries, POINTER(ctypes.c_char_p))
+    names = ctypes.cast(d.material_names, POINTER(ctypes.c_char_p))
     return {"uv": uv, "uv_faces": uv_faces, "vertex_fields": vf, "face_fields": ff,
-            "polygons_triangulated": d.polygon_count}
+            "polygons_triangulated": d.polygon_count,
+            "material_libraries": [os.fsdecode(libs[i]) for i in range(d.material_library_count)],
+            "material_names": [os.fsdecode(names[i]) for i in range(d.material_count)],
+            "face_materials": (_copy_out(ctypes.cast(d.face_materials, POINTER(c_int32)), (d.face_count,))
+                               if d.face_materials else None)}
 
 
 def load(path, validate=True):
@@ -617,7 +623,11 @@ def load(path, validate=True):
     fan-triangulated), extras a dict with "uv" ((k, 2) texture coordinates
     or None), "uv_faces" ((m, 3) indices into uv for per-corner coordinates,
     None when they are per vertex or absent), "vertex_fields" / "face_fields"
-    ({name: array} from PLY properties) and "polygons_triangulated".
+    ({name: array} from PLY properties), "polygons_triangulated" and an OBJ's
+    materials: "material_libraries" (the text after each `mtllib`, as written),
+    "material_names" (in order of first `usemtl`) and "face_materials" ((m,)
+    int32 indices into material_names, -1 before the first `usemtl`; None
+    when the file has none). Pass the last three to save() to keep them.
     With validate=True (default) the mesh is checked as every command checks
     it (InvalidMeshError naming the file and element, e.g. a non-manifold
     edge); validate=False returns what the file holds (syntax, index range
@@ -640,7 +650,7 @@ _PLY_ENCODINGS = {"binary": 0, "binary_little_endian": 0, "binary_big_endian": 1
 
 
 def save(path, V, F, fields=None, uv=None, uv_faces=None, vertex_fields=None, face_fields=None,
-         ply_encoding="binary"):
+         ply_encoding="binary", material_libraries=None, material_names=None, face_materials=None):
     """Writes a mesh atomically (temporary file + rename: an existing file is
     replaced only by a complete one). Format from the extension.
 
@@ -650,7 +660,12 @@ def save(path, V, F, fields=None, uv=None, uv_faces=None, vertex_fields=None, fa
     <stem>.vertex.csv / <stem>.face.csv (17 digits), OFF refuses them.
     uv: texture coordinates, (n, 2) per vertex or (k, 2) with uv_faces
     (m, 3) per corner. Positions are written exactly (binary PLY, or %.17g
-    text). The mesh is validated first (InvalidMeshError)."""
+    text). The mesh is validated first (InvalidMeshError).
+    OBJ only: material_libraries (list of str, one `mtllib` line each),
+    material_names (list of str) and face_materials ((m,) indices into
+    material_names, -1 for none: a `usemtl` line starts each run of faces of
+    one material), as load() returns them. Another format refuses them
+    (UsageError): it has no place for them."""
     V = _vertices(V)
     F = _faces(F)
     if uv is not None:
@@ -692,13 +707,53 @@ def save(path, V, F, fields=None, uv=None, uv_faces=None, vertex_fields=None, fa
                              % (name, expected, "vertex" if loc == 0 else "face", a.shape[0]))
         keep.append((name.encode(), a))
         cfields[i].name, cfields[i].location, cfields[i].values = keep[-1][0], loc, a.ctypes.data
+    materials = _materials(path, m, material_libraries, material_names, face_materials)
     with _Context() as ctx:
         mesh = ctx.mesh(V, F, uv, uv_faces)
         wo = _lib.WriteOptions()
         ctx.L.cf_write_options_default(byref(wo))
         wo.ply_encoding = _PLY_ENCODINGS[ply_encoding]
+        if materials:
+            (libs, nlibs), (names, nnames), fm = materials
+            wo.material_library_count, wo.material_libraries = nlibs, ctypes.cast(libs, c_void_p)
+            wo.material_count, wo.material_names = nnames, ctypes.cast(names, c_void_p)
+            wo.face_materials = fm.ctypes.data if fm is not None else None
         st = ctx.L.cf_write_mesh_file_ex(ctx.ptr, os.fsencode(path), mesh, None, cfields, len(entries), byref(wo))
         ctx.check(st, os.fspath(path))
+
+
+def _text_list(values, name):
+    if not all(isinstance(v, str) for v in values):
+        raise TypeError("%s: expected a list of str, got %r" % (name, values))
+    out = (ctypes.c_char_p * max(len(values), 1))()
+    for i, v in enumerate(values):
+        out[i] = os.fsencode(v)  # the array keeps its own references to the bytes
+    return out, len(values)
+
+
+def _materials(path, face_count, libraries, names, face_materials):
+    """save()'s material arguments as the C lists, or None when there are none."""
+    for value, name in ((libraries, "material_libraries"), (names, "material_names")):
+        if isinstance(value, (str, bytes)):
+            raise TypeError("%s: expected a list of str, got %r" % (name, value))
+    libraries, names = list(libraries or []), list(names or [])
+    if not libraries and not names and face_materials is None:
+        return None
+    ext = os.path.splitext(os.fspath(path))[1].lower()
+    if ext != ".obj":
+        raise UsageError("%s: materials (mtllib / usemtl) can only be written to an OBJ file" % os.fspath(path))
+    fm = None
+    if face_materials is not None:
+        if not names:
+            raise UsageError("face_materials given without material_names")
+        fm = _array(face_materials, "face_materials", None, "iu", np.int32, "integer material indices (int32)")
+        if fm.shape[0] != face_count:
+            raise UsageError("face_materials has %d entries, F has %d faces" % (fm.shape[0], face_count))
+        bad = np.flatnonzero((fm < -1) | (fm >= len(names)))
+        if bad.size:
+            raise UsageError("face_materials: face %d has material %d, expected -1 .. %d"
+                             % (bad[0], fm[bad[0]], len(names) - 1))
+    return _text_list(libraries, "material_libraries"), _text_list(names, "material_names"), fm
 
 
 def write_text_atomic(path, text):

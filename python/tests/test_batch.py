@@ -199,6 +199,18 @@ def test_file_names_with_spaces(tmp_path, meshes):
     assert np.array_equal(extras["vertex_fields"]["red"], red)
     assert np.array_equal(extras["face_fields"]["label"], label)
     assert not np.array_equal(V2, V)
+    # and an OBJ's materials to an OBJ result, the library named from the output directory
+    Vi, Fi, _ = curvflow.load(str(meshes["icosphere"]))
+    mat = (np.arange(len(Fi)) % 2).astype(np.int32)
+    curvflow.save(str(d / "textured.obj"), Vi, Fi, material_libraries=["skin.mtl"], material_names=["a", "b"],
+                  face_materials=mat)
+    m.write_text("path\ntextured.obj\n", encoding="utf-8")
+    proc = run_batch(m, "--method", "spin-willmore", "--steps", "1", "--out", out, "--workers", "1",
+                     "--format", "obj")
+    assert proc.returncode == 0, proc.stderr
+    _, _, extras = curvflow.load(str(out / "textured.obj"))
+    assert extras["material_libraries"] == [os.path.join(os.path.realpath(d), "skin.mtl")]
+    assert extras["material_names"] == ["a", "b"] and np.array_equal(extras["face_materials"], mat)
     m.write_text("path,name\nscan 01 (left).obj,my scan\n", encoding="utf-8")
     proc = run_batch(m, "--method", "implicit-mcf", "--out", out)
     assert proc.returncode == 1 and "name 'my scan' is not a plain file stem (letters, digits" in proc.stderr

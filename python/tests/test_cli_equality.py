@@ -239,6 +239,47 @@ def test_load_extras_and_save_round_trip(cli, meshes, tmp_path):
         assert info["texture_coordinates"] == "per-corner" and info["vertices"] == len(V)
 
 
+def test_obj_materials_round_trip_and_cli(cli, meshes, tmp_path):
+    """An OBJ's mtllib / usemtl survive load -> save exactly as the CLI's
+    flow keeps them (the same file both ways); other formats refuse them;
+    bad material lists are refused naming what is wrong, writing nothing."""
+    V, F, extras = curvflow.load(meshes["icosphere"])
+    assert extras["material_libraries"] == [] and extras["material_names"] == [] and extras["face_materials"] is None
+    mat = np.where(np.arange(len(F)) < 7, -1, np.arange(len(F)) % 3).astype(np.int32)
+    names = ["skin", "spots", "ünïcode name"]
+    src = tmp_path / "textured.obj"
+    curvflow.save(src, V, F, material_libraries=["skin.mtl", "sub dir/b.mtl"], material_names=names,
+                  face_materials=mat)
+    _, _, ex = curvflow.load(src)
+    # names come back in order of first use (the file holds no other order): compare each face's name
+    assert ex["material_libraries"] == ["skin.mtl", "sub dir/b.mtl"] and sorted(ex["material_names"]) == sorted(names)
+    assert ex["face_materials"].dtype == np.int32
+    assert [ex["material_names"][i] if i >= 0 else None for i in ex["face_materials"]] == \
+        [names[i] if i >= 0 else None for i in mat]
+    # the CLI's flow output and Python's flow + save of the same run are the same file
+    run_cli(cli, "flow", src, "-o", tmp_path / "cli.obj", "--method", "spin-willmore", "--steps", "1", "-q")
+    state, _ = curvflow.flow(V, F, "spin-willmore", steps=1)
+    keep = {k: ex[k] for k in ("material_libraries", "material_names", "face_materials")}
+    curvflow.save(tmp_path / "py.obj", state, F, **keep)
+    assert (tmp_path / "cli.obj").read_bytes() == (tmp_path / "py.obj").read_bytes()
+    before = sorted(p.name for p in tmp_path.iterdir())
+    with pytest.raises(curvflow.UsageError, match=r"x\.ply: materials \(mtllib / usemtl\) can only be written to an OBJ"):
+        curvflow.save(tmp_path / "x.ply", V, F, **keep)
+    with pytest.raises(curvflow.UsageError, match=r"face 7 has material 4, expected -1 \.\. 2"):
+        curvflow.save(tmp_path / "x.obj", V, F, material_names=names, face_materials=mat + (np.arange(len(F)) == 7) * 3)
+    with pytest.raises(curvflow.UsageError, match=r"face_materials has 3 entries, F has 320 faces"):
+        curvflow.save(tmp_path / "x.obj", V, F, material_names=names, face_materials=[0, 1, 2])
+    with pytest.raises(curvflow.UsageError, match=r"face_materials given without material_names"):
+        curvflow.save(tmp_path / "x.obj", V, F, face_materials=mat)
+    with pytest.raises(curvflow.UsageError, match=r"material 1's name is empty or holds a line break"):
+        curvflow.save(tmp_path / "x.obj", V, F, material_names=["a", "b\nusemtl c"], face_materials=mat * 0)
+    with pytest.raises(TypeError, match=r"material_names: expected a list of str, got 'skin'"):
+        curvflow.save(tmp_path / "x.obj", V, F, material_names="skin")
+    with pytest.raises(TypeError, match=r"material_libraries: expected a list of str"):
+        curvflow.save(tmp_path / "x.obj", V, F, material_libraries=[b"skin.mtl"])
+    assert sorted(p.name for p in tmp_path.iterdir()) == before  # nothing written
+
+
 def test_save_refuses_fields_in_off(meshes, tmp_path):
     V, F, _ = curvflow.load(meshes["icosphere"])
     with pytest.raises(curvflow.UnsupportedError, match="off"):

@@ -395,10 +395,25 @@ int cli_run_flow_and_write(cf_context *ctx, cf_flow *flow, cli_progress *progres
     int32_t nfields = props ? props->count : 0;
     cf_mesh_format format = CF_FORMAT_AUTO; /* the output's name was checked before the run */
     (void)cf_mesh_format_from_path(ctx, output, &format);
-    if (nfields > 0 && format == CF_FORMAT_OFF) {
-        fprintf(stderr, "curvflow: warning: %s: OFF holds no properties: the %d of %s are not written (write PLY)\n",
-                output, (int)nfields, input);
-        nfields = 0;
+    cf_field *off_fields = NULL;
+    if (nfields > 0 && format == CF_FORMAT_OFF) { /* OFF holds colours only */
+        uint8_t *writable = calloc((size_t)nfields, 1);
+        off_fields = calloc((size_t)nfields, sizeof *off_fields);
+        int32_t kept = 0;
+        if (writable && off_fields) {
+            (void)cf_off_fields_writable(fields, nfields, cf_mesh_vertex_count(mesh), cf_mesh_face_count(mesh),
+                                         writable);
+            for (int32_t i = 0; i < nfields; ++i)
+                if (writable[i]) off_fields[kept++] = fields[i];
+        }
+        if (kept < nfields)
+            fprintf(stderr,
+                    "curvflow: warning: %s: OFF holds only colours: %d of the %d properties of %s are not written "
+                    "(write PLY)\n",
+                    output, (int)(nfields - kept), (int)nfields, input);
+        free(writable);
+        fields = off_fields;
+        nfields = kept;
     }
     cf_write_options wo;
     cf_write_options_default(&wo);
@@ -406,6 +421,7 @@ int cli_run_flow_and_write(cf_context *ctx, cf_flow *flow, cli_progress *progres
     material_options(props, input, output, format, &wo, &made);
     cf_status st = cf_write_mesh_file_ex(ctx, output, mesh, cf_flow_positions(flow), fields, nfields, &wo);
     free_made(made);
+    free(off_fields);
     if (st != CF_OK) {
         int wcode = cli_fail(ctx, output, st);
         if (code == CLI_EXIT_OK) code = wcode == CLI_EXIT_USAGE ? CLI_EXIT_INPUT : wcode;

@@ -209,8 +209,13 @@ CF_API void cf_write_options_default(cf_write_options *options);
  *    CSV files next to it: "<stem>.vertex.csv" and "<stem>.face.csv"
  *    (stem = path without its extension), header "index,<name>,...", one
  *    row per element with values in %.17g. Each CSV is written atomically
- *    before the OBJ.
- *  - OFF: positions and triangles only; fields are rejected (CF_ERR_UNSUPPORTED).
+ *    before the OBJ. Vertex fields red, green and blue with values in
+ *    [0, 255] go on the v lines instead, as `v x y z r g b` in [0, 1].
+ *  - OFF: positions and triangles, and colours only (cf_off_fields_writable):
+ *    vertex fields red green blue [alpha] as `COFF` (x y z r g b a), face
+ *    fields red green blue [alpha] after each face's indices, as whole
+ *    numbers 0..255 (rounded; alpha 255 when absent); any other field is
+ *    rejected (CF_ERR_UNSUPPORTED).
  * Statuses: CF_ERR_INVALID_ARG (NULL, bad field), CF_ERR_NONFINITE
  * (non-finite position), CF_ERR_IO (with the path and the system's reason),
  * CF_ERR_UNSUPPORTED, CF_ERR_NOMEM. */
@@ -222,6 +227,15 @@ CF_API cf_status cf_write_mesh_file(cf_context *ctx, const char *path, const cf_
  * vertex_indices texcoord index); 0 otherwise (also for NULL). The rule
  * cf_write_mesh_file checks, for callers that pass fields on from a file. */
 CF_API int32_t cf_field_name_valid(const char *name);
+
+/* Which of `fields` an OFF file holds: the colour channels red, green,
+ * blue [, alpha] of vertices or of faces, each with values in [0, 255], when
+ * red, green and blue of that location are all given. Sets writable[i] to
+ * 1 or 0 (writable may be NULL) and returns the number of 1s. For callers
+ * that pass a file's properties on to an OFF output (the rest would be
+ * refused). */
+CF_API int32_t cf_off_fields_writable(const cf_field *fields, int32_t field_count, int32_t vertex_count,
+                                      int32_t face_count, uint8_t *writable);
 
 /* As cf_write_mesh_file with options (NULL = defaults). */
 CF_API cf_status cf_write_mesh_file_ex(cf_context *ctx, const char *path, const cf_mesh *mesh,

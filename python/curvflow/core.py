@@ -623,7 +623,8 @@ def load(path, validate=True):
     fan-triangulated), extras a dict with "uv" ((k, 2) texture coordinates
     or None), "uv_faces" ((m, 3) indices into uv for per-corner coordinates,
     None when they are per vertex or absent), "vertex_fields" / "face_fields"
-    ({name: array} from PLY properties), "polygons_triangulated" and an OBJ's
+    ({name: array} from PLY properties, and the colours of an OBJ or OFF as
+    red / green / blue [/ alpha] in 0..255), "polygons_triangulated" and an OBJ's
     materials: "material_libraries" (the text after each `mtllib`, as written),
     "material_names" (in order of first `usemtl`) and "face_materials" ((m,)
     int32 indices into material_names, -1 before the first `usemtl`; None

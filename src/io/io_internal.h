@@ -55,6 +55,19 @@ void cfi_builder_free(cfi_mesh_builder *b);
 /* Adds a property with a copy of `name` (len bytes, not NUL-terminated);
  * *index receives its position. */
 cf_status cfi_builder_add_prop(cfi_mesh_builder *b, bool face, const char *name, size_t len, int32_t *index);
+/* How a file wrote its colour values. */
+typedef enum cfi_colour_range {
+    CFI_COLOURS_UNIT,  /* 0..1 (OFF colours written as floats; values past the range clamped) */
+    CFI_COLOURS_BYTES, /* 0..255 (OFF colours written as integers) */
+    CFI_COLOURS_GUESS  /* 0..1 when every value lies in [0, 1], else 0..255 (OBJ's `v x y z r g b`) */
+} cfi_colour_range;
+/* Adds the colour channels red, green, blue [, alpha] (channels = 3 or 4)
+ * as properties, from `values`: n elements' values interleaved, as the file
+ * wrote them. Values in 0..1 are scaled to [0, 255] and rounded: the PLY
+ * convention, which the writers and viewers use; 0..255 values are kept as
+ * written. */
+cf_status cfi_builder_add_colours(cfi_mesh_builder *b, bool face, int channels, const double *values, size_t n,
+                                  cfi_colour_range range);
 /* Moves the collected arrays into a new cf_mesh_data (exact-size copies)
  * and frees the builder. On failure the builder is freed too. */
 cf_status cfi_builder_finish(cfi_mesh_builder *b, cf_mesh_data **out);

@@ -8,6 +8,7 @@
 
 #include <stdio.h>
 #include <stdlib.h>
+#include <math.h>
 #include <string.h>
 
 /* ---- growable buffer ---------------------------------------------------- */
@@ -118,6 +119,32 @@ cf_status cfi_builder_add_prop(cfi_mesh_builder *b, bool face, const char *name,
     cfi_buf_init(&p->values, sizeof(double));
     *index = (int32_t)props->count;
     props->count++;
+    return CF_OK;
+}
+
+cf_status cfi_builder_add_colours(cfi_mesh_builder *b, bool face, int channels, const double *values, size_t n,
+                                  cfi_colour_range range)
+{
+    static const char *const names[4] = {"red", "green", "blue", "alpha"};
+    bool unit = range == CFI_COLOURS_UNIT;
+    if (range == CFI_COLOURS_GUESS) {
+        unit = true;
+        for (size_t i = 0; i < n * (size_t)channels; ++i) unit = unit && values[i] >= 0.0 && values[i] <= 1.0;
+    }
+    for (int c = 0; c < channels; ++c) {
+        int32_t index = 0;
+        cf_status st = cfi_builder_add_prop(b, face, names[c], strlen(names[c]), &index);
+        if (st != CF_OK) return st;
+        cfi_buf *dst = &((cfi_prop *)(face ? b->fprops.data : b->vprops.data))[index].values;
+        if (cfi_buf_reserve(b->ctx, dst, n) != CF_OK) return CF_ERR_NOMEM;
+        double *out = dst->data;
+        for (size_t i = 0; i < n; ++i) {
+            double v = values[i * (size_t)channels + (size_t)c];
+            if (unit) v = floor(255.0 * (v < 0.0 ? 0.0 : v > 1.0 ? 1.0 : v) + 0.5); /* a 0..1 colour past its range: its end */
+            out[i] = v;
+        }
+        dst->count = n;
+    }
     return CF_OK;
 }
 

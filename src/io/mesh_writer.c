@@ -133,6 +133,7 @@ typedef struct write_job {
     bool use_uv;
     uint8_t *uchar;       /* PLY: per field, 1 when it is written as uchar (a colour channel) */
     const cf_write_options *opts;
+    int32_t obj_rgb[3];   /* OBJ: the fields written as `v x y z r g b` (red, green, blue), or -1 */
 } write_job;
 
 /* A colour channel: named red, green, blue or alpha, and every value a
@@ -268,6 +269,42 @@ static cf_status write_ply(write_job *j, cf_ply_encoding enc)
 
 /* ---- OBJ + CSV, OFF ------------------------------------------------------------ */
 
+/* The index of the field of `location` named `name`, or -1. */
+static int32_t find_field(const cf_field *fields, int32_t count, cf_field_location location, const char *name)
+{
+    for (int32_t i = 0; i < count; ++i)
+        if (fields[i].location == location && fields[i].name && strcmp(fields[i].name, name) == 0) return i;
+    return -1;
+}
+
+static bool in_colour_range(const cf_field *f, int32_t n)
+{
+    for (int32_t k = 0; k < n; ++k)
+        if (!(f->values[k] >= 0.0 && f->values[k] <= 255.0)) return false;
+    return true;
+}
+
+static bool is_obj_colour(const write_job *j, int32_t i)
+{
+    return i == j->obj_rgb[0] || i == j->obj_rgb[1] || i == j->obj_rgb[2];
+}
+
+/* Vertex fields red, green and blue with values in [0, 255] (the PLY
+ * convention, which the readers use) are written in the OBJ itself, as
+ * `v x y z r g b` with r g b in [0, 1], where viewers read vertex colours;
+ * the CSV files get the other fields. */
+static void find_obj_colours(write_job *j)
+{
+    static const char *const names[3] = {"red", "green", "blue"};
+    int32_t nv = cf_mesh_vertex_count(j->mesh);
+    for (int c = 0; c < 3; ++c) {
+        j->obj_rgb[c] = find_field(j->fields, j->field_count, CF_FIELD_VERTEX, names[c]);
+        if (j->obj_rgb[c] >= 0 && !in_colour_range(&j->fields[j->obj_rgb[c]], nv)) j->obj_rgb[c] = -1;
+    }
+    if (j->obj_rgb[0] < 0 || j->obj_rgb[1] < 0 || j->obj_rgb[2] < 0) j->obj_rgb[0] = j->obj_rgb[1] = j->obj_rgb[2] = -1;
+    else j->nvf -= 3;
+}
+
 static cf_status write_csv(write_job *j, const char *csv_path, cf_field_location loc, int32_t n)
 {
     cf_context *ctx = j->ctx;
@@ -276,12 +313,12 @@ static cf_status write_csv(write_job *j, const char *csv_path, cf_field_location
     if (st != CF_OK) return st;
     fputs("index", af.fp);
     for (int32_t i = 0; i < j->field_count; ++i)
-        if (j->fields[i].location == loc) fprintf(af.fp, ",%s", j->fields[i].name);
+        if (j->fields[i].location == loc && !is_obj_colour(j, i)) fprintf(af.fp, ",%s", j->fields[i].name);
     fputc('\n', af.fp);
     for (int32_t e = 0; e < n; ++e) {
         fprintf(af.fp, "%d", e);
         for (int32_t i = 0; i < j->field_count; ++i)
-            if (j->fields[i].location == loc) fprintf(af.fp, ",%.17g", j->fields[i].values[e]);
+            if (j->fields[i].location == loc && !is_obj_colour(j, i)) fprintf(af.fp, ",%.17g", j->fields[i].values[e]);
         fputc('\n', af.fp);
     }
     return cfi_atomic_commit(ctx, &af);
@@ -315,6 +352,7 @@ static cf_status write_obj_sidecars(write_job *j)
 static cf_status write_obj(write_job *j)
 {
     cf_context *ctx = j->ctx;
+    find_obj_colours(j);
     cf_status st = write_obj_sidecars(j);
     if (st != CF_OK) return st;
     cfi_atomic_file af;
@@ -328,7 +366,13 @@ static cf_status write_obj(write_job *j)
     const cf_write_options *o = j->opts;
     for (int32_t l = 0; l < o->material_library_count; ++l) fprintf(fp, "mtllib %s\n", o->material_libraries[l]);
     int32_t material = -1;
-    for (int32_t v = 0; v < nv; ++v) fprintf(fp, "v %.17g %.17g %.17g\n", j->x[3 * v], j->x[3 * v + 1], j->x[3 * v + 2]);
+    for (int32_t v = 0; v < nv; ++v) {
+        fprintf(fp, "v %.17g %.17g %.17g", j->x[3 * v], j->x[3 * v + 1], j->x[3 * v + 2]);
+        if (j->obj_rgb[0] >= 0)
+            fprintf(fp, " %.17g %.17g %.17g", j->fields[j->obj_rgb[0]].values[v] / 255.0,
+                    j->fields[j->obj_rgb[1]].values[v] / 255.0, j->fields[j->obj_rgb[2]].values[v] / 255.0);
+        fputc('\n', fp);
+    }
     if (j->use_uv)
         for (int32_t t = 0; t < nuv; ++t) fprintf(fp, "vt %.17g %.17g\n", uv[2 * t], uv[2 * t + 1]);
     for (int32_t f = 0; f < nf; ++f) {
@@ -346,20 +390,80 @@ static cf_status write_obj(write_job *j)
     return cfi_atomic_commit(ctx, &af);
 }
 
+/* The colour channels of one location that OFF holds: rgba[0..3] field
+ * indices (alpha -1 when absent), all -1 when red, green and blue are not
+ * all there in range. */
+static void off_colour_fields(const cf_field *fields, int32_t count, cf_field_location location, int32_t n,
+                              int32_t rgba[4])
+{
+    static const char *const names[4] = {"red", "green", "blue", "alpha"};
+    for (int c = 0; c < 4; ++c) {
+        rgba[c] = find_field(fields, count, location, names[c]);
+        if (rgba[c] >= 0 && !in_colour_range(&fields[rgba[c]], n)) rgba[c] = -1;
+    }
+    if (rgba[0] < 0 || rgba[1] < 0 || rgba[2] < 0) rgba[0] = rgba[1] = rgba[2] = rgba[3] = -1;
+}
+
+int32_t cf_off_fields_writable(const cf_field *fields, int32_t field_count, int32_t vertex_count, int32_t face_count,
+                               uint8_t *writable)
+{
+    int32_t v[4] = {-1, -1, -1, -1}, f[4] = {-1, -1, -1, -1}, n = 0;
+    if (fields && field_count > 0) {
+        off_colour_fields(fields, field_count, CF_FIELD_VERTEX, vertex_count, v);
+        off_colour_fields(fields, field_count, CF_FIELD_FACE, face_count, f);
+    }
+    for (int32_t i = 0; fields && i < field_count; ++i) {
+        bool w = false;
+        for (int c = 0; c < 4; ++c) w = w || i == v[c] || i == f[c];
+        if (writable) writable[i] = w;
+        n += w;
+    }
+    return n;
+}
+
+/* A colour channel's value as OFF writes it: a whole number 0..255
+ * (integers read back as 0..255, floats would be read as 0..1). */
+static long off_channel(const write_job *j, int32_t field, int32_t k)
+{
+    return field < 0 ? 255L : lround(j->fields[field].values[k]);
+}
+
 static cf_status write_off(write_job *j)
 {
     cf_context *ctx = j->ctx;
-    if (j->field_count > 0)
-        return cfi_error(ctx, CF_ERR_UNSUPPORTED, "%s: OFF cannot hold fields (write PLY, or OBJ with CSV files)",
-                         j->path);
+    int32_t nv = cf_mesh_vertex_count(j->mesh), nf = cf_mesh_face_count(j->mesh);
+    int32_t v[4], f[4];
+    off_colour_fields(j->fields, j->field_count, CF_FIELD_VERTEX, nv, v);
+    off_colour_fields(j->fields, j->field_count, CF_FIELD_FACE, nf, f);
+    for (int32_t i = 0; i < j->field_count; ++i) {
+        bool colour = false;
+        for (int c = 0; c < 4; ++c) colour = colour || i == v[c] || i == f[c];
+        if (!colour)
+            return cfi_error(ctx, CF_ERR_UNSUPPORTED,
+                             "%s: OFF holds only colours (red green blue [alpha] of vertices or faces, in [0, 255]); "
+                             "field '%s' cannot be written (write PLY, or OBJ with CSV files)",
+                             j->path, j->fields[i].name);
+    }
     cfi_atomic_file af;
     cf_status st = cfi_atomic_open(ctx, j->path, &af);
     if (st != CF_OK) return st;
-    int32_t nv = cf_mesh_vertex_count(j->mesh), nf = cf_mesh_face_count(j->mesh);
     const int32_t *tri = cf_mesh_triangles(j->mesh);
-    fprintf(af.fp, "OFF\n%d %d 0\n", nv, nf);
-    for (int32_t v = 0; v < nv; ++v) fprintf(af.fp, "%.17g %.17g %.17g\n", j->x[3 * v], j->x[3 * v + 1], j->x[3 * v + 2]);
-    for (int32_t f = 0; f < nf; ++f) fprintf(af.fp, "3 %d %d %d\n", tri[3 * f], tri[3 * f + 1], tri[3 * f + 2]);
+    fprintf(af.fp, "%s\n%d %d 0\n", v[0] >= 0 ? "COFF" : "OFF", nv, nf);
+    for (int32_t k = 0; k < nv; ++k) {
+        fprintf(af.fp, "%.17g %.17g %.17g", j->x[3 * k], j->x[3 * k + 1], j->x[3 * k + 2]);
+        if (v[0] >= 0)
+            fprintf(af.fp, " %ld %ld %ld %ld", off_channel(j, v[0], k), off_channel(j, v[1], k),
+                    off_channel(j, v[2], k), off_channel(j, v[3], k));
+        fputc('\n', af.fp);
+    }
+    for (int32_t k = 0; k < nf; ++k) {
+        fprintf(af.fp, "3 %d %d %d", tri[3 * k], tri[3 * k + 1], tri[3 * k + 2]);
+        if (f[0] >= 0) {
+            fprintf(af.fp, " %ld %ld %ld", off_channel(j, f[0], k), off_channel(j, f[1], k), off_channel(j, f[2], k));
+            if (f[3] >= 0) fprintf(af.fp, " %ld", off_channel(j, f[3], k));
+        }
+        fputc('\n', af.fp);
+    }
     return cfi_atomic_commit(ctx, &af);
 }
 
@@ -384,7 +488,7 @@ cf_status cf_write_mesh_file_ex(cf_context *ctx, const char *path, const cf_mesh
     if ((st = check_fields(ctx, path, fields, field_count)) != CF_OK) return st;
     if ((st = check_materials(ctx, path, &opts, cf_mesh_face_count(mesh))) != CF_OK) return st;
     write_job j = {ctx, path, mesh, positions ? positions : cf_mesh_positions(mesh), fields, field_count, 0, 0,
-                   false, NULL, &opts};
+                   false, NULL, &opts, {-1, -1, -1}};
     int32_t nv = cf_mesh_vertex_count(mesh);
     for (int32_t v = 0; v < nv; ++v)
         if (!isfinite(j.x[3 * v]) || !isfinite(j.x[3 * v + 1]) || !isfinite(j.x[3 * v + 2]))

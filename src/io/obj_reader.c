@@ -3,6 +3,10 @@
  * relative indices); polygons are fan-triangulated with one warning.
  * mtllib and usemtl are kept (cf_mesh_data's materials: the libraries, the
  * names, each triangle's material), so that writers can carry them.
+ * Vertex colours `v x y z r g b` (the extension of MeshLab, ZBrush and most
+ * scanners) become the vertex properties red, green, blue (0..255, as PLY's;
+ * cfi_builder_add_colours) when every vertex has one; when only some do they
+ * are dropped with a warning (session 30; they were ignored silently).
  * vn, vp, comments, o, g, s are ignored; any other keyword
  * is ignored with a single warning, as are v lines with values beyond
  * x y z [w] / x y z r g b. Lines come from the shared text input
@@ -47,6 +51,9 @@ typedef struct obj_reader {
     cfi_buf materials;      /* char *: usemtl names, in order of first use */
     cfi_buf face_materials; /* int32_t per triangle, from the first usemtl on (earlier ones -1) */
     int32_t material;       /* current: index into materials, -1 before any usemtl */
+    cfi_buf colours;        /* double, r g b per vertex while every vertex so far has one */
+    int32_t coloured;       /* vertices with a colour */
+    bool colours_mixed;     /* some vertex has none: no colours are kept */
 } obj_reader;
 
 
@@ -190,20 +197,32 @@ static cf_status parse_vertex(obj_reader *r, obj_line *ln)
         if (!cfi_parse_double(s, e, &x[k]))
             return fail(r, ln, CF_ERR_PARSE, "vertex %d: bad number '%.*s'", r->nv, (int)(e - s > 40 ? 40 : e - s), s);
     }
-    /* x y z w (the spec) and x y z r g b (the colour extension of many
-     * writers) are ignored silently; any other count, or a token that is not
-     * a number, is input we would drop without a word: say so once. */
+    /* x y z w (the spec) is read, w ignored; x y z r g b (the colour
+     * extension of many writers) keeps its colour; any other count, or a
+     * token that is not a number, is input we would drop without a word: say
+     * so once. */
     int extra = 0;
     const char *first_s = NULL, *first_e = NULL;
     bool all_numbers = true;
+    double rgb[3] = {0.0, 0.0, 0.0};
     while (next_token(ln, &s, &e)) {
-        double v;
+        double v = 0.0;
         if (extra == 0) {
             first_s = s;
             first_e = e;
         }
         all_numbers = all_numbers && cfi_parse_double(s, e, &v);
+        if (extra < 3) rgb[extra] = v;
         ++extra;
+    }
+    bool coloured = extra == 3 && all_numbers && isfinite(rgb[0]) && isfinite(rgb[1]) && isfinite(rgb[2]);
+    r->coloured += coloured;
+    if (coloured && !r->colours_mixed && r->colours.count == 3 * (size_t)r->nv) {
+        if (cfi_buf_reserve(r->ctx, &r->colours, 3) != CF_OK) return CF_ERR_NOMEM;
+        memcpy((double *)r->colours.data + r->colours.count, rgb, sizeof rgb);
+        r->colours.count += 3;
+    } else if (coloured || r->colours.count > 0) {
+        r->colours_mixed = true; /* a vertex without colour after coloured ones, or the reverse */
     }
     if ((extra == 2 || extra > 3 || !all_numbers) && !r->warned_vertex_values) {
         cfi_log(r->ctx, CF_LOG_WARNING,
@@ -367,6 +386,7 @@ cf_status cfi_read_obj(cf_context *ctx, const char *buf, size_t size, const char
     cfi_buf_init(&r.libraries, sizeof(char *));
     cfi_buf_init(&r.materials, sizeof(char *));
     cfi_buf_init(&r.face_materials, sizeof(int32_t));
+    cfi_buf_init(&r.colours, sizeof(double));
     cf_status st = cfi_text_check_nul(ctx, name, buf, 0, size);
     if (st != CF_OK) return st;
     cfi_builder_init(&r.b, ctx);
@@ -405,6 +425,16 @@ cf_status cfi_read_obj(cf_context *ctx, const char *buf, size_t size, const char
             r.warned_unknown = true;
         }
     }
+    if (st == CF_OK && r.coloured > 0) {
+        if (r.coloured == r.nv && !r.colours_mixed)
+            st = cfi_builder_add_colours(&r.b, false, 3, r.colours.data, (size_t)r.nv, CFI_COLOURS_GUESS);
+        else
+            cfi_log(ctx, CF_LOG_WARNING,
+                    "%s: %d of %d vertices give a colour (v x y z r g b): colours are kept only when every vertex "
+                    "has one, these are dropped",
+                    name, r.coloured, r.nv);
+    }
+    cfi_buf_free(ctx, &r.colours);
     if (st != CF_OK) {
         cfi_builder_free(&r.b);
         free_materials(&r);

@@ -1,9 +1,18 @@
 /*
  * OFF reader (Geomview Object File Format, ASCII). Header keyword OFF with
- * the usual prefixes tolerated (ST, C, N: texture, colour, normal values per
- * vertex are ignored); the keyword itself may be omitted. Then
- * "nv nf [ne]", nv vertex lines "x y z [extra...]" and nf face lines
- * "n i_0 ... i_{n-1} [colour...]" with 0-based indices. '#' starts a
+ * the prefixes ST, C, N (texture coordinates, colour, normal per vertex,
+ * written after x y z in the order normal, colour, texture); the keyword
+ * itself may be omitted. Then "nv nf [ne]", nv vertex lines
+ * "x y z [extra...]" and nf face lines "n i_0 ... i_{n-1} [colour...]" with
+ * 0-based indices. Kept (session 30; they were dropped silently): a C
+ * header's vertex colours (3 or 4 values: the properties red green blue
+ * [alpha]), an ST header's texture coordinates (per-vertex uv), and face
+ * colours of 3 or 4 values when every face has them (each triangle of a
+ * polygon gets its colour). Colours written as integers are 0..255, as
+ * floats 0..1 (the spec), stored as 0..255 (cfi_builder_add_colours).
+ * Normals are ignored; a colour map index (one value) is ignored; extras
+ * that do not fit the header, or colours on some faces only, are dropped
+ * with one warning. '#' starts a
  * comment. The reader is line-based: one vertex or face per line, as every
  * OFF writer we know produces. Polygons are fan-triangulated.
  *
@@ -21,6 +30,19 @@
 #include <stdio.h>
 #include <string.h>
 
+/* What the vertex and face lines carry beyond positions and indices. */
+typedef struct off_extras {
+    int vertex_colour_channels; /* 3 or 4 when the vertex colours are kept, else 0 */
+    int vertex_colour_offset;   /* index of the first colour value after z */
+    int texcoord_offset;        /* index of s after z when texture coordinates are kept, else -1 */
+    bool vertex_colour_float;   /* a colour value was written as a float: 0..1 */
+    cfi_buf vertex_colours;     /* double, channels per vertex */
+    int face_colour_channels;   /* 0 before the first face, then 3 / 4; -1 when not kept */
+    bool face_colour_float;
+    int32_t faces_coloured;     /* faces that give 3 or 4 colour values */
+    cfi_buf face_colours;       /* double, channels per triangle */
+} off_extras;
+
 typedef struct off_reader {
     cf_context *ctx;
     const char *name;
@@ -29,6 +51,7 @@ typedef struct off_reader {
     const char *lp, *lend;      /* cursor and end of the current line (comment stripped) */
     int64_t line;
     bool last_unterminated;
+    off_extras x;
 } off_reader;
 
 static cf_status fail(off_reader *r, cf_status st, const char *fmt, ...) CF_PRINTF(3, 4);
@@ -170,6 +193,44 @@ static cf_status diagnose_face_line(off_reader *r, cf_status st, int64_t f, int6
                 (long long)(nv + extra));
 }
 
+/* A token written as an integer (no '.', exponent, inf or nan). */
+static bool integer_token(const char *s, const char *e)
+{
+    for (const char *c = s; c < e; ++c)
+        if (!(*c >= '0' && *c <= '9') && *c != '-' && *c != '+') return false;
+    return true;
+}
+
+/* The colour after a face's indices: kept while every face so far has one
+ * of the same number of values (3 or 4), for each of its `triangles`. */
+static cf_status read_face_colour(off_reader *r, int64_t triangles)
+{
+    off_extras *x = &r->x;
+    const char *s, *e;
+    double c[4];
+    int k = 0;
+    bool numbers = true;
+    while (next_token(r, &s, &e)) {
+        double v = 0.0;
+        numbers = numbers && cfi_parse_double(s, e, &v) && isfinite(v);
+        if (k < 4) c[k] = v;
+        x->face_colour_float = x->face_colour_float || !integer_token(s, e);
+        ++k;
+    }
+    bool coloured = numbers && (k == 3 || k == 4);
+    x->faces_coloured += coloured;
+    if (x->face_colour_channels == 0) x->face_colour_channels = coloured ? k : -1; /* the first face decides */
+    if (x->face_colour_channels < 0) return CF_OK;
+    if (!coloured || k != x->face_colour_channels) {
+        x->face_colour_channels = -1;
+        return CF_OK;
+    }
+    if (cfi_buf_reserve(r->ctx, &x->face_colours, (size_t)(k * triangles)) != CF_OK) return CF_ERR_NOMEM;
+    for (int64_t t = 0; t < triangles; ++t)
+        for (int i = 0; i < k; ++i) ((double *)x->face_colours.data)[x->face_colours.count++] = c[i];
+    return CF_OK;
+}
+
 static cf_status read_face(off_reader *r, cfi_mesh_builder *b, int64_t f, int64_t nv)
 {
     cf_context *ctx = r->ctx;
@@ -197,7 +258,99 @@ static cf_status read_face(off_reader *r, cfi_mesh_builder *b, int64_t f, int64_
         vp = (int32_t)v;
     }
     if (n > 3) b->polygon_count++;
+    return read_face_colour(r, n - 2);
+}
+
+/* The layout of the values after x y z from the header's prefixes and
+ * vertex 0's line (`extra` values): normal (N, 3), colour (C, 3 or 4),
+ * texture coordinates (ST, 2), in that order. What does not fit is dropped
+ * with a warning. */
+static void plan_vertex_extras(off_reader *r, bool has_st, bool has_c, bool has_n, int64_t extra)
+{
+    off_extras *x = &r->x;
+    x->texcoord_offset = -1;
+    if ((!has_st && !has_c) || extra < 0) return; /* extra < 0: vertex 0 lacks a coordinate, an error follows */
+    int64_t fixed = 3 * has_n + 2 * has_st, colour = has_c ? extra - fixed : 0;
+    if (extra < fixed || (has_c && colour != 3 && colour != 4) || (!has_c && extra != fixed)) {
+        cfi_log(r->ctx, CF_LOG_WARNING,
+                "%s: line %lld: vertex 0 has %lld values after x y z, which do not fit the header's %s%s%s "
+                "(normal 3, colour 3 or 4, texture 2): its colours and texture coordinates are not kept",
+                r->name, (long long)r->line, (long long)extra, has_st ? "ST" : "", has_c ? "C" : "",
+                has_n ? "N" : "");
+        return;
+    }
+    x->vertex_colour_channels = (int)colour;
+    x->vertex_colour_offset = 3 * has_n;
+    if (has_st) x->texcoord_offset = (int)(3 * has_n + colour);
+}
+
+/* Vertex i's colour and texture coordinates, after its x y z (the cursor
+ * is there). A line with another number of values than vertex 0's ends
+ * keeping them, with a warning. */
+static cf_status read_vertex_extras(off_reader *r, cfi_mesh_builder *b, int64_t i, int64_t extra)
+{
+    off_extras *x = &r->x;
+    if (x->vertex_colour_channels == 0 && x->texcoord_offset < 0) return CF_OK;
+    double v[16];
+    int64_t k = 0;
+    const char *s, *e;
+    bool numbers = true;
+    while (next_token(r, &s, &e)) {
+        double d = 0.0;
+        numbers = numbers && cfi_parse_double(s, e, &d) && isfinite(d);
+        if (k < 16) v[k] = d;
+        if (x->vertex_colour_channels > 0 && k >= x->vertex_colour_offset &&
+            k < x->vertex_colour_offset + x->vertex_colour_channels)
+            x->vertex_colour_float = x->vertex_colour_float || !integer_token(s, e);
+        ++k;
+    }
+    if (k != extra || !numbers) {
+        cfi_log(r->ctx, CF_LOG_WARNING,
+                "%s: line %lld: vertex %lld has %lld values after x y z, vertex 0 has %lld%s: the vertex colours and "
+                "texture coordinates are not kept",
+                r->name, (long long)r->line, (long long)i, (long long)k, (long long)extra,
+                numbers ? "" : " (or one is not a finite number)");
+        x->vertex_colour_channels = 0;
+        x->texcoord_offset = -1;
+        cfi_buf_free(r->ctx, &x->vertex_colours);
+        cfi_buf_free(r->ctx, &b->uv);
+        return CF_OK;
+    }
+    int c = x->vertex_colour_channels;
+    if (c > 0) {
+        if (cfi_buf_reserve(r->ctx, &x->vertex_colours, (size_t)c) != CF_OK) return CF_ERR_NOMEM;
+        memcpy((double *)x->vertex_colours.data + x->vertex_colours.count, v + x->vertex_colour_offset,
+               (size_t)c * sizeof(double));
+        x->vertex_colours.count += (size_t)c;
+    }
+    if (x->texcoord_offset >= 0) {
+        if (cfi_buf_reserve(r->ctx, &b->uv, 2) != CF_OK) return CF_ERR_NOMEM;
+        memcpy((double *)b->uv.data + b->uv.count, v + x->texcoord_offset, 2 * sizeof(double));
+        b->uv.count += 2;
+    }
     return CF_OK;
+}
+
+/* Moves the kept colours into properties; warns about face colours that
+ * only some faces give. */
+static cf_status finish_extras(off_reader *r, cfi_mesh_builder *b, int64_t nv, int64_t nf)
+{
+    off_extras *x = &r->x;
+    cf_status st = CF_OK;
+    if (x->vertex_colour_channels > 0 && x->vertex_colours.count == (size_t)(nv * x->vertex_colour_channels)) {
+        st = cfi_builder_add_colours(b, false, x->vertex_colour_channels, x->vertex_colours.data, (size_t)nv,
+                                     x->vertex_colour_float ? CFI_COLOURS_UNIT : CFI_COLOURS_BYTES);
+    }
+    size_t nt = b->triangles.count / 3;
+    if (st == CF_OK && x->face_colour_channels > 0 && x->face_colours.count == nt * (size_t)x->face_colour_channels)
+        st = cfi_builder_add_colours(b, true, x->face_colour_channels, x->face_colours.data, nt,
+                                     x->face_colour_float ? CFI_COLOURS_UNIT : CFI_COLOURS_BYTES);
+    else if (st == CF_OK && x->faces_coloured > 0)
+        cfi_log(r->ctx, CF_LOG_WARNING,
+                "%s: %d of %lld faces give a colour (3 or 4 values, the same count on every face): face colours are "
+                "kept only when every face has one, these are dropped",
+                r->name, x->faces_coloured, (long long)nf);
+    return st;
 }
 
 static cf_status read_body(off_reader *r, cfi_mesh_builder *b)
@@ -209,10 +362,16 @@ static cf_status read_body(off_reader *r, cfi_mesh_builder *b)
     if (!next_token(r, &s, &e)) return fail(r, CF_ERR_PARSE, "missing header");
     int64_t nv = 0, nf = 0;
     size_t len = (size_t)(e - s);
+    bool has_st = false, has_c = false, has_n = false;
     if (len >= 3 && cfi_word_eq(e - 3, 3, "OFF")) {
         for (const char *c = s; c < e - 3; ++c)
             if (!strchr("STCNstcn", *c))
                 return fail(r, CF_ERR_UNSUPPORTED, "unsupported OFF variant '%.*s'", tok_len(s, e), s);
+        has_st = len >= 5 && cfi_word_eq(s, 2, "ST");
+        for (const char *c = s + (has_st ? 2 : 0); c < e - 3; ++c) {
+            has_c = has_c || *c == 'C' || *c == 'c';
+            has_n = has_n || *c == 'N' || *c == 'n';
+        }
         if (next_token(r, &s, &e)) {
             if (cfi_word_eq(s, (size_t)(e - s), "BINARY"))
                 return fail(r, CF_ERR_UNSUPPORTED, "binary OFF is not supported");
@@ -241,7 +400,10 @@ static cf_status read_body(off_reader *r, cfi_mesh_builder *b)
         if (!next_line(r))
             return cfi_error(ctx, CF_ERR_TRUNCATED, "%s: header declares %lld vertices, file holds %lld", r->name,
                              (long long)nv, (long long)i);
-        if (i == 0) vertex_tokens = count_tokens(r->ls, r->lend);
+        if (i == 0) {
+            vertex_tokens = count_tokens(r->ls, r->lend);
+            plan_vertex_extras(r, has_st, has_c, has_n, vertex_tokens - 3);
+        }
         for (int k = 0; k < 3; ++k) {
             if (!next_token(r, &s, &e))
                 return fail(r, CF_ERR_PARSE, "vertex %lld has %d coordinates, expected 3", (long long)i, k);
@@ -252,6 +414,7 @@ static cf_status read_body(off_reader *r, cfi_mesh_builder *b)
         if (!isfinite(pos[3 * i]) || !isfinite(pos[3 * i + 1]) || !isfinite(pos[3 * i + 2]))
             return fail(r, CF_ERR_NONFINITE, "vertex %lld has a non-finite coordinate", (long long)i);
         b->positions.count += 3;
+        if ((st = read_vertex_extras(r, b, i, vertex_tokens - 3)) != CF_OK) return st;
     }
     for (int64_t f = 0; f < nf; ++f) {
         if (!next_line(r))
@@ -270,7 +433,7 @@ static cf_status read_body(off_reader *r, cfi_mesh_builder *b)
         return fail(r, CF_ERR_PARSE, "data after the last face ('%.*s'; the header declares %lld faces)",
                     tok_len(ts, te), ts, (long long)nf);
     }
-    return CF_OK;
+    return finish_extras(r, b, nv, nf);
 }
 
 cf_status cfi_read_off(cf_context *ctx, const char *buf, size_t size, const char *name, cf_mesh_data **out)
@@ -284,7 +447,11 @@ cf_status cfi_read_off(cf_context *ctx, const char *buf, size_t size, const char
     cfi_text_init(&r.tx, buf, size);
     cfi_mesh_builder b;
     cfi_builder_init(&b, ctx);
+    cfi_buf_init(&r.x.vertex_colours, sizeof(double));
+    cfi_buf_init(&r.x.face_colours, sizeof(double));
     st = read_body(&r, &b);
+    cfi_buf_free(ctx, &r.x.vertex_colours);
+    cfi_buf_free(ctx, &r.x.face_colours);
     if (st != CF_OK) {
         cfi_builder_free(&b);
         return st;

@@ -379,7 +379,7 @@ static void test_flow_keeps_properties(void)
     cft_read_small(cft_in_dir("props_out.vertex.csv"), text, sizeof text);
     CHECK(strncmp(text, "index,red,quality\n0,0,", 22) == 0);
     EXPECT("flow props.ply -o props_out.off --method implicit-mcf --steps 1 -q", 0,
-           "props_out.off: OFF holds no properties: the 3 of props.ply are not written (write PLY)");
+           "props_out.off: OFF holds only colours: 3 of the 3 properties of props.ply are not written (write PLY)");
     /* a property name the writer cannot use: named, the others kept */
     FILE *f = fopen(cft_in_dir("odd.ply"), "w");
     fprintf(f, "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
@@ -395,9 +395,38 @@ static void test_flow_keeps_properties(void)
     CHECK(d && !cf_mesh_data_vertex_property(d, "nx"));
     cf_mesh_data_destroy(&d);
     CHECK(cft_exists("props_out.off") && cft_exists("props_out.face.csv"));
+    /* an OBJ's vertex colours (v x y z r g b) and a COFF's (session 30; they were dropped): back on the v
+     * lines of an OBJ output, uchar in a PLY */
+    f = fopen(cft_in_dir("scan.obj"), "w");
+    fprintf(f, "v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nv 0 0 1 0.5 0.5 0.5\n"
+               "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+    fclose(f);
+    CHECK_RUN("flow scan.obj -o scan_out.obj --method implicit-mcf --steps 1 -q", 0);
+    cft_read_small(cft_in_dir("scan_out.obj"), text, sizeof text);
+    CHECK(strstr(text, " 1 0 0\nv ") && strstr(text, " 0.50196078431372548 0.50196078431372548 0.50196078431372548\nf"));
+    CHECK(!cft_exists("scan_out.vertex.csv"));
+    CHECK_RUN("flow scan.obj -o scan_out.ply --method implicit-mcf --steps 1 -q --force", 0);
+    cft_read_small(cft_in_dir("scan_out.ply"), text, sizeof text);
+    CHECK(strstr(text, "property uchar red\nproperty uchar green\nproperty uchar blue\n") != NULL);
+    f = fopen(cft_in_dir("scan.off"), "w");
+    fprintf(f, "COFF\n4 4 0\n0 0 0 255 0 0 255\n1 0 0 0 255 0 255\n0 1 0 0 0 255 255\n0 0 1 9 9 9 255\n"
+               "3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n");
+    fclose(f);
+    CHECK_RUN("flow scan.off -o scan_off_out.ply --method implicit-mcf --steps 1 -q", 0);
+    CHECK_OK(ctx, cf_read_mesh_file(ctx, cft_in_dir("scan_off_out.ply"), &d));
+    const cf_mesh_property *blue = d ? cf_mesh_data_vertex_property(d, "blue") : NULL;
+    CHECK(blue && blue->values[2] == 255 && blue->values[3] == 9 && cf_mesh_data_vertex_property(d, "alpha"));
+    cf_mesh_data_destroy(&d);
+    /* COFF to OFF: the colours stay, without a warning */
+    EXPECT("flow scan.off -o scan_off_out.off --method implicit-mcf --steps 1", 0, "wrote scan_off_out.off");
+    cft_read_small(cft_in_dir("scan_off_out.off"), text, sizeof text);
+    CHECK(strncmp(text, "COFF\n4 4 0\n", 11) == 0 && strstr(text, " 9 9 9 255\n3 0 2 1\n"));
+    CHECK(!cft_err_has("warning"));
     /* test_no_temp_files lists what the other tests leave */
     static const char *const made[] = {"props.ply", "props_out.ply", "props_out.obj", "props_out.vertex.csv",
-                                       "props_out.face.csv", "props_out.off", "odd.ply", "odd_out.ply"};
+                                       "props_out.face.csv", "props_out.off", "odd.ply", "odd_out.ply",
+                                       "scan.obj", "scan_out.obj", "scan_out.ply", "scan.off", "scan_off_out.ply",
+                                       "scan_off_out.off"};
     for (size_t i = 0; i < sizeof made / sizeof made[0]; ++i) remove(cft_in_dir(made[i]));
     free(red);
     free(quality);

@@ -1,6 +1,7 @@
 /* OBJ reader and writer: every face syntax, relative indices, polygons,
  * ignored keywords, line endings, every error path, bit-exact round trips
- * with texture coordinates, side CSV fields, allocation failures. */
+ * with texture coordinates, side CSV fields, vertex colours, materials,
+ * allocation failures. */
 #define _POSIX_C_SOURCE 200809L
 #include "io_test_util.h"
 
@@ -311,6 +312,100 @@ static void test_materials(void)
     cf_context_destroy(&ctx);
 }
 
+/* `v x y z r g b` (session 30; the colours were ignored without a word):
+ * kept as the vertex properties red green blue in PLY's 0..255 when every
+ * vertex has one (0..1 values scaled and rounded, 0..255 values as
+ * written); dropped with one warning when only some vertices have one. The
+ * writer puts vertex fields red green blue in [0, 255] back on the v lines
+ * (as 0..1) and the other fields in the CSV file. */
+static void test_vertex_colours(void)
+{
+    cf_context *ctx = cft_context();
+    iot_log log = {0, ""};
+    cf_context_set_log(ctx, iot_log_fn, &log, CF_LOG_WARNING);
+    const char *faces = "f 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n";
+    char text[512];
+    snprintf(text, sizeof text, "v 0 0 0 1 0 0\nv 1 0 0 0.5 0.25 0\nv 0 1 0 0 1 0.003\nv 0 0 1 0 0 1\n%s", faces);
+    cf_mesh_data *d = read_text(ctx, text);
+    static const double red[4] = {255, 128, 0, 0}, green[4] = {0, 64, 255, 0}, blue[4] = {0, 0, 1, 255};
+    const cf_mesh_property *r = d ? cf_mesh_data_vertex_property(d, "red") : NULL;
+    const cf_mesh_property *g = d ? cf_mesh_data_vertex_property(d, "green") : NULL;
+    const cf_mesh_property *b = d ? cf_mesh_data_vertex_property(d, "blue") : NULL;
+    CHECK(d && d->vertex_property_count == 3 && r && g && b);
+    CHECK(r && memcmp(r->values, red, sizeof red) == 0);
+    CHECK(g && memcmp(g->values, green, sizeof green) == 0);
+    CHECK(b && memcmp(b->values, blue, sizeof blue) == 0);
+    CHECK(log.warnings == 0);
+    cf_mesh_data_destroy(&d);
+    /* a file that writes 0..255 keeps its values */
+    snprintf(text, sizeof text, "v 0 0 0 255 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 17\nv 0 0 1 1 1 1\n%s", faces);
+    d = read_text(ctx, text);
+    r = d ? cf_mesh_data_vertex_property(d, "red") : NULL;
+    b = d ? cf_mesh_data_vertex_property(d, "blue") : NULL;
+    CHECK(r && r->values[0] == 255 && r->values[3] == 1 && b && b->values[2] == 17);
+    cf_mesh_data_destroy(&d);
+    /* only some vertices: no colours, one warning; w is not a colour */
+    static const char *const partial[] = {
+        "v 0 0 0 1 0 0\nv 1 0 0\nv 0 1 0 0 1 0\nv 0 0 1 0 0 1\n",
+        "v 0 0 0\nv 1 0 0 1 0 0\nv 0 1 0 0 1 0\nv 0 0 1 0 0 1\n",
+        "v 0 0 0 1 0 0\nv 1 0 0 1 0 0\nv 0 1 0 0 1 0\nv 0 0 1 nan 0 1\n",
+    };
+    for (size_t i = 0; i < sizeof partial / sizeof partial[0]; ++i) {
+        log.warnings = 0;
+        snprintf(text, sizeof text, "%s%s", partial[i], faces);
+        d = read_text(ctx, text);
+        CHECK(d && d->vertex_property_count == 0);
+        CHECK(log.warnings == 1 && strstr(log.last, "3 of 4 vertices give a colour (v x y z r g b)"));
+        cf_mesh_data_destroy(&d);
+    }
+    log.warnings = 0;
+    snprintf(text, sizeof text, "v 0 0 0 1\nv 1 0 0 1\nv 0 1 0 1\nv 0 0 1 1\n%s", faces);
+    d = read_text(ctx, text);
+    CHECK(d && d->vertex_property_count == 0 && log.warnings == 0);
+    cf_mesh_data_destroy(&d);
+
+    /* writer: colours on the v lines, alpha and others in the CSV; read back */
+    cf_mesh *m = iot_octahedron_mesh(ctx, 0);
+    double rr[IOT_NV], gg[IOT_NV], bb[IOT_NV], aa[IOT_NV];
+    for (int i = 0; i < IOT_NV; ++i) rr[i] = 51.0 * i, gg[i] = 255 - 40 * i, bb[i] = i == 2 ? 255 : 3, aa[i] = 200;
+    cf_field fields[4] = {{"blue", CF_FIELD_VERTEX, bb}, {"alpha", CF_FIELD_VERTEX, aa},
+                          {"red", CF_FIELD_VERTEX, rr}, {"green", CF_FIELD_VERTEX, gg}};
+    const char *path = cft_temp_path(".obj");
+    char csv_path[4200];
+    snprintf(csv_path, sizeof csv_path, "%.*s.vertex.csv", (int)(strlen(path) - 4), path);
+    CHECK_OK(ctx, cf_write_mesh_file(ctx, path, m, NULL, fields, 4));
+    char *obj = iot_read(path, NULL), *csv = iot_read(csv_path, NULL);
+    CHECK(obj && strstr(obj, " 0 1 0.011764705882352941\nv ")); /* vertex 0: r g b = 0, 1, 3/255 */
+    CHECK(csv && strncmp(csv, "index,alpha\n0,200\n", 18) == 0);
+    free(obj);
+    free(csv);
+    CHECK_OK(ctx, cf_read_mesh_file(ctx, path, &d));
+    r = d ? cf_mesh_data_vertex_property(d, "red") : NULL;
+    g = d ? cf_mesh_data_vertex_property(d, "green") : NULL;
+    b = d ? cf_mesh_data_vertex_property(d, "blue") : NULL;
+    CHECK(r && memcmp(r->values, rr, sizeof rr) == 0 && g && memcmp(g->values, gg, sizeof gg) == 0);
+    CHECK(b && memcmp(b->values, bb, sizeof bb) == 0);
+    cf_mesh_data_destroy(&d);
+    /* a "red" outside [0, 255] is no colour: every field to the CSV, plain v lines */
+    rr[1] = 300;
+    CHECK_OK(ctx, cf_write_mesh_file(ctx, path, m, NULL, fields, 4));
+    obj = iot_read(path, NULL);
+    csv = iot_read(csv_path, NULL);
+    CHECK(obj && !strstr(obj, " 0 1 0.011764705882352941\n"));
+    CHECK(csv && strncmp(csv, "index,blue,alpha,red,green\n", 27) == 0);
+    free(obj);
+    free(csv);
+    remove(csv_path);
+    remove(path);
+    cf_mesh_destroy(&m);
+    /* allocation failures on a coloured file */
+    cf_context_set_log(ctx, NULL, NULL, CF_LOG_ERROR);
+    snprintf(text, sizeof text, "v 0 0 0 1 0 0\nv 1 0 0 0.5 0.25 0\nv 0 1 0 0 1 0.003\nv 0 0 1 0 0 1\n%s", faces);
+    CHECK(iot_nomem_sweep(ctx, text, strlen(text), CF_FORMAT_OBJ) >= 5);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 int main(void)
 {
     CFT_RUN(test_face_syntaxes);
@@ -322,5 +417,6 @@ int main(void)
     CFT_RUN(test_load_mesh);
     CFT_RUN(test_allocation_failures);
     CFT_RUN(test_materials);
+    CFT_RUN(test_vertex_colours);
     return cft_finish();
 }

@@ -82,6 +82,40 @@ static cf_status add_mesh_figures(cf_context *ctx, const cf_mesh *mesh, json_t *
     return CF_OK;
 }
 
+static json_t *string_array(char *const *strings, int32_t count)
+{
+    json_t *a = json_array();
+    for (int32_t i = 0; i < count; ++i) json_array_append_new(a, json_string(strings[i]));
+    return a;
+}
+
+/* What the file carries besides the mesh, which flow and edit write back:
+ * property names (PLY properties, OBJ / OFF colours) and OBJ materials. */
+static void add_file_contents(const cf_mesh_data *data, json_t *root)
+{
+    json_t *vp = json_array(), *fp = json_array();
+    for (int32_t i = 0; i < data->vertex_property_count; ++i)
+        json_array_append_new(vp, json_string(data->vertex_properties[i].name));
+    for (int32_t i = 0; i < data->face_property_count; ++i)
+        json_array_append_new(fp, json_string(data->face_properties[i].name));
+    json_object_set_new(root, "vertex_properties", vp);
+    json_object_set_new(root, "face_properties", fp);
+    json_object_set_new(root, "material_libraries",
+                        string_array(data->material_libraries, data->material_library_count));
+    json_object_set_new(root, "material_names", string_array(data->material_names, data->material_count));
+}
+
+/* "name name ..." of a JSON array of strings, on one line. */
+static void print_names(const char *label, const json_t *names)
+{
+    if (json_array_size(names) == 0) return;
+    printf("%s", label);
+    size_t i;
+    const json_t *name;
+    json_array_foreach(names, i, name) printf(" %s", json_string_value(name));
+    putchar('\n');
+}
+
 /* The text form of root (mesh NULL: the mesh is invalid, report says why). */
 static void print_text(const char *path, const cf_mesh_data *data, const cf_mesh *mesh, const cf_mesh_report *report,
                        json_t *root)
@@ -90,6 +124,10 @@ static void print_text(const char *path, const cf_mesh_data *data, const cf_mesh
     printf("vertices:      %d\nfaces:         %d\n", (int)data->vertex_count, (int)data->face_count);
     if (data->polygon_count) printf("polygons:      %d (fan-triangulated)\n", (int)data->polygon_count);
     printf("uv:            %s\n", json_string_value(json_object_get(root, "texture_coordinates")));
+    print_names("vertex props: ", json_object_get(root, "vertex_properties"));
+    print_names("face props:   ", json_object_get(root, "face_properties"));
+    print_names("mtllib:       ", json_object_get(root, "material_libraries"));
+    print_names("materials:    ", json_object_get(root, "material_names"));
     if (!mesh) {
         printf("validation:    INVALID: %s\n", report->first_message);
         printf("  index out of range %d, repeated index %d, non-finite %d, degenerate faces %d,\n"
@@ -175,6 +213,7 @@ int cli_info(int argc, char **argv)
     json_object_set_new(root, "polygons_triangulated", json_integer(data->polygon_count));
     json_object_set_new(root, "texture_coordinates",
                         json_string(data->uv_count == 0 ? "none" : data->uv_triangles ? "per-corner" : "per-vertex"));
+    add_file_contents(data, root);
     json_object_set_new(root, "validation", validation_json(&report));
 
     if (report.first_status == CF_OK) {

@@ -801,7 +801,8 @@ def loop_subdivide(V, F, levels=1):
 
 def info(V_or_path, F=None):
     """Mesh summary as `curvflow info --json`: counts, texture coordinates,
-    the validation report (every defect counted), and for a valid mesh
+    (for a file) the names of its vertex and face properties and its OBJ
+    material libraries and names, the validation report (every defect counted), and for a valid mesh
     edges, components, boundary loops, Euler characteristic, genus, corner
     angle and face area statistics, W/4pi and volume (closed meshes).
     Accepts a file path (the file may hold an invalid mesh: the report says
@@ -820,6 +821,11 @@ def info(V_or_path, F=None):
             out["polygons_triangulated"] = d.polygon_count
             out["texture_coordinates"] = ("none" if d.uv_count == 0 else
                                           "per-corner" if d.uv_triangles else "per-vertex")
+            extras = _extras(d)
+            out["vertex_properties"] = list(extras["vertex_fields"])
+            out["face_properties"] = list(extras["face_fields"])
+            out["material_libraries"] = extras["material_libraries"]
+            out["material_names"] = extras["material_names"]
         else:
             V, Fa = _vertices(V_or_path), _faces(F)
             desc = _desc(V, Fa)

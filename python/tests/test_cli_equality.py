@@ -194,7 +194,8 @@ def test_info_equals_cli(cli, meshes, mesh):
     js = json.loads(run_cli(cli, "info", meshes[mesh], "--json").stdout)
     for got in (curvflow.info(meshes[mesh]), curvflow.info(*curvflow.load(meshes[mesh])[:2])):
         for key, value in js.items():
-            if key in ("file", "texture_coordinates", "polygons_triangulated") and "file" not in got:
+            if key in ("file", "texture_coordinates", "polygons_triangulated", "vertex_properties",
+                       "face_properties", "material_libraries", "material_names") and "file" not in got:
                 continue
             if isinstance(value, dict):
                 for k, v in value.items():
@@ -256,6 +257,9 @@ def test_obj_materials_round_trip_and_cli(cli, meshes, tmp_path):
     assert ex["face_materials"].dtype == np.int32
     assert [ex["material_names"][i] if i >= 0 else None for i in ex["face_materials"]] == \
         [names[i] if i >= 0 else None for i in mat]
+    js = json.loads(run_cli(cli, "info", src, "--json").stdout)
+    assert js["material_libraries"] == ["skin.mtl", "sub dir/b.mtl"] and js["material_names"] == ex["material_names"]
+    assert curvflow.info(src)["material_names"] == ex["material_names"]
     # the CLI's flow output and Python's flow + save of the same run are the same file
     run_cli(cli, "flow", src, "-o", tmp_path / "cli.obj", "--method", "spin-willmore", "--steps", "1", "-q")
     state, _ = curvflow.flow(V, F, "spin-willmore", steps=1)

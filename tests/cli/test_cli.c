@@ -154,7 +154,24 @@ static void test_info(void)
         CHECK(json_integer_value(json_object_get(root, "boundary_loops")) == 1);
         CHECK(json_is_null(json_object_get(root, "willmore_over_4pi")));
     }
+    /* what the file carries besides the mesh (session 30): property names, materials */
+    CHECK(json_array_size(json_object_get(root, "vertex_properties")) == 0 &&
+          json_array_size(json_object_get(root, "material_names")) == 0);
     json_decref(root);
+    FILE *f0 = fopen(cft_in_dir("carry.obj"), "w");
+    if (!f0) return;
+    fprintf(f0, "mtllib skin.mtl\nv 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nv 0 0 1 1 1 1\n"
+                "usemtl a\nf 1 3 2\nf 1 2 4\nusemtl b\nf 1 4 3\nf 2 3 4\n");
+    fclose(f0);
+    CHECK_RUN("info carry.obj", 0);
+    CHECK(strstr(cft_out, "\nvertex props:  red green blue\nmtllib:        skin.mtl\nmaterials:     a b\n") != NULL);
+    CHECK(!strstr(cft_out, "face props:"));
+    CHECK_RUN("info carry.obj --json", 0);
+    root = json_loads(cft_out, 0, &jerr);
+    CHECK(root && json_array_size(json_object_get(root, "vertex_properties")) == 3);
+    CHECK(root && strcmp(json_string_value(json_array_get(json_object_get(root, "material_names"), 1)), "b") == 0);
+    json_decref(root);
+    remove(cft_in_dir("carry.obj"));
 
     /* a broken file: exit 2, the message names the file */
     FILE *f = fopen(cft_in_dir("broken.obj"), "w");

@@ -39,6 +39,12 @@ typedef struct cf_render_options {
      * Needs a mesh with uv (CF_ERR_INVALID_ARG otherwise). */
     int32_t uv_checker;
     double checker_count;
+    /* The mesh's own colours, RGB in [0, 1] (values outside are clamped):
+     * vertex_colors (3 nv, interpolated across each face) or face_colors
+     * (3 nf), e.g. a scan's colours read from its file. face_field, when
+     * given, takes precedence; NULL (default): none. Session 30. */
+    const double *vertex_colors;
+    const double *face_colors;
 } cf_render_options;
 
 CF_API void cf_render_options_default(cf_render_options *options);
@@ -46,7 +52,8 @@ CF_API void cf_render_options_default(cf_render_options *options);
 /* Renders into rgb (3 * width * height bytes, row by row from the top,
  * caller-allocated). positions: 3 nv (NULL: rest positions). Statuses:
  * CF_OK, CF_ERR_INVALID_ARG (NULL, sizes, parallel view/up, uv_checker
- * without uv), CF_ERR_NONFINITE (position or field value), CF_ERR_NOMEM. */
+ * without uv), CF_ERR_NONFINITE (position, field value or colour),
+ * CF_ERR_NOMEM. */
 CF_API cf_status cf_render_rgb(cf_context *ctx, const cf_mesh *mesh, const double *positions,
                                const cf_render_options *options, uint8_t *rgb);
 

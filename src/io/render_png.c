@@ -62,6 +62,8 @@ void cf_render_options_default(cf_render_options *o)
     o->field_max = 0.0;
     o->uv_checker = 0;
     o->checker_count = 16.0;
+    o->vertex_colors = NULL;
+    o->face_colors = NULL;
 }
 
 static double dot3(const double *a, const double *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
@@ -137,6 +139,12 @@ cf_status cf_render_rgb(cf_context *ctx, const cf_mesh *mesh, const double *posi
             hi[k] = fmax(hi[k], c);
         }
     double fmin_v = o->field_min, fmax_v = o->field_max;
+    const double *vcol = o->face_field || o->face_colors ? NULL : o->vertex_colors;
+    const double *fcol = o->face_field ? NULL : o->face_colors;
+    for (size_t i = 0; vcol && i < 3 * (size_t)nv; ++i)
+        if (!isfinite(vcol[i])) return cfi_error(ctx, CF_ERR_NONFINITE, "vertex %zu: colour is not finite", i / 3);
+    for (size_t i = 0; fcol && i < 3 * (size_t)nf; ++i)
+        if (!isfinite(fcol[i])) return cfi_error(ctx, CF_ERR_NONFINITE, "face %zu: colour is not finite", i / 3);
     if (o->face_field) {
         double a = INFINITY, b = -INFINITY;
         for (int32_t f = 0; f < nf; ++f) {
@@ -219,6 +227,10 @@ cf_status cf_render_rgb(cf_context *ctx, const cf_mesh *mesh, const double *posi
         if (facing < 0.0) shade *= 0.6;
         double base[3] = {o->color[0], o->color[1], o->color[2]};
         if (o->face_field) color_map((o->face_field[f] - fmin_v) / (fmax_v - fmin_v), base);
+        if (fcol)
+            for (int c = 0; c < 3; ++c) base[c] = fcol[3 * (size_t)f + (size_t)c];
+        const double *c0 = vcol ? vcol + 3 * (size_t)t[0] : NULL, *c1 = vcol ? vcol + 3 * (size_t)t[1] : NULL,
+                     *c2 = vcol ? vcol + 3 * (size_t)t[2] : NULL;
         const double *uv0 = NULL, *uv1 = NULL, *uv2 = NULL;
         if (o->uv_checker) {
             const int32_t *ut = mesh->uv_triangles + 3 * (size_t)f;
@@ -253,6 +265,8 @@ cf_status cf_render_rgb(cf_context *ctx, const cf_mesh *mesh, const double *posi
                     double cell = floor(uu * o->checker_count) + floor(vv * o->checker_count);
                     if (fabs(fmod(cell, 2.0)) == 1.0) k *= 0.55;
                 }
+                if (vcol)
+                    for (int c = 0; c < 3; ++c) base[c] = b0 * c0[c] + b1 * c1[c] + b2 * c2[c];
                 for (int c = 0; c < 3; ++c) rgb[3 * pix + (size_t)c] = to_byte(k * base[c]);
             }
         }

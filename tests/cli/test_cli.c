@@ -9,6 +9,7 @@
 #include "curvflow/io.h"
 #include "curvflow/mesh.h"
 #include "cli_test.h"
+#include "png_read.h"
 
 #include <dirent.h>
 #include <fcntl.h>
@@ -594,7 +595,23 @@ static void test_render(void)
     CHECK_RUN("render ico.obj -o x.png --view 1,2", 1);
     CHECK_RUN("render ico.obj -o x.png --size 0x10", 1);
     CHECK_RUN("render ico.obj", 1);
+    /* --colours (session 30): the file's own colours; a file without them, or with --field, is refused */
+    FILE *f = fopen(cft_in_dir("rgb.obj"), "w");
+    if (f) {
+        fprintf(f, "v 0 0 0 1 0 0\nv 1 0 0 1 0 0\nv 1 1 0 1 0 0\nv 0 1 0 1 0 0\nf 1 2 3\nf 1 3 4\n");
+        fclose(f);
+    }
+    CHECK_RUN("render rgb.obj -o c.png --colours --size 40x40 --view 0,0,1", 0);
+    unsigned char *img = cft_png_load_rgb(cft_in_dir("c.png"), &w, &h);
+    CHECK(img && w == 40 && h == 40); /* the square faces the headlight: its full red */
+    CHECK(img && img[3 * (20 * 40 + 20)] == 255 && img[3 * (20 * 40 + 20) + 1] == 0 && img[3 * (20 * 40 + 20) + 2] == 0);
+    cft_png_free(img);
+    CHECK_RUN("render ico.obj -o x.png --colours", 2);
+    CHECK(strstr(cft_err, "ico.obj: --colours: the file has no colours (vertex or face properties red, green, blue)"));
+    CHECK_RUN("render rgb.obj -o x.png --colours --field face:Q", 1);
     CHECK(!cft_exists("x.png"));
+    remove(cft_in_dir("rgb.obj"));
+    remove(cft_in_dir("c.png"));
 }
 
 /* Atomic writes: only the files the commands named exist in the folder. */

@@ -1,14 +1,15 @@
 /*
  * Software renderer (src/io/render_png.c): silhouette size of a sphere
  * under orthographic projection, headlight shading, depth test, uv
- * checkerboard placement, PNG round trip (decoded with stb_image) and
- * error paths.
+ * checkerboard placement, the mesh's own colours (per vertex, interpolated;
+ * per face), PNG round trip (decoded with stb_image) and error paths.
  */
 #include "curvflow/generate.h"
 #include "curvflow/ops.h"
 #include "curvflow/render.h"
 #include "test.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -146,6 +147,83 @@ static void test_uv_checker(void)
     cf_context_destroy(&ctx);
 }
 
+/* The mesh's own colours (session 30): vertex colours interpolated
+ * barycentrically across a face (a unit grid with red growing along x and
+ * green along y shows each pixel's own mix), face colours constant per
+ * face; a face field wins over both; a non-finite colour is refused. */
+static void test_own_colours(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *mesh = NULL;
+    CHECK_OK(ctx, cf_generate_grid(ctx, 4, 4, 1.0, 1.0, &mesh));
+    if (!mesh) { cf_context_destroy(&ctx); return; }
+    int32_t nv = cf_mesh_vertex_count(mesh), nf = cf_mesh_face_count(mesh);
+    const double *x = cf_mesh_positions(mesh);
+    double lo[2] = {1e300, 1e300}, hi[2] = {-1e300, -1e300};
+    for (int32_t v = 0; v < nv; ++v)
+        for (int k = 0; k < 2; ++k) lo[k] = fmin(lo[k], x[3 * v + k]), hi[k] = fmax(hi[k], x[3 * v + k]);
+    double *vc = malloc(3 * (size_t)nv * sizeof *vc), *fc = malloc(3 * (size_t)nf * sizeof *fc);
+    for (int32_t v = 0; v < nv; ++v) {
+        vc[3 * v] = (x[3 * v] - lo[0]) / (hi[0] - lo[0]);
+        vc[3 * v + 1] = (x[3 * v + 1] - lo[1]) / (hi[1] - lo[1]);
+        vc[3 * v + 2] = 0.5;
+    }
+    for (int32_t f = 0; f < nf; ++f) fc[3 * f] = 0.1, fc[3 * f + 1] = f % 2 ? 0.9 : 0.3, fc[3 * f + 2] = 1.7;
+    cf_render_options o;
+    front_view_options(&o);
+    o.ambient = 1.0; /* flat: the colour alone */
+    o.vertex_colors = vc;
+    uint8_t *rgb = malloc(3 * W * H);
+    CHECK_OK(ctx, cf_render_rgb(ctx, mesh, NULL, &o, rgb));
+    double scale = 0.9 * W / (2.0 * sqrt(0.5));
+    int checked = 0;
+    double worst = 0.0;
+    for (double u = 0.1; u < 0.95; u += 0.2)
+        for (double v = 0.1; v < 0.95; v += 0.2) {
+            int px = (int)(W / 2.0 + (u - 0.5) * scale), py = (int)(H / 2.0 - (v - 0.5) * scale);
+            /* the pixel centre's own (u, v): linear colours are interpolated exactly */
+            double cu = (px + 0.5 - W / 2.0) / scale + 0.5, cv = (H / 2.0 - py - 0.5) / scale + 0.5;
+            const uint8_t *p = rgb + 3 * (py * W + px);
+            worst = fmax(worst, fmax(fabs(p[0] - 255.0 * cu), fabs(p[1] - 255.0 * cv)));
+            worst = fmax(worst, fabs(p[2] - 127.5));
+            ++checked;
+        }
+    CHECK(checked == 25);
+    if (!(worst <= 1.0)) cft_fail(__FILE__, __LINE__, "vertex colours off by %g of 255", worst);
+    /* face colours (clamped to [0, 1]) take precedence over vertex colours */
+    o.face_colors = fc;
+    CHECK_OK(ctx, cf_render_rgb(ctx, mesh, NULL, &o, rgb));
+    int greens[2] = {0, 0}, others = 0;
+    for (int p = 0; p < W * H; ++p) {
+        const uint8_t *q = rgb + 3 * p;
+        if (is_background(q)) continue;
+        if (q[0] == 26 && q[2] == 255 && (q[1] == 230 || q[1] == 77)) greens[q[1] == 230]++;
+        else ++others;
+    }
+    CHECK(greens[0] > 100 && greens[1] > 100 && others == 0);
+    /* a face field wins */
+    double *field = calloc((size_t)nf, sizeof *field);
+    o.face_field = field;
+    CHECK_OK(ctx, cf_render_rgb(ctx, mesh, NULL, &o, rgb));
+    const uint8_t *c = rgb + 3 * (H / 2 * W + W / 2);
+    CHECK(c[0] == 59 && c[1] == 77 && c[2] == 191); /* the map's low end (0.23, 0.30, 0.75) for a constant field */
+    o.face_field = NULL;
+    fc[3 * 5 + 1] = NAN;
+    CHECK_STATUS(cf_render_rgb(ctx, mesh, NULL, &o, rgb), CF_ERR_NONFINITE);
+    CHECK(strstr(cf_context_message(ctx), "face 5: colour is not finite") != NULL);
+    o.face_colors = NULL;
+    vc[3 * 7 + 2] = INFINITY;
+    CHECK_STATUS(cf_render_rgb(ctx, mesh, NULL, &o, rgb), CF_ERR_NONFINITE);
+    CHECK(strstr(cf_context_message(ctx), "vertex 7: colour is not finite") != NULL);
+    free(field);
+    free(rgb);
+    free(vc);
+    free(fc);
+    cf_mesh_destroy(&mesh);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 /* PNG is lossless: decoding the file gives back the rendered bytes. */
 static void test_png_round_trip(void)
 {
@@ -182,6 +260,7 @@ int main(void)
 {
     CFT_RUN(test_sphere_silhouette_and_shading);
     CFT_RUN(test_uv_checker);
+    CFT_RUN(test_own_colours);
     CFT_RUN(test_png_round_trip);
     return cft_finish();
 }

@@ -61,10 +61,10 @@ static int run(cf_context *ctx, const char *name, const cf_mesh *mesh, int repea
     int64_t ntrip = cfi_cotan_laplacian_triplet_count(mesh);
     int64_t *slots = malloc((size_t)ntrip * sizeof *slots);
     cf_sparse *lr = NULL;
-    if ((st = cfi_cotan_laplacian_pattern(ctx, mesh, pos, &lr, slots)) != CF_OK) return fail(ctx, "pattern", st);
+    if ((st = cfi_cotan_laplacian_pattern(ctx, mesh, pos, 0.0, &lr, slots)) != CF_OK) return fail(ctx, "pattern", st);
     for (int r = 0; r < repeat; ++r) {
         double t0 = now_ms();
-        if ((st = cfi_cotan_laplacian_refill(lr, mesh, pos, slots)) != CF_OK) return fail(ctx, "refill", st);
+        if ((st = cfi_cotan_laplacian_refill(lr, mesh, pos, 0.0, slots)) != CF_OK) return fail(ctx, "refill", st);
         refill = fmin(refill, now_ms() - t0);
     }
     double mean_diag = 0.0;

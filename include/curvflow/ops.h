@@ -91,6 +91,26 @@ CF_API cf_status cf_cotan_laplacian_refill(cf_sparse *l, const cf_mesh *mesh, co
  * also the DEC Hodge star *1. */
 CF_API cf_status cf_cotan_weights(cf_context *ctx, const cf_mesh *mesh, const double *positions, double *weights);
 
+/* The same operators with a floor on the weights (session 30): each face's
+ * cotangents are taken as if twice its area were at least weight_floor (in
+ * [0, 1]; 0: exact, the functions above) times the sum of its squared edge
+ * lengths. An equilateral face has 0.29, a face with a small angle of t
+ * radians about t / 2: a floor of 1e-8 leaves every face with its angles
+ * above about 2e-8 rad exact and bounds the weights of a nearly flat face (a
+ * near-duplicate vertex) at about 1 / weight_floor, which would otherwise
+ * cost every solve on L that many digits (docs/spin.md, "Near-duplicate
+ * vertices"; spin-willmore's option weight_floor). Areas, angles and
+ * curvature sums are not affected. CF_ERR_INVALID_ARG for a floor outside
+ * [0, 1]. */
+CF_API cf_status cf_cotan_laplacian_floored(cf_context *ctx, const cf_mesh *mesh, const double *positions,
+                                            double weight_floor, cf_sparse **out);
+CF_API cf_status cf_cotan_laplacian_with_slots_floored(cf_context *ctx, const cf_mesh *mesh, const double *positions,
+                                                       double weight_floor, cf_sparse **out, int64_t *slot_map);
+CF_API cf_status cf_cotan_laplacian_refill_floored(cf_sparse *l, const cf_mesh *mesh, const double *positions,
+                                                   double weight_floor, const int64_t *slot_map);
+CF_API cf_status cf_cotan_weights_floored(cf_context *ctx, const cf_mesh *mesh, const double *positions,
+                                          double weight_floor, double *weights);
+
 /* ---- Positions from edge vectors (src/ops/edge_poisson.c) ---------------
  * Least-squares fit of positions f (3 nv) to prescribed edge vectors e~
  * (3 ne, interleaved, e~_e for edge e running i -> j, i < j as in
@@ -116,6 +136,12 @@ typedef struct cf_edge_poisson cf_edge_poisson;
  * solver errors. The object keeps `mesh` (it must outlive it). */
 CF_API cf_status cf_edge_poisson_create(cf_context *ctx, const cf_mesh *mesh, const double *positions,
                                         int32_t known_count, const int32_t *known, cf_edge_poisson **out);
+/* The same with L's weights floored as cf_cotan_laplacian_floored's, for
+ * this metric and every later one (weight_floor in [0, 1]; 0: exact, as
+ * cf_edge_poisson_create). Used by spin-willmore (option weight_floor). */
+CF_API cf_status cf_edge_poisson_create_floored(cf_context *ctx, const cf_mesh *mesh, const double *positions,
+                                                int32_t known_count, const int32_t *known, double weight_floor,
+                                                cf_edge_poisson **out);
 /* Refills L for the metric of `positions` (3 nv, values only); the next
  * solve refactorises. CF_ERR_DEGENERATE_FACE on a zero-area face. */
 CF_API cf_status cf_edge_poisson_set_metric(cf_edge_poisson *p, const double *positions);
@@ -200,6 +226,11 @@ typedef struct cf_vertex_fairing cf_vertex_fairing;
  * CF_ERR_INVALID_ARG, CF_ERR_DEGENERATE_FACE, CF_ERR_NOMEM, solver errors. */
 CF_API cf_status cf_vertex_fairing_create(cf_context *ctx, const cf_mesh *mesh, const double *positions,
                                           int32_t hold_boundary, cf_vertex_fairing **out);
+/* The same with L0's weights floored as cf_edge_poisson_create_floored's
+ * (weight_floor in [0, 1]; 0: exact). */
+CF_API cf_status cf_vertex_fairing_create_floored(cf_context *ctx, const cf_mesh *mesh, const double *positions,
+                                                  int32_t hold_boundary, double weight_floor,
+                                                  cf_vertex_fairing **out);
 /* out = the faired positions of in (3 nv each, interleaved; out may equal
  * in). kappa >= 0 (0: a copy). timings (may be NULL) accumulates the solve
  * seconds. Statuses: CF_ERR_INVALID_ARG (kappa negative or not finite),

@@ -176,6 +176,16 @@ typedef struct cf_spin_willmore_options {
                                 * is redone at the same tau with `regularization` raised to 1, which
                                 * stays for the rest of the run. Default 2; 0: never (docs/spin.md,
                                 * "Long tubes: damping when a step outruns its model") */
+    double weight_floor;       /* floor on the cotan weights of every Laplacian the flow builds (the
+                                * energy's, the position recovery's, the fairing's, the exactness
+                                * metric's; not the Dirac matrix): a face weighs as if twice its area
+                                * were at least weight_floor times the sum of its squared edges
+                                * (cf_cotan_laplacian_floored). A near-duplicate vertex gives weights
+                                * of 1 / (its distance in edge lengths) that cost every solve that many
+                                * digits (spot_3k with one at 1e-12: W/4pi 4.4 after 10 steps instead
+                                * of 1.002). Default 1e-8 (only faces with an angle below about 2e-8
+                                * rad are touched; none on any shared mesh); 0: exact weights
+                                * (docs/spin.md, "Near-duplicate vertices") */
 } cf_spin_willmore_options;
 
 CF_API void cf_spin_willmore_options_default(cf_spin_willmore_options *options);

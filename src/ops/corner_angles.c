@@ -21,7 +21,7 @@ cf_status cf_corner_cotangents(cf_context *ctx, const cf_mesh *mesh, const doubl
     cf_status s = cfi_ops_check(ctx, mesh, positions, cot, "corner_cotangents");
     if (s != CF_OK) return s;
     for (int32_t f = 0; f < mesh->nf; ++f) {
-        s = cfi_face_cotangents(ctx, mesh, positions, f, cot + 3 * f, NULL);
+        s = cfi_face_cotangents(ctx, mesh, positions, f, 0.0, cot + 3 * f, NULL);
         if (s != CF_OK) return s;
     }
     return CF_OK;

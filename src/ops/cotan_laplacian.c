@@ -19,7 +19,7 @@ int64_t cfi_cotan_laplacian_triplet_count(const cf_mesh *mesh)
 /* Per-edge assembly (nv + 2 ne triplets, 2.6x fewer than 9 per face): the
  * weights are accumulated per edge, the diagonal per vertex. */
 cf_status cfi_cotan_laplacian_pattern(cf_context *ctx, const cf_mesh *mesh, const double *positions,
-                                      cf_sparse **out, int64_t *slot_map)
+                                      double weight_floor, cf_sparse **out, int64_t *slot_map)
 {
     cf_status s = cfi_ops_check(ctx, mesh, positions, out, "cotan_laplacian");
     if (s != CF_OK) return s;
@@ -41,7 +41,7 @@ cf_status cfi_cotan_laplacian_pattern(cf_context *ctx, const cf_mesh *mesh, cons
     for (int32_t e = 0; e < ne; ++e) vals[nv + 2 * (int64_t)e] = 0.0;
     for (int32_t f = 0; f < mesh->nf; ++f) {
         double cot[3];
-        s = cfi_face_cotangents(ctx, mesh, positions, f, cot, NULL);
+        s = cfi_face_cotangents(ctx, mesh, positions, f, weight_floor, cot, NULL);
         if (s != CF_OK) goto done;
         for (int k = 0; k < 3; ++k) vals[nv + 2 * (int64_t)mesh->halfedge_edge[3 * f + k]] += 0.5 * cot[(k + 2) % 3];
     }
@@ -66,7 +66,7 @@ done:
 }
 
 cf_status cfi_cotan_laplacian_refill(cf_sparse *l, const cf_mesh *mesh, const double *positions,
-                                     const int64_t *slot_map)
+                                     double weight_floor, const int64_t *slot_map)
 {
     if (!l || !mesh || !positions || !slot_map) return CF_ERR_INVALID_ARG;
     cf_context *ctx = l->ctx;
@@ -75,7 +75,7 @@ cf_status cfi_cotan_laplacian_refill(cf_sparse *l, const cf_mesh *mesh, const do
     const int64_t *edge_slot = slot_map + mesh->nv;
     for (int32_t f = 0; f < mesh->nf; ++f) {
         double cot[3];
-        cf_status s = cfi_face_cotangents(ctx, mesh, positions, f, cot, NULL);
+        cf_status s = cfi_face_cotangents(ctx, mesh, positions, f, weight_floor, cot, NULL);
         if (s != CF_OK) return s;
         const int32_t *t = mesh->triangles + 3 * f;
         for (int k = 0; k < 3; ++k) {
@@ -93,7 +93,21 @@ cf_status cfi_cotan_laplacian_refill(cf_sparse *l, const cf_mesh *mesh, const do
 
 cf_status cf_cotan_laplacian(cf_context *ctx, const cf_mesh *mesh, const double *positions, cf_sparse **out)
 {
-    return cfi_cotan_laplacian_pattern(ctx, mesh, positions, out, NULL);
+    return cfi_cotan_laplacian_pattern(ctx, mesh, positions, 0.0, out, NULL);
+}
+
+static cf_status check_floor(cf_context *ctx, double weight_floor)
+{
+    if (weight_floor >= 0.0 && weight_floor <= 1.0) return CF_OK;
+    return cfi_error(ctx, CF_ERR_INVALID_ARG, "cotan weights: weight_floor %g outside [0, 1]", weight_floor);
+}
+
+cf_status cf_cotan_laplacian_floored(cf_context *ctx, const cf_mesh *mesh, const double *positions,
+                                     double weight_floor, cf_sparse **out)
+{
+    if (!ctx) return CF_ERR_INVALID_ARG;
+    cf_status s = check_floor(ctx, weight_floor);
+    return s != CF_OK ? s : cfi_cotan_laplacian_pattern(ctx, mesh, positions, weight_floor, out, NULL);
 }
 
 /* Public face of the refill path (ops/cotan_laplacian.h stays private to
@@ -103,14 +117,28 @@ int64_t cf_cotan_laplacian_slot_count(const cf_mesh *mesh) { return cfi_cotan_la
 cf_status cf_cotan_laplacian_with_slots(cf_context *ctx, const cf_mesh *mesh, const double *positions, cf_sparse **out,
                                         int64_t *slot_map)
 {
+    return cf_cotan_laplacian_with_slots_floored(ctx, mesh, positions, 0.0, out, slot_map);
+}
+
+cf_status cf_cotan_laplacian_with_slots_floored(cf_context *ctx, const cf_mesh *mesh, const double *positions,
+                                                double weight_floor, cf_sparse **out, int64_t *slot_map)
+{
     if (!ctx) return CF_ERR_INVALID_ARG;
     if (!slot_map) return cfi_error(ctx, CF_ERR_INVALID_ARG, "cotan_laplacian_with_slots: slot_map is NULL");
-    return cfi_cotan_laplacian_pattern(ctx, mesh, positions, out, slot_map);
+    cf_status s = check_floor(ctx, weight_floor);
+    return s != CF_OK ? s : cfi_cotan_laplacian_pattern(ctx, mesh, positions, weight_floor, out, slot_map);
 }
 
 cf_status cf_cotan_laplacian_refill(cf_sparse *l, const cf_mesh *mesh, const double *positions, const int64_t *slot_map)
 {
-    return cfi_cotan_laplacian_refill(l, mesh, positions, slot_map);
+    return cfi_cotan_laplacian_refill(l, mesh, positions, 0.0, slot_map);
+}
+
+cf_status cf_cotan_laplacian_refill_floored(cf_sparse *l, const cf_mesh *mesh, const double *positions,
+                                            double weight_floor, const int64_t *slot_map)
+{
+    if (l && check_floor(l->ctx, weight_floor) != CF_OK) return CF_ERR_INVALID_ARG;
+    return cfi_cotan_laplacian_refill(l, mesh, positions, weight_floor, slot_map);
 }
 
 cf_status cfi_cotan_laplacian_apply(cf_context *ctx, const cf_mesh *mesh, const double *positions, int32_t dim,
@@ -120,7 +148,7 @@ cf_status cfi_cotan_laplacian_apply(cf_context *ctx, const cf_mesh *mesh, const 
     for (int32_t f = 0; f < mesh->nf; ++f) {
         const int32_t *t = mesh->triangles + 3 * f;
         double cot[3];
-        cf_status s = cfi_face_cotangents(ctx, mesh, positions, f, cot, NULL);
+        cf_status s = cfi_face_cotangents(ctx, mesh, positions, f, 0.0, cot, NULL);
         if (s != CF_OK) return s;
         for (int k = 0; k < 3; ++k) {
             int64_t i = t[k], j = t[(k + 1) % 3];
@@ -137,12 +165,19 @@ cf_status cfi_cotan_laplacian_apply(cf_context *ctx, const cf_mesh *mesh, const 
 
 cf_status cf_cotan_weights(cf_context *ctx, const cf_mesh *mesh, const double *positions, double *weights)
 {
+    return cf_cotan_weights_floored(ctx, mesh, positions, 0.0, weights);
+}
+
+cf_status cf_cotan_weights_floored(cf_context *ctx, const cf_mesh *mesh, const double *positions, double weight_floor,
+                                   double *weights)
+{
     cf_status s = cfi_ops_check(ctx, mesh, positions, weights, "cotan_weights");
+    if (s == CF_OK) s = check_floor(ctx, weight_floor);
     if (s != CF_OK) return s;
     for (int32_t e = 0; e < mesh->ne; ++e) weights[e] = 0.0;
     for (int32_t f = 0; f < mesh->nf; ++f) {
         double cot[3];
-        s = cfi_face_cotangents(ctx, mesh, positions, f, cot, NULL);
+        s = cfi_face_cotangents(ctx, mesh, positions, f, weight_floor, cot, NULL);
         if (s != CF_OK) return s;
         for (int k = 0; k < 3; ++k) weights[mesh->halfedge_edge[3 * f + k]] += 0.5 * cot[(k + 2) % 3];
     }

@@ -16,9 +16,10 @@
 int64_t cfi_cotan_laplacian_triplet_count(const cf_mesh *mesh);
 
 /* Builds L for `positions` (nv x nv, symmetric) and fills the caller's
- * slot_map (cfi_cotan_laplacian_triplet_count entries). */
+ * slot_map (cfi_cotan_laplacian_triplet_count entries; NULL: none).
+ * weight_floor: as cfi_face_cotangents (0: the exact weights). */
 cf_status cfi_cotan_laplacian_pattern(cf_context *ctx, const cf_mesh *mesh, const double *positions,
-                                      cf_sparse **out, int64_t *slot_map);
+                                      double weight_floor, cf_sparse **out, int64_t *slot_map);
 
 /* Overwrites L's values with the cotan Laplacian of `positions`, using the
  * slot_map from cfi_cotan_laplacian_pattern. No allocation; positions are
@@ -26,7 +27,7 @@ cf_status cfi_cotan_laplacian_pattern(cf_context *ctx, const cf_mesh *mesh, cons
  * CF_ERR_DEGENERATE_FACE (message names the face) on a zero-area face, L
  * then holds partial values. */
 cf_status cfi_cotan_laplacian_refill(cf_sparse *l, const cf_mesh *mesh, const double *positions,
-                                     const int64_t *slot_map);
+                                     double weight_floor, const int64_t *slot_map);
 
 /* Applies L to a vertex function without forming the matrix: y = L x for
  * `dim` interleaved components (x, y: dim nv, entry v * dim + c). */

@@ -11,6 +11,7 @@
  */
 #include "curvflow/ops.h"
 #include "mesh/mesh_internal.h"
+#include "ops/cotan_laplacian.h"
 
 #include <math.h>
 #include <string.h>
@@ -35,6 +36,7 @@ struct cf_edge_poisson {
     double *sol;           /* 3 nv */
     int32_t nv, ne, known_count;
     int32_t factored;      /* the factorisation matches L's current values */
+    double weight_floor;   /* of L's cotan weights (cf_edge_poisson_create_floored) */
 };
 
 static cf_status edge_slots(cf_edge_poisson *p)
@@ -72,9 +74,18 @@ static cf_status create_solver(cf_edge_poisson *p)
 cf_status cf_edge_poisson_create(cf_context *ctx, const cf_mesh *mesh, const double *positions, int32_t known_count,
                                  const int32_t *known, cf_edge_poisson **out)
 {
+    return cf_edge_poisson_create_floored(ctx, mesh, positions, known_count, known, 0.0, out);
+}
+
+cf_status cf_edge_poisson_create_floored(cf_context *ctx, const cf_mesh *mesh, const double *positions,
+                                         int32_t known_count, const int32_t *known, double weight_floor,
+                                         cf_edge_poisson **out)
+{
     if (!ctx) return CF_ERR_INVALID_ARG;
     if (!out) return cfi_error(ctx, CF_ERR_INVALID_ARG, "edge_poisson: out is NULL");
     *out = NULL;
+    if (!(weight_floor >= 0.0 && weight_floor <= 1.0))
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "edge_poisson: weight_floor %g outside [0, 1]", weight_floor);
     if (!mesh) return cfi_error(ctx, CF_ERR_INVALID_ARG, "edge_poisson: mesh is NULL");
     if (known_count < 0 || known_count >= mesh->nv || (known_count > 0 && !known))
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "edge_poisson: %d known vertices of %d (need 0 .. nv - 1, and the list)",
@@ -87,6 +98,7 @@ cf_status cf_edge_poisson_create(cf_context *ctx, const cf_mesh *mesh, const dou
     p->nv = mesh->nv;
     p->ne = mesh->ne;
     p->known_count = known_count;
+    p->weight_floor = weight_floor;
     p->slot_count = cf_cotan_laplacian_slot_count(mesh);
     p->slot_map = CFI_ALLOC(ctx, int64_t, p->slot_count);
     p->edge_slot = CFI_ALLOC(ctx, int64_t, mesh->ne);
@@ -104,7 +116,7 @@ cf_status cf_edge_poisson_create(cf_context *ctx, const cf_mesh *mesh, const dou
         goto fail;
     }
     if (known_count > 0) memcpy(p->known, known, (size_t)known_count * sizeof *known);
-    st = cf_cotan_laplacian_with_slots(ctx, mesh, positions, &p->l, p->slot_map);
+    st = cfi_cotan_laplacian_pattern(ctx, mesh, positions, weight_floor, &p->l, p->slot_map);
     if (st == CF_OK) st = edge_slots(p);
     if (st == CF_OK) st = create_solver(p);
     if (st != CF_OK) goto fail;
@@ -147,7 +159,7 @@ cf_status cf_edge_poisson_set_metric(cf_edge_poisson *p, const double *positions
     if (!p->slot_map)
         return cfi_error(p->ctx, CF_ERR_INVALID_ARG, "edge poisson: the metric was frozen (cf_edge_poisson_freeze_metric)");
     p->factored = 0;
-    return cf_cotan_laplacian_refill(p->l, p->mesh, positions, p->slot_map);
+    return cfi_cotan_laplacian_refill(p->l, p->mesh, positions, p->weight_floor, p->slot_map);
 }
 
 const cf_sparse *cf_edge_poisson_laplacian(const cf_edge_poisson *p) { return p ? p->l : NULL; }

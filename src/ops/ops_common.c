@@ -18,7 +18,7 @@ cf_status cfi_ops_check(cf_context *ctx, const cf_mesh *mesh, const double *posi
 
 /* cot of the angle at a between u = b - a and v = c - a is (u . v) / |u x v| */
 cf_status cfi_face_cotangents(cf_context *ctx, const cf_mesh *mesh, const double *positions, int32_t f,
-                              double cot[3], double *double_area)
+                              double weight_floor, double cot[3], double *double_area)
 {
     const int32_t *t = mesh->triangles + 3 * f;
     const double *p[3] = {positions + 3 * t[0], positions + 3 * t[1], positions + 3 * t[2]};
@@ -28,11 +28,18 @@ cf_status cfi_face_cotangents(cf_context *ctx, const cf_mesh *mesh, const double
     cfi_v3_cross(e1, e2, n);
     double a2 = cfi_v3_norm(n);
     if (!(a2 > 0.0)) return cfi_error(ctx, CF_ERR_DEGENERATE_FACE, "face %d: zero area", f);
+    double weight_area = a2;
+    if (weight_floor > 0.0) {
+        double e0[3];
+        cfi_v3_sub(p[2], p[1], e0);
+        double floor_area = weight_floor * (cfi_v3_dot(e0, e0) + cfi_v3_dot(e1, e1) + cfi_v3_dot(e2, e2));
+        if (weight_area < floor_area) weight_area = floor_area;
+    }
     for (int k = 0; k < 3; ++k) {
         double u[3], v[3];
         cfi_v3_sub(p[(k + 1) % 3], p[k], u);
         cfi_v3_sub(p[(k + 2) % 3], p[k], v);
-        cot[k] = cfi_v3_dot(u, v) / a2;
+        cot[k] = cfi_v3_dot(u, v) / weight_area;
     }
     if (double_area) *double_area = a2;
     return CF_OK;

@@ -21,9 +21,12 @@ cf_status cfi_ops_check(cf_context *ctx, const cf_mesh *mesh, const double *posi
 
 /* Cotangent of the angle at corner k of face f, and twice the face area in
  * *double_area. Returns CF_ERR_DEGENERATE_FACE (with message) on a face of
- * zero area. */
+ * zero area. weight_floor >= 0: the cotangents are taken as if twice the
+ * area were at least weight_floor times the sum of the squared edge
+ * lengths (the weights of a nearly flat face bounded by about
+ * 1 / weight_floor; 0: the exact cotangents); *double_area stays exact. */
 cf_status cfi_face_cotangents(cf_context *ctx, const cf_mesh *mesh, const double *positions, int32_t f,
-                              double cot[3], double *double_area);
+                              double weight_floor, double cot[3], double *double_area);
 
 /* Gradients of the three hat functions of face f (row k: grad phi_k,
  * 9 doubles) and its area (optional). CF_ERR_DEGENERATE_FACE on zero area. */

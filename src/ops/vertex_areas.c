@@ -24,7 +24,7 @@ cf_status cf_vertex_areas(cf_context *ctx, const cf_mesh *mesh, const double *po
             continue;
         }
         double cot[3], a2;
-        s = cfi_face_cotangents(ctx, mesh, positions, f, cot, &a2);
+        s = cfi_face_cotangents(ctx, mesh, positions, f, 0.0, cot, &a2);
         if (s != CF_OK) return s;
         double area = 0.5 * a2;
         int obtuse = -1;

@@ -21,6 +21,7 @@
 #include "curvflow/linalg.h"
 #include "curvflow/ops.h"
 #include "mesh/mesh_internal.h"
+#include "ops/cotan_laplacian.h"
 
 #include <math.h>
 #include <string.h>
@@ -43,9 +44,17 @@ struct cf_vertex_fairing {
 cf_status cf_vertex_fairing_create(cf_context *ctx, const cf_mesh *mesh, const double *positions, int32_t hold_boundary,
                                    cf_vertex_fairing **out)
 {
+    return cf_vertex_fairing_create_floored(ctx, mesh, positions, hold_boundary, 0.0, out);
+}
+
+cf_status cf_vertex_fairing_create_floored(cf_context *ctx, const cf_mesh *mesh, const double *positions,
+                                           int32_t hold_boundary, double weight_floor, cf_vertex_fairing **out)
+{
     if (!ctx) return CF_ERR_INVALID_ARG;
     if (!out || !mesh) return cfi_error(ctx, CF_ERR_INVALID_ARG, "vertex_fairing: mesh or out is NULL");
     *out = NULL;
+    if (!(weight_floor >= 0.0 && weight_floor <= 1.0))
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "vertex_fairing: weight_floor %g outside [0, 1]", weight_floor);
     if (!positions) positions = mesh->positions;
     cf_vertex_fairing *f = CFI_ALLOC(ctx, cf_vertex_fairing, 1);
     if (!f) return CF_ERR_NOMEM;
@@ -59,7 +68,7 @@ cf_status cf_vertex_fairing_create(cf_context *ctx, const cf_mesh *mesh, const d
     f->p = CFI_ALLOC(ctx, double, n3);
     f->q = CFI_ALLOC(ctx, double, n3);
     cf_status st = CF_ERR_NOMEM;
-    if (f->held && f->diag && f->r && f->minv && f->p && f->q) st = cf_cotan_laplacian(ctx, mesh, positions, &f->l0);
+    if (f->held && f->diag && f->r && f->minv && f->p && f->q) st = cfi_cotan_laplacian_pattern(ctx, mesh, positions, weight_floor, &f->l0, NULL);
     if (st != CF_OK) {
         cf_vertex_fairing_destroy(&f);
         return st;

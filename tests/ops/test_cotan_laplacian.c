@@ -1,11 +1,15 @@
 /* Cotan Laplacian: L 1 = 0, symmetry, PSD, linear precision on a flat grid,
- * agreement with the per-edge weights and the refill path. */
+ * agreement with the per-edge weights and the refill path, the floored
+ * weights. */
 #include "curvflow/generate.h"
 #include "curvflow/ops.h"
 #include "ops/cotan_laplacian.h"
 #include "test.h"
 
+#include <math.h>
 #include <stdlib.h>
+#include <stdio.h>
+#include <string.h>
 
 static uint64_t rng_state = 0x853c49e6748fea9bull;
 static double urand(void)
@@ -163,11 +167,11 @@ static void test_refill(void)
     CHECK(n == nv + 2 * (int64_t)cf_mesh_edge_count(m));
     int64_t *slots = malloc(sizeof(int64_t) * n);
     cf_sparse *l = NULL, *fresh = NULL;
-    CHECK_OK(ctx, cfi_cotan_laplacian_pattern(ctx, m, cf_mesh_positions(m), &l, slots));
+    CHECK_OK(ctx, cfi_cotan_laplacian_pattern(ctx, m, cf_mesh_positions(m), 0.0, &l, slots));
     double *y = malloc(sizeof(double) * 3 * nv);
     for (int32_t i = 0; i < 3 * nv; ++i) y[i] = cf_mesh_positions(m)[i] * (1.0 + 0.05 * urand());
     int64_t allocs = cf_context_allocation_count(ctx);
-    CHECK_OK(ctx, cfi_cotan_laplacian_refill(l, m, y, slots));
+    CHECK_OK(ctx, cfi_cotan_laplacian_refill(l, m, y, 0.0, slots));
     CHECK(cf_context_allocation_count(ctx) == allocs);
     CHECK_OK(ctx, cf_cotan_laplacian(ctx, m, y, &fresh));
     CHECK(cf_sparse_nnz(l) == cf_sparse_nnz(fresh));
@@ -200,11 +204,11 @@ static void test_public_refill(void)
     cf_sparse *l = NULL, *l2 = NULL;
     CHECK_STATUS(cf_cotan_laplacian_with_slots(ctx, m, cf_mesh_positions(m), &l, NULL), CF_ERR_INVALID_ARG);
     CHECK_OK(ctx, cf_cotan_laplacian_with_slots(ctx, m, cf_mesh_positions(m), &l, slots));
-    CHECK_OK(ctx, cfi_cotan_laplacian_pattern(ctx, m, cf_mesh_positions(m), &l2, slots2));
+    CHECK_OK(ctx, cfi_cotan_laplacian_pattern(ctx, m, cf_mesh_positions(m), 0.0, &l2, slots2));
     double *y = malloc(sizeof(double) * 3 * nv);
     for (int32_t i = 0; i < 3 * nv; ++i) y[i] = cf_mesh_positions(m)[i] * (1.0 + 0.05 * urand());
     CHECK_OK(ctx, cf_cotan_laplacian_refill(l, m, y, slots));
-    CHECK_OK(ctx, cfi_cotan_laplacian_refill(l2, m, y, slots2));
+    CHECK_OK(ctx, cfi_cotan_laplacian_refill(l2, m, y, 0.0, slots2));
     for (int64_t k = 0; k < cf_sparse_nnz(l); ++k) CHECK(l->values[k] == l2->values[k]);
     CHECK_STATUS(cf_cotan_laplacian_refill(l, m, y, NULL), CF_ERR_INVALID_ARG);
     double *angles = malloc(sizeof(double) * 3 * nf);
@@ -217,6 +221,123 @@ static void test_public_refill(void)
     free(slots2);
     free(y);
     free(angles);
+    cf_mesh_destroy(&m);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+/* The weight floor (session 30): a face's cotangents as if twice its area
+ * were at least floor * (sum of squared edges). On a mesh whose faces are
+ * all above the floor every floored operator equals the exact one bit for
+ * bit; a near-duplicate vertex (at 1e-12 of an edge from its neighbour)
+ * has exact weights of order 1e12 and floored ones of order 1 / floor, the
+ * others unchanged; L 1 = 0 and symmetry hold; the floor's range is checked.
+ * The floored solvers (edge Poisson, fairing) agree with the exact ones on
+ * a mesh above the floor. */
+static void test_weight_floor(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *m = NULL;
+    CHECK_OK(ctx, cf_generate_bumpy_sphere(ctx, 2, 0.2, 5u, &m));
+    if (!m) return;
+    int32_t nv = cf_mesh_vertex_count(m), ne = cf_mesh_edge_count(m), nf = cf_mesh_face_count(m);
+    const double *x = cf_mesh_positions(m);
+    int64_t n = cf_cotan_laplacian_slot_count(m);
+    int64_t *slots = malloc(sizeof(int64_t) * n), *slots2 = malloc(sizeof(int64_t) * n);
+    double *w = malloc(sizeof(double) * ne), *wf = malloc(sizeof(double) * ne), *y = malloc(sizeof(double) * 3 * nv);
+    cf_sparse *l = NULL, *lf = NULL, *ls = NULL;
+    /* above the floor: bit for bit */
+    CHECK_OK(ctx, cf_cotan_weights(ctx, m, x, w));
+    CHECK_OK(ctx, cf_cotan_weights_floored(ctx, m, x, 1e-8, wf));
+    CHECK(memcmp(w, wf, sizeof(double) * ne) == 0);
+    CHECK_OK(ctx, cf_cotan_laplacian(ctx, m, x, &l));
+    CHECK_OK(ctx, cf_cotan_laplacian_floored(ctx, m, x, 1e-8, &lf));
+    CHECK_OK(ctx, cf_cotan_laplacian_with_slots_floored(ctx, m, x, 1e-8, &ls, slots));
+    for (int64_t k = 0; l && lf && ls && k < cf_sparse_nnz(l); ++k)
+        CHECK(l->values[k] == lf->values[k] && l->values[k] == ls->values[k]);
+    cf_sparse_destroy(&lf);
+    /* a near-duplicate vertex: face 100's first corner at 1e-12 of the way from its second */
+    memcpy(y, x, sizeof(double) * 3 * nv);
+    const int32_t *t = cf_mesh_triangles(m) + 3 * 100;
+    for (int c = 0; c < 3; ++c) y[3 * t[0] + c] = x[3 * t[1] + c] + 1e-12 * (x[3 * t[0] + c] - x[3 * t[1] + c]);
+    CHECK_OK(ctx, cf_cotan_weights(ctx, m, y, w));
+    CHECK_OK(ctx, cf_cotan_weights_floored(ctx, m, y, 1e-8, wf));
+    double exact_max = 0.0, floored_max = 0.0;
+    int32_t changed = 0;
+    for (int32_t e = 0; e < ne; ++e) {
+        exact_max = fmax(exact_max, fabs(w[e]));
+        floored_max = fmax(floored_max, fabs(wf[e]));
+        changed += w[e] != wf[e];
+    }
+    fprintf(stderr, "   near-duplicate at 1e-12: largest weight %.3g exact, %.3g floored (1e-8); %d edges changed\n",
+            exact_max, floored_max, (int)changed);
+    CHECK(exact_max > 1e10);
+    CHECK(floored_max < 1e8 && floored_max > 1e6);
+    CHECK(changed > 0 && changed <= 6); /* the edges of the two thin faces */
+    /* the floored L: refill equals a fresh build, L 1 = 0, symmetric */
+    CHECK_OK(ctx, cf_cotan_laplacian_refill_floored(ls, m, y, 1e-8, slots));
+    CHECK_OK(ctx, cf_cotan_laplacian_floored(ctx, m, y, 1e-8, &lf));
+    double scale = 0.0;
+    for (int64_t k = 0; lf && k < cf_sparse_nnz(lf); ++k) scale = fmax(scale, fabs(lf->values[k]));
+    CHECK(scale < 1e8);
+    /* the same sums in another order: equal to rounding */
+    for (int64_t k = 0; ls && lf && k < cf_sparse_nnz(ls); ++k) CHECK_NEAR(ls->values[k], lf->values[k], 0, 1e-15 * scale);
+    double *ones = malloc(sizeof(double) * nv), *r = malloc(sizeof(double) * nv);
+    for (int32_t i = 0; i < nv; ++i) ones[i] = 1.0;
+    if (lf) cf_sparse_multiply(lf, ones, r);
+    for (int32_t i = 0; lf && i < nv; ++i) CHECK_NEAR(r[i], 0.0, 0, 1e-13 * scale);
+    for (int32_t j = 0; lf && j < nv; ++j)
+        for (int32_t k = lf->colptr[j]; k < lf->colptr[j + 1]; ++k)
+            CHECK(lf->values[k] == entry(lf, j, lf->rowind[k]));
+    /* the floor's range */
+    CHECK_STATUS(cf_cotan_weights_floored(ctx, m, y, -1e-9, wf), CF_ERR_INVALID_ARG);
+    CHECK(strstr(cf_context_message(ctx), "weight_floor -1e-09 outside [0, 1]") != NULL);
+    CHECK_STATUS(cf_cotan_laplacian_floored(ctx, m, y, NAN, &l), CF_ERR_INVALID_ARG);
+    CHECK_STATUS(cf_cotan_laplacian_refill_floored(ls, m, y, 2.0, slots), CF_ERR_INVALID_ARG);
+    cf_edge_poisson *p = NULL;
+    CHECK_STATUS(cf_edge_poisson_create_floored(ctx, m, y, 0, NULL, 1.5, &p), CF_ERR_INVALID_ARG);
+    cf_vertex_fairing *fa = NULL;
+    CHECK_STATUS(cf_vertex_fairing_create_floored(ctx, m, y, 1, -1.0, &fa), CF_ERR_INVALID_ARG);
+    /* the solvers above the floor: the same results as the exact ones */
+    cf_edge_poisson *p0 = NULL;
+    CHECK_OK(ctx, cf_edge_poisson_create(ctx, m, x, 0, NULL, &p0));
+    CHECK_OK(ctx, cf_edge_poisson_create_floored(ctx, m, x, 0, NULL, 1e-8, &p));
+    double *edges = malloc(sizeof(double) * 3 * ne), *f0 = malloc(sizeof(double) * 3 * nv),
+           *f1 = malloc(sizeof(double) * 3 * nv);
+    const int32_t *ev = cf_mesh_edge_vertices(m);
+    for (int32_t e = 0; e < ne; ++e)
+        for (int c = 0; c < 3; ++c) edges[3 * e + c] = 1.1 * (x[3 * ev[2 * e + 1] + c] - x[3 * ev[2 * e] + c]);
+    if (p0 && p) {
+        CHECK_OK(ctx, cf_edge_poisson_solve(p0, edges, NULL, f0, NULL));
+        CHECK_OK(ctx, cf_edge_poisson_solve(p, edges, NULL, f1, NULL));
+        CHECK(memcmp(f0, f1, sizeof(double) * 3 * nv) == 0);
+    }
+    cf_vertex_fairing *fa0 = NULL;
+    CHECK_OK(ctx, cf_vertex_fairing_create(ctx, m, x, 1, &fa0));
+    CHECK_OK(ctx, cf_vertex_fairing_create_floored(ctx, m, x, 1, 1e-8, &fa));
+    if (fa0 && fa) {
+        CHECK_OK(ctx, cf_vertex_fairing_apply(fa0, 0.5, x, f0, NULL));
+        CHECK_OK(ctx, cf_vertex_fairing_apply(fa, 0.5, x, f1, NULL));
+        CHECK(memcmp(f0, f1, sizeof(double) * 3 * nv) == 0);
+    }
+    (void)nf;
+    cf_edge_poisson_destroy(&p0);
+    cf_edge_poisson_destroy(&p);
+    cf_vertex_fairing_destroy(&fa0);
+    cf_vertex_fairing_destroy(&fa);
+    cf_sparse_destroy(&l);
+    cf_sparse_destroy(&lf);
+    cf_sparse_destroy(&ls);
+    free(edges);
+    free(f0);
+    free(f1);
+    free(ones);
+    free(r);
+    free(slots);
+    free(slots2);
+    free(w);
+    free(wf);
+    free(y);
     cf_mesh_destroy(&m);
     CHECK(cf_context_bytes_in_use(ctx) == 0);
     cf_context_destroy(&ctx);
@@ -310,6 +431,7 @@ int main(void)
     CFT_RUN(test_refill);
     CFT_RUN(test_public_refill);
     CFT_RUN(test_relabelling);
+    CFT_RUN(test_weight_floor);
     CFT_RUN(test_failures);
     return cft_finish();
 }

@@ -343,7 +343,7 @@ cf_status cfi_spin_exactness_init(cf_flow *flow, cfi_spin_state *s)
     if (st != CF_OK) return st;
     if (CF_NEVER(dim2 != s->harmonic_dim))
         return cfi_error(ctx, CF_ERR_NUMERICAL, "spin-willmore: harmonic basis dimension changed");
-    if (s->linearized) return cf_cotan_weights(ctx, mesh, flow->positions, s->hweights);
+    if (s->linearized) return cf_cotan_weights_floored(ctx, mesh, flow->positions, s->opt.weight_floor, s->hweights);
     return CF_OK;
 }
 

@@ -54,7 +54,7 @@ cf_status cfi_spin_update_geometry(cf_flow *flow, cfi_spin_state *s, const doubl
     cf_context *ctx = flow->ctx;
     const cf_mesh *mesh = flow->mesh;
     cf_status st = s->poisson ? cf_edge_poisson_set_metric(s->poisson, x)
-                              : cf_cotan_laplacian_refill(s->lap, mesh, x, s->lap_slots);
+                              : cf_cotan_laplacian_refill_floored(s->lap, mesh, x, s->opt.weight_floor, s->lap_slots);
     if (st == CF_OK) st = cf_vertex_areas(ctx, mesh, x, CF_DUAL_AREA_BARYCENTRIC, s->area);
     if (st == CF_OK) st = cf_vertex_normals(ctx, mesh, x, s->normal);
     if (st != CF_OK) return st;
@@ -168,9 +168,11 @@ static cf_status create_current_poisson(cf_flow *flow, cfi_spin_state *s)
     if (s->opt.input_metric && !s->fixed_boundary && s->harmonic_dim == 0) {
         s->lap_slots = CFI_WS_ALLOC(&s->ws, int64_t, cf_cotan_laplacian_slot_count(mesh));
         if (!s->lap_slots) return CF_ERR_NOMEM;
-        return cf_cotan_laplacian_with_slots(ctx, mesh, flow->positions, &s->lap, s->lap_slots);
+        return cf_cotan_laplacian_with_slots_floored(ctx, mesh, flow->positions, s->opt.weight_floor, &s->lap,
+                                                     s->lap_slots);
     }
-    if (!s->fixed_boundary) return cf_edge_poisson_create(ctx, mesh, flow->positions, 0, NULL, &s->poisson);
+    if (!s->fixed_boundary)
+        return cf_edge_poisson_create_floored(ctx, mesh, flow->positions, 0, NULL, s->opt.weight_floor, &s->poisson);
     int32_t count = 0;
     for (int32_t i = 0; i < mesh->nv; ++i) count += mesh->vertex_on_boundary[i] != 0;
     int32_t *known = CFI_ALLOC(ctx, int32_t, count);
@@ -178,7 +180,8 @@ static cf_status create_current_poisson(cf_flow *flow, cfi_spin_state *s)
     count = 0;
     for (int32_t i = 0; i < mesh->nv; ++i)
         if (mesh->vertex_on_boundary[i]) known[count++] = i;
-    cf_status st = cf_edge_poisson_create(ctx, mesh, flow->positions, count, known, &s->poisson);
+    cf_status st = cf_edge_poisson_create_floored(ctx, mesh, flow->positions, count, known, s->opt.weight_floor,
+                                                  &s->poisson);
     CFI_FREE(ctx, known, count);
     return st;
 }
@@ -220,15 +223,18 @@ static cf_status create_dirac(cf_flow *flow, cfi_spin_state *s)
 
 /* The face thinnest against its size (its area over its longest edge
  * squared, the mesh check's measure, whose zero is CFI_ZERO_AREA_RATIO;
- * 0.43 for an equilateral triangle) below which spin-willmore warns: a
+ * 0.43 for an equilateral triangle) below which spin-willmore speaks: a
  * vertex within about 1e-10 of an edge's length from its neighbour. From
- * 1e-11 on, measured on spot_3k, the cotan weights of 1 / that ratio cost
+ * 1e-11 on, measured on spot_3k, exact cotan weights of 1 / that ratio cost
  * every solve its accuracy and the flow stops far from round (W/4pi 2.8-5.6
- * after 10 steps instead of 1.002; docs/spin.md, "Near-duplicate
- * vertices"); every shared and generated mesh is above 1e-6. */
+ * after 10 steps instead of 1.002); the weight floor (option weight_floor,
+ * on by default since session 30) bounds them, and the flow ends at 1.002
+ * (docs/spin.md, "Near-duplicate vertices"). Every shared and generated
+ * mesh is above 1e-6. */
 #define CFI_SPIN_THIN_FACE_WARNING 1e-10
 
-static void warn_thin_faces(const cf_flow *flow)
+/* With the floor: a note (info) that it is in use; without: the warning. */
+static void report_thin_faces(const cf_flow *flow, double weight_floor)
 {
     const cf_mesh *mesh = flow->mesh;
     const double *x = flow->positions;
@@ -246,11 +252,18 @@ static void warn_thin_faces(const cf_flow *flow)
             face = f;
         }
     }
-    if (face >= 0)
+    if (face < 0) return;
+    if (weight_floor > 0.0)
+        cfi_log(flow->ctx, CF_LOG_INFO,
+                "spin-willmore: face %d is nearly flat (its area is %.2g of its longest edge squared; %d face%s below "
+                "%g): a near-duplicate vertex? Its cotan weights are bounded by weight_floor %g",
+                face, least, count, count == 1 ? "" : "s", CFI_SPIN_THIN_FACE_WARNING, weight_floor);
+    else
         cfi_log(flow->ctx, CF_LOG_WARNING,
                 "spin-willmore: face %d is nearly flat (its area is %.2g of its longest edge squared; %d face%s below "
-                "%g): a near-duplicate vertex? Its weights cost the solves their accuracy and the flow may stop "
-                "far from its minimum; welding such vertices helps (docs/spin.md, \"Near-duplicate vertices\")",
+                "%g): a near-duplicate vertex? With weight_floor=0 its weights cost the solves their accuracy and the "
+                "flow may stop far from its minimum; the default weight_floor or welding such vertices helps "
+                "(docs/spin.md, \"Near-duplicate vertices\")",
                 face, least, count, count == 1 ? "" : "s", CFI_SPIN_THIN_FACE_WARNING);
 }
 
@@ -326,7 +339,8 @@ cf_status cfi_spin_create(cf_flow *flow, const void *options)
      * -> 2.9; bunny max Q 7.1 -> 3.7; spot W/4pi 1.0488 -> 1.0472. A fixed
      * boundary rewrites the matrix every step and keeps the current metric. */
     if (st == CF_OK && o->input_metric && !s->fixed_boundary)
-        st = cf_edge_poisson_create(ctx, mesh, flow->positions, 0, NULL, &s->poisson_input); /* filled with these positions */
+        st = cf_edge_poisson_create_floored(ctx, mesh, flow->positions, 0, NULL, o->weight_floor,
+                                            &s->poisson_input); /* filled with these positions */
     /* its metric stays the input's: the refill data would only hold memory */
     if (st == CF_OK && s->poisson_input) cf_edge_poisson_freeze_metric(s->poisson_input);
     if (st == CF_OK) st = cfi_spin_update_geometry(flow, s, flow->positions);
@@ -345,13 +359,14 @@ cf_status cfi_spin_create(cf_flow *flow, const void *options)
     /* the vertex-scale fairing, with the input's Laplacian (conformally
      * invariant, as the position recovery's) and the boundary held;
      * prescribed / cmc boundaries set their boundary vectors themselves */
-    if (st == CF_OK && s->faired) st = cf_vertex_fairing_create(ctx, mesh, flow->positions, 1, &s->fairing);
+    if (st == CF_OK && s->faired)
+        st = cf_vertex_fairing_create_floored(ctx, mesh, flow->positions, 1, o->weight_floor, &s->fairing);
     if (st != CF_OK) goto fail;
 
     flow->info.energy = s->energy;
     flow->info.energy_terms[0] = s->energy / (4.0 * CFI_PI);
     flow->info.term_names[0] = "W/4pi";
-    warn_thin_faces(flow);
+    report_thin_faces(flow, o->weight_floor);
     return CF_OK;
 fail:
     cfi_spin_destroy(flow);
@@ -905,7 +920,8 @@ cf_status cfi_spin_fallback(cf_flow *flow, int32_t *switched, double *restart_st
     if (!s->poisson) {
         /* the layer has reverted to the step's start: its metric, and from
          * now on H from the solver's Laplacian (the same values as s->lap) */
-        cf_status st = cf_edge_poisson_create(flow->ctx, flow->mesh, flow->positions, 0, NULL, &s->poisson);
+        cf_status st = cf_edge_poisson_create_floored(flow->ctx, flow->mesh, flow->positions, 0, NULL,
+                                                      s->opt.weight_floor, &s->poisson);
         if (st != CF_OK) return st;
     }
     s->current_metric_step = 1;

@@ -45,6 +45,7 @@ void cf_spin_willmore_options_default(cf_spin_willmore_options *o)
     o->growth_ratio = 0.75;
     o->exactness_refresh = 0.1;
     o->fairing = 1.0;
+    o->weight_floor = CFI_SPIN_WEIGHT_FLOOR;
 }
 
 static void options_default(void *options) { cf_spin_willmore_options_default(options); }
@@ -122,6 +123,9 @@ static const cf_param_desc spin_params[] = {
      "vertex-scale fairing per unit tau: each step's positions relaxed by (I + fairing tau L0)^-1 (input cotan "
      "Laplacian, unit vertex weights, boundary held), kept if W is lower (0: off, the paper's step; not with "
      "prescribed/cmc boundaries)"},
+    {"weight_floor", CF_PARAM_DOUBLE, OPT(weight_floor), 0.0, 1e-3, NULL,
+     "floor on the cotan weights of the flow's Laplacians: a face weighs as if twice its area were at least this "
+     "times the sum of its squared edges (bounds the weights of a near-duplicate vertex; 0: exact weights)"},
     {"harmonic_update", CF_PARAM_BOOL, OPT(harmonic_update), 0, 1, NULL,
      "with App. C's Z_i: re-project the harmonic 1-forms onto the current metric each step"},
     {"boundary_targets", CF_PARAM_VERTEX_VECTORS, OPT(boundary_targets), 0, 1, NULL,

@@ -119,6 +119,14 @@ void cfi_spin_transform_edges(const cf_mesh *mesh, const double *positions, cons
  * The flow's default; its option `regularization` changes it. */
 #define CFI_SPIN_SHIFT 1e-3
 
+/* Default floor on the flow's cotan weights (option weight_floor): twice a
+ * face's area counts as at least this times the sum of its squared edges.
+ * Session 28 measured it (docs/spin.md, "Near-duplicate vertices"): every
+ * near-duplicate from 1e-10 to 1e-13 of an edge on spot_3k then ends at
+ * W/4pi 1.002 after 10 steps; the smallest ratio on the shared meshes is
+ * 1.2e-6 (triceratops_needles_3k), so none of them is touched. */
+#define CFI_SPIN_WEIGHT_FLOOR 1e-8
+
 /* Inverse power iteration (Crane 2013, Sec. 6.4.2) on a factorisation of
  * X + eps M and its Rayleigh quotient: cf_inverse_iteration_blocks /
  * cf_rayleigh_quotient_blocks (curvflow/linalg.h) with block size 4 and the

@@ -199,7 +199,9 @@ CF_API void cf_spin_willmore_options_default(cf_spin_willmore_options *options);
  *   rho: nv values, curvature change in 1/length (H~ ~= H + rho);
  *   out_positions: 3 nv, caller-allocated (may not alias positions).
  * The result keeps the area-weighted centroid of the input; its scale is set
- * by normalising lambda to mean |lambda|^2 = 1 (area weighted).
+ * by normalising lambda to mean |lambda|^2 = 1 (area weighted). The
+ * Poisson problem's weights have the flow's default floor (weight_floor
+ * 1e-8: only faces with an angle below about 2e-8 rad are touched).
  * Statuses: CF_OK, CF_ERR_INVALID_ARG, CF_ERR_NONFINITE (rho), CF_ERR_NOMEM,
  * CF_ERR_DEGENERATE_FACE, CF_ERR_NOT_POSDEF, CF_ERR_NUMERICAL. */
 CF_API cf_status cf_spin_transform(cf_context *ctx, const cf_mesh *mesh, const double *positions, const double *rho,

@@ -284,6 +284,21 @@ static bool in_colour_range(const cf_field *f, int32_t n)
     return true;
 }
 
+/* The colour channels of one location: rgba[0..3] field indices of red,
+ * green, blue, alpha with values in [0, 255] (alpha -1 when absent), all
+ * -1 when red, green and blue are not all there in range. What OFF holds,
+ * and (red green blue) what OBJ writes on its v lines. */
+static void colour_fields(const cf_field *fields, int32_t count, cf_field_location location, int32_t n,
+                              int32_t rgba[4])
+{
+    static const char *const names[4] = {"red", "green", "blue", "alpha"};
+    for (int c = 0; c < 4; ++c) {
+        rgba[c] = find_field(fields, count, location, names[c]);
+        if (rgba[c] >= 0 && !in_colour_range(&fields[rgba[c]], n)) rgba[c] = -1;
+    }
+    if (rgba[0] < 0 || rgba[1] < 0 || rgba[2] < 0) rgba[0] = rgba[1] = rgba[2] = rgba[3] = -1;
+}
+
 static bool is_obj_colour(const write_job *j, int32_t i)
 {
     return i == j->obj_rgb[0] || i == j->obj_rgb[1] || i == j->obj_rgb[2];
@@ -295,14 +310,10 @@ static bool is_obj_colour(const write_job *j, int32_t i)
  * the CSV files get the other fields. */
 static void find_obj_colours(write_job *j)
 {
-    static const char *const names[3] = {"red", "green", "blue"};
-    int32_t nv = cf_mesh_vertex_count(j->mesh);
-    for (int c = 0; c < 3; ++c) {
-        j->obj_rgb[c] = find_field(j->fields, j->field_count, CF_FIELD_VERTEX, names[c]);
-        if (j->obj_rgb[c] >= 0 && !in_colour_range(&j->fields[j->obj_rgb[c]], nv)) j->obj_rgb[c] = -1;
-    }
-    if (j->obj_rgb[0] < 0 || j->obj_rgb[1] < 0 || j->obj_rgb[2] < 0) j->obj_rgb[0] = j->obj_rgb[1] = j->obj_rgb[2] = -1;
-    else j->nvf -= 3;
+    int32_t rgba[4];
+    colour_fields(j->fields, j->field_count, CF_FIELD_VERTEX, cf_mesh_vertex_count(j->mesh), rgba);
+    for (int c = 0; c < 3; ++c) j->obj_rgb[c] = rgba[c];
+    if (rgba[0] >= 0) j->nvf -= 3;
 }
 
 static cf_status write_csv(write_job *j, const char *csv_path, cf_field_location loc, int32_t n)
@@ -390,18 +401,12 @@ static cf_status write_obj(write_job *j)
     return cfi_atomic_commit(ctx, &af);
 }
 
-/* The colour channels of one location that OFF holds: rgba[0..3] field
- * indices (alpha -1 when absent), all -1 when red, green and blue are not
- * all there in range. */
-static void off_colour_fields(const cf_field *fields, int32_t count, cf_field_location location, int32_t n,
-                              int32_t rgba[4])
+/* Field i is one of the vertex or face colour channels v, f (colour_fields). */
+static bool is_channel(int32_t i, const int32_t v[4], const int32_t f[4])
 {
-    static const char *const names[4] = {"red", "green", "blue", "alpha"};
-    for (int c = 0; c < 4; ++c) {
-        rgba[c] = find_field(fields, count, location, names[c]);
-        if (rgba[c] >= 0 && !in_colour_range(&fields[rgba[c]], n)) rgba[c] = -1;
-    }
-    if (rgba[0] < 0 || rgba[1] < 0 || rgba[2] < 0) rgba[0] = rgba[1] = rgba[2] = rgba[3] = -1;
+    for (int c = 0; c < 4; ++c)
+        if (i == v[c] || i == f[c]) return true;
+    return false;
 }
 
 int32_t cf_off_fields_writable(const cf_field *fields, int32_t field_count, int32_t vertex_count, int32_t face_count,
@@ -409,12 +414,11 @@ int32_t cf_off_fields_writable(const cf_field *fields, int32_t field_count, int3
 {
     int32_t v[4] = {-1, -1, -1, -1}, f[4] = {-1, -1, -1, -1}, n = 0;
     if (fields && field_count > 0) {
-        off_colour_fields(fields, field_count, CF_FIELD_VERTEX, vertex_count, v);
-        off_colour_fields(fields, field_count, CF_FIELD_FACE, face_count, f);
+        colour_fields(fields, field_count, CF_FIELD_VERTEX, vertex_count, v);
+        colour_fields(fields, field_count, CF_FIELD_FACE, face_count, f);
     }
     for (int32_t i = 0; fields && i < field_count; ++i) {
-        bool w = false;
-        for (int c = 0; c < 4; ++c) w = w || i == v[c] || i == f[c];
+        bool w = is_channel(i, v, f);
         if (writable) writable[i] = w;
         n += w;
     }
@@ -433,12 +437,10 @@ static cf_status write_off(write_job *j)
     cf_context *ctx = j->ctx;
     int32_t nv = cf_mesh_vertex_count(j->mesh), nf = cf_mesh_face_count(j->mesh);
     int32_t v[4], f[4];
-    off_colour_fields(j->fields, j->field_count, CF_FIELD_VERTEX, nv, v);
-    off_colour_fields(j->fields, j->field_count, CF_FIELD_FACE, nf, f);
+    colour_fields(j->fields, j->field_count, CF_FIELD_VERTEX, nv, v);
+    colour_fields(j->fields, j->field_count, CF_FIELD_FACE, nf, f);
     for (int32_t i = 0; i < j->field_count; ++i) {
-        bool colour = false;
-        for (int c = 0; c < 4; ++c) colour = colour || i == v[c] || i == f[c];
-        if (!colour)
+        if (!is_channel(i, v, f))
             return cfi_error(ctx, CF_ERR_UNSUPPORTED,
                              "%s: OFF holds only colours (red green blue [alpha] of vertices or faces, in [0, 255]); "
                              "field '%s' cannot be written (write PLY, or OBJ with CSV files)",

@@ -96,10 +96,15 @@ cf_status cf_cotan_laplacian(cf_context *ctx, const cf_mesh *mesh, const double 
     return cfi_cotan_laplacian_pattern(ctx, mesh, positions, 0.0, out, NULL);
 }
 
-static cf_status check_floor(cf_context *ctx, double weight_floor)
+cf_status cfi_check_weight_floor(cf_context *ctx, double weight_floor, const char *fn)
 {
     if (weight_floor >= 0.0 && weight_floor <= 1.0) return CF_OK;
-    return cfi_error(ctx, CF_ERR_INVALID_ARG, "cotan weights: weight_floor %g outside [0, 1]", weight_floor);
+    return cfi_error(ctx, CF_ERR_INVALID_ARG, "%s: weight_floor %g outside [0, 1]", fn, weight_floor);
+}
+
+static cf_status check_floor(cf_context *ctx, double weight_floor)
+{
+    return cfi_check_weight_floor(ctx, weight_floor, "cotan weights");
 }
 
 cf_status cf_cotan_laplacian_floored(cf_context *ctx, const cf_mesh *mesh, const double *positions,

@@ -15,6 +15,9 @@
  * vertex v at v, then (i, j) and (j, i) of edge e at nv + 2e, nv + 2e + 1). */
 int64_t cfi_cotan_laplacian_triplet_count(const cf_mesh *mesh);
 
+/* CF_OK for a weight floor in [0, 1]; else CF_ERR_INVALID_ARG naming `fn`. */
+cf_status cfi_check_weight_floor(cf_context *ctx, double weight_floor, const char *fn);
+
 /* Builds L for `positions` (nv x nv, symmetric) and fills the caller's
  * slot_map (cfi_cotan_laplacian_triplet_count entries; NULL: none).
  * weight_floor: as cfi_face_cotangents (0: the exact weights). */

@@ -84,8 +84,8 @@ cf_status cf_edge_poisson_create_floored(cf_context *ctx, const cf_mesh *mesh, c
     if (!ctx) return CF_ERR_INVALID_ARG;
     if (!out) return cfi_error(ctx, CF_ERR_INVALID_ARG, "edge_poisson: out is NULL");
     *out = NULL;
-    if (!(weight_floor >= 0.0 && weight_floor <= 1.0))
-        return cfi_error(ctx, CF_ERR_INVALID_ARG, "edge_poisson: weight_floor %g outside [0, 1]", weight_floor);
+    cf_status floor_ok = cfi_check_weight_floor(ctx, weight_floor, "edge_poisson");
+    if (floor_ok != CF_OK) return floor_ok;
     if (!mesh) return cfi_error(ctx, CF_ERR_INVALID_ARG, "edge_poisson: mesh is NULL");
     if (known_count < 0 || known_count >= mesh->nv || (known_count > 0 && !known))
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "edge_poisson: %d known vertices of %d (need 0 .. nv - 1, and the list)",

@@ -53,8 +53,8 @@ cf_status cf_vertex_fairing_create_floored(cf_context *ctx, const cf_mesh *mesh,
     if (!ctx) return CF_ERR_INVALID_ARG;
     if (!out || !mesh) return cfi_error(ctx, CF_ERR_INVALID_ARG, "vertex_fairing: mesh or out is NULL");
     *out = NULL;
-    if (!(weight_floor >= 0.0 && weight_floor <= 1.0))
-        return cfi_error(ctx, CF_ERR_INVALID_ARG, "vertex_fairing: weight_floor %g outside [0, 1]", weight_floor);
+    cf_status floor_ok = cfi_check_weight_floor(ctx, weight_floor, "vertex_fairing");
+    if (floor_ok != CF_OK) return floor_ok;
     if (!positions) positions = mesh->positions;
     cf_vertex_fairing *f = CFI_ALLOC(ctx, cf_vertex_fairing, 1);
     if (!f) return CF_ERR_NOMEM;

@@ -68,6 +68,14 @@ typedef struct cf_baseline_options {
     /* What happens at the boundary of a mesh with boundary (a
      * cf_baseline_boundary value; parameter "boundary" = free | fixed). */
     int32_t boundary;
+    /* Floor on the cotan weights of L (cf_cotan_laplacian_floored): a face
+     * weighs as if twice its area were at least this times the sum of its
+     * squared edges. Default 0: the exact weights, the classical operators.
+     * 1e-8 bounds the weights of a near-duplicate vertex, which otherwise
+     * make the explicit flows' automatic step vanish and cost the implicit
+     * solves their accuracy (docs/flowcli.md). Parameter "weight_floor",
+     * session 30. */
+    double weight_floor;
 } cf_baseline_options;
 
 /* Boundary conditions of the baseline flows.

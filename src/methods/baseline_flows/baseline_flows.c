@@ -83,7 +83,10 @@ static const char *const boundary_choices[] = {"free", "fixed", NULL};
     {"boundary", CF_PARAM_CHOICE, offsetof(cf_baseline_options, boundary), 0, 1, boundary_choices,                     \
      "free: boundary vertices move (natural boundary; MCF default); fixed: they are held and the bi-Laplacian "        \
      "energy counts interior vertices only (bi-Laplacian default: with a free boundary its step raises its "           \
-     "energy on flat or nearly flat open meshes)"}
+     "energy on flat or nearly flat open meshes)"},                                                                    \
+    {"weight_floor", CF_PARAM_DOUBLE, offsetof(cf_baseline_options, weight_floor), 0.0, 1e-3, NULL,                   \
+     "floor on L's cotan weights: a face weighs as if twice its area were at least this times the sum of its "         \
+     "squared edges (0: exact, the classical operator; 1e-8 bounds the weights of a near-duplicate vertex)"}
 
 /* The time step's range is each family's: 0 asks the explicit flows for
  * their automatic step and is refused by the implicit ones, so their listing
@@ -154,7 +157,7 @@ static cf_status assemble_mass(cf_flow *flow, baseline_state *s)
 /* L and the lumped masses of the current positions. */
 static cf_status assemble(cf_flow *flow, baseline_state *s)
 {
-    cf_status st = cf_cotan_laplacian_refill(s->l, flow->mesh, flow->positions, s->slot_map);
+    cf_status st = cf_cotan_laplacian_refill_floored(s->l, flow->mesh, flow->positions, s->opt.weight_floor, s->slot_map);
     if (st != CF_OK) return st;
     return assemble_mass(flow, s);
 }
@@ -357,7 +360,7 @@ static cf_status baseline_create(cf_flow *flow, const void *options)
     cf_status st = cf_vertex_areas(ctx, mesh, flow->positions, CF_DUAL_AREA_BARYCENTRIC, s->mass);
     if (st != CF_OK) return st;
     mass_centroid(s, flow->positions, s->centroid0);
-    st = cf_cotan_laplacian_with_slots(ctx, mesh, flow->positions, &s->l, s->slot_map);
+    st = cf_cotan_laplacian_with_slots_floored(ctx, mesh, flow->positions, s->opt.weight_floor, &s->l, s->slot_map);
     if (st != CF_OK) return st;
     st = find_diagonal(ctx, s->l, s->l_diag, "the Laplacian");
     if (st != CF_OK) return st;

@@ -26,8 +26,9 @@ static void usage(FILE *out)
             "  --rho FILE|NAME  text file with one value per vertex (1/length), or the name of a\n"
             "                   PLY vertex property of IN (a name that is both is refused: ./NAME is the file)\n"
             "  --scale S        multiply rho by S (default 1)\n"
-            "  -o OUT           output mesh (.obj, .off or .ply; texture coordinates are kept; a PLY\n"
-            "                   also gets rho as a vertex property); must not be IN or the rho file\n"
+            "  -o OUT           output mesh (.obj, .off or .ply; texture coordinates, IN's properties,\n"
+            "                   colours and OBJ materials are kept, as by flow; a PLY also gets rho as\n"
+            "                   a vertex property); must not be IN or the rho file\n"
             "  -f, --force      replace a read-only OUT\n"
             "Exit status: 0 ok, 1 usage error, 2 invalid input or an output that cannot or must not\n"
             "be written, 3 numerical failure.\n");
@@ -67,22 +68,14 @@ int cli_spin(int argc, char **argv)
     cf_context *ctx = cli_context(false);
     if (!ctx) return CLI_EXIT_NUMERICAL;
     int code = CLI_EXIT_OK;
-    cf_mesh_data *data = NULL;
+    cli_properties props;
+    memset(&props, 0, sizeof props);
     cf_mesh *mesh = NULL;
     double *rho = NULL, *x = NULL;
+    cf_status st = CF_OK;
     if ((code = cli_files_check(ctx, &files)) != CLI_EXIT_OK) goto done;
-    cf_status st = cf_read_mesh_file(ctx, in, &data);
-    if (st != CF_OK) {
-        code = cli_fail(ctx, in, st);
-        goto done;
-    }
-    cf_mesh_desc desc;
-    cf_mesh_data_desc(data, &desc);
-    st = cf_mesh_create(ctx, &desc, &mesh);
-    if (st != CF_OK) {
-        code = cli_fail(ctx, in, st);
-        goto done;
-    }
+    /* the input's properties and materials are written with the result, as flow's */
+    if ((code = cli_load_mesh_properties(ctx, in, &mesh, &props)) != CLI_EXIT_OK) goto done;
     int32_t nv = cf_mesh_vertex_count(mesh);
     rho = malloc((size_t)nv * sizeof(double));
     x = malloc(3 * (size_t)nv * sizeof(double));
@@ -91,7 +84,7 @@ int cli_spin(int argc, char **argv)
         code = CLI_EXIT_NUMERICAL;
         goto done;
     }
-    const cf_mesh_property *prop = cf_mesh_data_vertex_property(data, rho_arg);
+    const cf_mesh_property *prop = props.data ? cf_mesh_data_vertex_property(props.data, rho_arg) : NULL;
     struct stat sb;
     if (prop && stat(rho_arg, &sb) == 0) {
         /* a property name has no '/', so ./NAME always names the file */
@@ -120,14 +113,18 @@ int cli_spin(int argc, char **argv)
     cf_field field = {"rho", CF_FIELD_VERTEX, rho};
     cf_mesh_format fmt;
     int with_field = cf_mesh_format_from_path(ctx, out, &fmt) == CF_OK && fmt == CF_FORMAT_PLY;
-    st = cf_write_mesh_file(ctx, out, mesh, x, with_field ? &field : NULL, with_field ? 1 : 0);
-    if (st != CF_OK) code = cli_fail(ctx, out, st);
-    else cli_warn_if_unreadable(ctx, mesh, x, out);
+    st = cli_write_result(ctx, in, mesh, x, &props, with_field ? &field : NULL, with_field ? 1 : 0, out);
+    if (st != CF_OK) {
+        code = cli_fail(ctx, out, st);
+        if (code == CLI_EXIT_USAGE) code = CLI_EXIT_INPUT;
+    } else {
+        cli_warn_if_unreadable(ctx, mesh, x, out);
+    }
 done:
     free(rho);
     free(x);
     cf_mesh_destroy(&mesh);
-    cf_mesh_data_destroy(&data);
+    cli_properties_free(&props);
     cf_context_destroy(&ctx);
     return code;
 }

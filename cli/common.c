@@ -372,6 +372,57 @@ static void free_made(char **made)
     free(made);
 }
 
+/* The result of a command on the input's connectivity, with what the input
+ * carries: its properties (props; an OFF output holds the colours only, a
+ * warning names how many others it drops), its OBJ materials (to an OBJ
+ * output), and `extra` fields the command adds (a property of the same
+ * name and location gives way to them). Returns the writer's status. */
+cf_status cli_write_result(cf_context *ctx, const char *input, const cf_mesh *mesh, const double *positions,
+                           const cli_properties *props, const cf_field *extra, int32_t extra_count, const char *output)
+{
+    int32_t nprops = props ? props->count : 0, nfields = 0;
+    cf_field *fields = calloc((size_t)(nprops + extra_count) + 1, sizeof *fields);
+    if (!fields) {
+        fprintf(stderr, "curvflow: out of memory\n");
+        return CF_ERR_NOMEM;
+    }
+    for (int32_t i = 0; i < nprops; ++i) {
+        bool replaced = false;
+        for (int32_t k = 0; k < extra_count; ++k)
+            replaced = replaced || (extra[k].location == props->fields[i].location &&
+                                    strcmp(extra[k].name, props->fields[i].name) == 0);
+        if (!replaced) fields[nfields++] = props->fields[i];
+    }
+    for (int32_t k = 0; k < extra_count; ++k) fields[nfields++] = extra[k];
+    cf_mesh_format format = CF_FORMAT_AUTO; /* the output's name was checked before the run */
+    (void)cf_mesh_format_from_path(ctx, output, &format);
+    if (nfields > 0 && format == CF_FORMAT_OFF) { /* OFF holds colours only */
+        uint8_t *writable = calloc((size_t)nfields, 1);
+        int32_t kept = 0;
+        if (writable) {
+            (void)cf_off_fields_writable(fields, nfields, cf_mesh_vertex_count(mesh), cf_mesh_face_count(mesh),
+                                         writable);
+            for (int32_t i = 0; i < nfields; ++i)
+                if (writable[i]) fields[kept++] = fields[i];
+        }
+        if (kept < nfields)
+            fprintf(stderr,
+                    "curvflow: warning: %s: OFF holds only colours: %d of the %d properties of %s are not written "
+                    "(write PLY)\n",
+                    output, (int)(nfields - kept), (int)nfields, input);
+        free(writable);
+        nfields = kept;
+    }
+    cf_write_options wo;
+    cf_write_options_default(&wo);
+    char **made = NULL;
+    material_options(props, input, output, format, &wo, &made);
+    cf_status st = cf_write_mesh_file_ex(ctx, output, mesh, positions, fields, nfields, &wo);
+    free_made(made);
+    free(fields);
+    return st;
+}
+
 int cli_run_flow_and_write(cf_context *ctx, cf_flow *flow, cli_progress *progress, const char *log_path,
                            int64_t steps, const char *input, const cf_mesh *mesh, const cli_properties *props,
                            const char *output, bool *completed)
@@ -390,38 +441,7 @@ int cli_run_flow_and_write(cf_context *ctx, cf_flow *flow, cli_progress *progres
         fprintf(stderr, "curvflow: writing the last good state (iteration %lld) to %s\n",
                 (long long)cf_flow_last_info(flow)->iteration, output);
     }
-    /* the input's properties ride along: the connectivity is the input's */
-    const cf_field *fields = props ? props->fields : NULL;
-    int32_t nfields = props ? props->count : 0;
-    cf_mesh_format format = CF_FORMAT_AUTO; /* the output's name was checked before the run */
-    (void)cf_mesh_format_from_path(ctx, output, &format);
-    cf_field *off_fields = NULL;
-    if (nfields > 0 && format == CF_FORMAT_OFF) { /* OFF holds colours only */
-        uint8_t *writable = calloc((size_t)nfields, 1);
-        off_fields = calloc((size_t)nfields, sizeof *off_fields);
-        int32_t kept = 0;
-        if (writable && off_fields) {
-            (void)cf_off_fields_writable(fields, nfields, cf_mesh_vertex_count(mesh), cf_mesh_face_count(mesh),
-                                         writable);
-            for (int32_t i = 0; i < nfields; ++i)
-                if (writable[i]) off_fields[kept++] = fields[i];
-        }
-        if (kept < nfields)
-            fprintf(stderr,
-                    "curvflow: warning: %s: OFF holds only colours: %d of the %d properties of %s are not written "
-                    "(write PLY)\n",
-                    output, (int)(nfields - kept), (int)nfields, input);
-        free(writable);
-        fields = off_fields;
-        nfields = kept;
-    }
-    cf_write_options wo;
-    cf_write_options_default(&wo);
-    char **made = NULL;
-    material_options(props, input, output, format, &wo, &made);
-    cf_status st = cf_write_mesh_file_ex(ctx, output, mesh, cf_flow_positions(flow), fields, nfields, &wo);
-    free_made(made);
-    free(off_fields);
+    cf_status st = cli_write_result(ctx, input, mesh, cf_flow_positions(flow), props, NULL, 0, output);
     if (st != CF_OK) {
         int wcode = cli_fail(ctx, output, st);
         if (code == CLI_EXIT_OK) code = wcode == CLI_EXIT_USAGE ? CLI_EXIT_INPUT : wcode;

@@ -90,6 +90,14 @@ typedef struct cli_properties {
 int cli_load_mesh_properties(cf_context *ctx, const char *path, cf_mesh **out, cli_properties *props);
 void cli_properties_free(cli_properties *props);
 
+/* Writes `positions` on the input's connectivity `mesh` to `output` with
+ * what the input carries (props, may be NULL: its properties, its OBJ
+ * materials; an OFF output holds the colours only and a warning names what
+ * it drops) and the command's own `extra` fields (a property of the same
+ * name and location gives way to them). Returns the writer's status. */
+cf_status cli_write_result(cf_context *ctx, const char *input, const cf_mesh *mesh, const double *positions,
+                           const cli_properties *props, const cf_field *extra, int32_t extra_count, const char *output);
+
 /* Removes the temporary files of atomic writes in progress when the tool
  * gets SIGINT, SIGTERM or SIGHUP, then dies of the signal as it would have
  * (a signal the tool was started with ignored, e.g. SIGHUP under nohup,

@@ -94,6 +94,23 @@ static void test_spin_cli(void)
             cf_mesh_destroy(&res);
         }
         remove(rho_file);
+        /* what the input carries is written with the result, as flow's (session 30; spin wrote the
+         * positions and rho only): its properties, with the new rho in place of an old one */
+        double *red = malloc((size_t)nv * sizeof *red);
+        for (int32_t i = 0; i < nv; ++i) red[i] = (double)((3 * i) % 256);
+        cf_field two[2] = {{"rho", CF_FIELD_VERTEX, field}, {"red", CF_FIELD_VERTEX, red}};
+        CHECK_OK(ctx, cf_write_mesh_file(ctx, ply, mesh, NULL, two, 2));
+        snprintf(args, sizeof args, "spin '%s' --rho rho --scale 2 -o '%s'", ply, out);
+        CHECK(run_cli(args) == 0);
+        cf_mesh_data *d = NULL;
+        CHECK_OK(ctx, cf_read_mesh_file(ctx, out, &d));
+        const cf_mesh_property *pr = d ? cf_mesh_data_vertex_property(d, "red") : NULL;
+        const cf_mesh_property *prho = d ? cf_mesh_data_vertex_property(d, "rho") : NULL;
+        CHECK(pr && memcmp(pr->values, red, (size_t)nv * sizeof *red) == 0);
+        CHECK(d && d->vertex_property_count == 2);
+        for (int32_t i = 0; prho && i < nv; ++i) CHECK(prho->values[i] == 2.0 * field[i]); /* the rho applied */
+        cf_mesh_data_destroy(&d);
+        free(red);
         free(field);
     }
     /* wrong count of values -> input error; missing --rho -> usage */

@@ -596,22 +596,31 @@ def _read(ctx, path):
     return data.contents
 
 
+def _names(d):
+    """What a file carries besides the mesh, by name (no values copied): its
+    vertex and face property names and its OBJ material libraries and names."""
+    libs = ctypes.cast(d.material_libraries, POINTER(ctypes.c_char_p))
+    names = ctypes.cast(d.material_names, POINTER(ctypes.c_char_p))
+    return {"vertex_properties": [d.vertex_properties[i].name.decode() for i in range(d.vertex_property_count)],
+            "face_properties": [d.face_properties[i].name.decode() for i in range(d.face_property_count)],
+            "material_libraries": [os.fsdecode(libs[i]) for i in range(d.material_library_count)],
+            "material_names": [os.fsdecode(names[i]) for i in range(d.material_count)]}
+
+
 def _extras(d):
     uv = uv_faces = None
     if d.uv_count:
         uv = _copy_out(d.uv, (d.uv_count, 2))
         if d.uv_triangles:
             uv_faces = _copy_out(d.uv_triangles, (d.face_count, 3))
-    vf = {d.vertex_properties[i].name.decode(): _copy_out(d.vertex_properties[i].values, (d.vertex_count,))
-          for i in range(d.vertex_property_count)}
-    ff = {d.face_properties[i].name.decode(): _copy_out(d.face_properties[i].values, (d.face_count,))
-          for i in range(d.face_property_count)}
-    libs = ctypes.cast(d.material_libraries, POINTER(ctypes.c_char_p))
-    names = ctypes.cast(d.material_names, POINTER(ctypes.c_char_p))
+    named = _names(d)
+    vf = {name: _copy_out(d.vertex_properties[i].values, (d.vertex_count,))
+          for i, name in enumerate(named["vertex_properties"])}
+    ff = {name: _copy_out(d.face_properties[i].values, (d.face_count,))
+          for i, name in enumerate(named["face_properties"])}
     return {"uv": uv, "uv_faces": uv_faces, "vertex_fields": vf, "face_fields": ff,
             "polygons_triangulated": d.polygon_count,
-            "material_libraries": [os.fsdecode(libs[i]) for i in range(d.material_library_count)],
-            "material_names": [os.fsdecode(names[i]) for i in range(d.material_count)],
+            "material_libraries": named["material_libraries"], "material_names": named["material_names"],
             "face_materials": (_copy_out(ctypes.cast(d.face_materials, POINTER(c_int32)), (d.face_count,))
                                if d.face_materials else None)}
 
@@ -821,11 +830,7 @@ def info(V_or_path, F=None):
             out["polygons_triangulated"] = d.polygon_count
             out["texture_coordinates"] = ("none" if d.uv_count == 0 else
                                           "per-corner" if d.uv_triangles else "per-vertex")
-            extras = _extras(d)
-            out["vertex_properties"] = list(extras["vertex_fields"])
-            out["face_properties"] = list(extras["face_fields"])
-            out["material_libraries"] = extras["material_libraries"]
-            out["material_names"] = extras["material_names"]
+            out.update(_names(d))  # names only: no property values copied
         else:
             V, Fa = _vertices(V_or_path), _faces(F)
             desc = _desc(V, Fa)

@@ -58,10 +58,13 @@ CF_API void cf_curve_flow_destroy(cf_curve_flow **flow);
 /* ---- polyline files ----------------------------------------------------
  * CSV (.csv, .txt): one point per line, "x,y" or "x y"; blank lines and lines
  * starting with '#' are ignored, as is a first line that is not numeric
- * (header). SVG (.svg): the first <polygon> or <polyline> "points", or the
- * first <path> "d" using only M/m, L/l, H/h, V/v, Z/z commands (implicit
- * repeats allowed; the first subpath is read). A last point equal to the
- * first is dropped (the curve is closed anyway). */
+ * (header). SVG (.svg): the first drawn <polygon> or <polyline> "points",
+ * <path> "d" (M L H V C S Q T A Z, absolute and relative, implicit repeats;
+ * the first subpath is read), <rect>, <circle> or <ellipse>, mapped by its
+ * transforms. Curves (Bezier segments, arcs, circles, ellipses, rounded
+ * corners) are flattened: points on the curve whose chords are within 1e-3
+ * of each segment's size (control polygon length, larger radius) of it. A
+ * last point equal to the first is dropped (the curve is closed anyway). */
 typedef struct cf_curve {
     int32_t count;
     double *points;     /* 2 count */

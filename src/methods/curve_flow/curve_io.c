@@ -1,8 +1,9 @@
 /*
  * Polyline files for the curve flow (curvflow/curve_flow.h):
  * CSV ("x,y" or "x y" per line) and a small SVG subset: the first drawn
- * <polygon> / <polyline> "points" or <path> "d" (M, L, H, V, Z, absolute
- * and relative) in document order, mapped by the "transform" attributes of
+ * <polygon> / <polyline> "points", <path> "d" (M L H V C S Q T A Z,
+ * absolute and relative; curves flattened), <rect>, <circle> or <ellipse>
+ * in document order, mapped by the "transform" attributes of
  * the element and its ancestors; comments, CDATA, processing instructions
  * and the DOCTYPE are skipped, as are shapes inside elements that are not
  * drawn (defs, clipPath, mask, symbol, marker, pattern). Further shapes and
@@ -149,6 +150,8 @@ static cf_status parse_csv(pbuf *b, const char *path, const char *text, size_t l
 
 /* ---- SVG ----------------------------------------------------------------- */
 
+#define SVG_PI 3.14159265358979323846
+
 /* An affine map of the plane as SVG writes it, matrix(a b c d e f):
  * x' = a x + c y + e, y' = b x + d y + f. */
 typedef struct affine {
@@ -235,7 +238,7 @@ static cf_status parse_transform(pbuf *b, const char *name, const char *text, co
                              line_of(text, tag), kinds[k].name, k == 0 ? "6" : k == 3 ? "1 or 3" : k >= 4 ? "1" : "1 or 2",
                              n);
         affine t = identity_map;
-        const double deg = 3.14159265358979323846 / 180.0;
+        const double deg = SVG_PI / 180.0;
         switch (k) {
         case 0: t = (affine){v[0], v[1], v[2], v[3], v[4], v[5]}; break;
         case 1: t.e = v[0]; t.f = n > 1 ? v[1] : 0.0; break;
@@ -274,12 +277,155 @@ static cf_status parse_points(pbuf *b, const char *path, const affine *m, const 
     }
 }
 
+/* ---- curves: flattened into the polyline ---------------------------------
+ * Bezier segments and elliptical arcs become line segments whose distance
+ * from the curve is at most SVG_FLATTEN_TOLERANCE times the segment's own
+ * size (its control polygon's length, an arc's larger radius), so the
+ * flattening does not depend on the drawing's units. The last point of a
+ * segment is its end point as written. */
+#define SVG_FLATTEN_TOLERANCE 1e-3
+#define SVG_MAX_PIECES 1024
+
+/* ceil(n) within [1, SVG_MAX_PIECES]; 1 for NaN (a segment of infinite
+ * size is refused when its points are pushed) */
+static int piece_count(double n)
+{
+    n = ceil(n);
+    return !(n >= 1.0) ? 1 : n > SVG_MAX_PIECES ? SVG_MAX_PIECES : (int)n;
+}
+
+/* Pieces for a segment whose second derivative is at most `curvature` in
+ * norm (over t in [0, 1]) and whose size is `size`: a uniform split into n
+ * pieces deviates from it by at most curvature / (8 n^2). */
+static int bezier_pieces(double curvature, double size)
+{
+    if (!(size > 0.0) || !(curvature > 0.0)) return 1;
+    return piece_count(sqrt(curvature / (8.0 * SVG_FLATTEN_TOLERANCE * size)));
+}
+
+/* The cubic (x0 y0) (x1 y1) (x2 y2) (x3 y3), from its second point on. */
+static cf_status push_cubic(pbuf *b, const affine *m, const double q[8])
+{
+    double size = 0.0, curvature = 0.0;
+    for (int i = 0; i < 3; ++i) size += hypot(q[2 * i + 2] - q[2 * i], q[2 * i + 3] - q[2 * i + 1]);
+    for (int i = 0; i < 2; ++i) /* B'' is linear in t between 6 (q_i - 2 q_i+1 + q_i+2) */
+        curvature = fmax(curvature, 6.0 * hypot(q[2 * i] - 2.0 * q[2 * i + 2] + q[2 * i + 4],
+                                                q[2 * i + 1] - 2.0 * q[2 * i + 3] + q[2 * i + 5]));
+    if (size == 0.0) return CF_OK; /* a point: nothing drawn */
+    int n = bezier_pieces(curvature, size);
+    for (int k = 1; k < n; ++k) {
+        double t = (double)k / n, s = 1.0 - t;
+        double w0 = s * s * s, w1 = 3.0 * s * s * t, w2 = 3.0 * s * t * t, w3 = t * t * t;
+        cf_status st = push_mapped(b, m, w0 * q[0] + w1 * q[2] + w2 * q[4] + w3 * q[6],
+                                   w0 * q[1] + w1 * q[3] + w2 * q[5] + w3 * q[7]);
+        if (st != CF_OK) return st;
+    }
+    return push_mapped(b, m, q[6], q[7]);
+}
+
+/* The quadratic (x0 y0) (x1 y1) (x2 y2), from its second point on. */
+static cf_status push_quadratic(pbuf *b, const affine *m, const double q[6])
+{
+    double size = hypot(q[2] - q[0], q[3] - q[1]) + hypot(q[4] - q[2], q[5] - q[3]);
+    if (size == 0.0) return CF_OK;
+    int n = bezier_pieces(2.0 * hypot(q[0] - 2.0 * q[2] + q[4], q[1] - 2.0 * q[3] + q[5]), size);
+    for (int k = 1; k < n; ++k) {
+        double t = (double)k / n, s = 1.0 - t;
+        double w0 = s * s, w1 = 2.0 * s * t, w2 = t * t;
+        cf_status st = push_mapped(b, m, w0 * q[0] + w1 * q[2] + w2 * q[4], w0 * q[1] + w1 * q[3] + w2 * q[5]);
+        if (st != CF_OK) return st;
+    }
+    return push_mapped(b, m, q[4], q[5]);
+}
+
+/* Pieces for an arc of `sweep` radians: a chord of angle a deviates from
+ * its circle by r (1 - cos(a / 2)). */
+static int arc_pieces(double sweep)
+{
+    return piece_count(fabs(sweep) / (2.0 * acos(1.0 - SVG_FLATTEN_TOLERANCE)));
+}
+
+/* The point at angle t of the ellipse with centre (cx, cy), radii rx, ry,
+ * x axis turned by phi (cosine cp, sine sp). */
+static cf_status push_ellipse_point(pbuf *b, const affine *m, double cx, double cy, double rx, double ry, double cp,
+                                    double sp, double t)
+{
+    double c = cos(t), s = sin(t);
+    return push_mapped(b, m, cx + rx * cp * c - ry * sp * s, cy + rx * sp * c + ry * cp * s);
+}
+
+/* The elliptical arc from (x1, y1) to (x2, y2) of SVG's path command A,
+ * from its second point on, by the endpoint-to-centre conversion of SVG
+ * 1.1 (implementation notes F.6.5, radii scaled up as in F.6.6). */
+static cf_status push_arc(pbuf *b, const affine *m, double x1, double y1, double rx, double ry, double phi_deg,
+                          int large, int sweep, double x2, double y2)
+{
+    if (x1 == x2 && y1 == y2) return CF_OK; /* omitted, as SVG says */
+    rx = fabs(rx);
+    ry = fabs(ry);
+    if (rx == 0.0 || ry == 0.0) return push_mapped(b, m, x2, y2); /* a line, as SVG says */
+    double phi = fmod(phi_deg, 360.0) * SVG_PI / 180.0, cp = cos(phi), sp = sin(phi);
+    double hx = 0.5 * (x1 - x2), hy = 0.5 * (y1 - y2);
+    double x1p = cp * hx + sp * hy, y1p = -sp * hx + cp * hy;
+    /* radii too small for the end points are scaled up until they fit */
+    double lambda = (x1p / rx) * (x1p / rx) + (y1p / ry) * (y1p / ry);
+    if (lambda > 1.0) {
+        rx *= sqrt(lambda);
+        ry *= sqrt(lambda);
+    }
+    double num = (rx * ry) * (rx * ry) - (rx * y1p) * (rx * y1p) - (ry * x1p) * (ry * x1p);
+    double den = (rx * y1p) * (rx * y1p) + (ry * x1p) * (ry * x1p);
+    double coef = den > 0.0 && num > 0.0 ? sqrt(num / den) : 0.0;
+    if (large == sweep) coef = -coef;
+    double cxp = coef * rx * y1p / ry, cyp = -coef * ry * x1p / rx;
+    double cx = cp * cxp - sp * cyp + 0.5 * (x1 + x2), cy = sp * cxp + cp * cyp + 0.5 * (y1 + y2);
+    double t1 = atan2((y1p - cyp) / ry, (x1p - cxp) / rx);
+    double dt = atan2((-y1p - cyp) / ry, (-x1p - cxp) / rx) - t1;
+    if (sweep && dt < 0.0) dt += 2.0 * SVG_PI;
+    if (!sweep && dt > 0.0) dt -= 2.0 * SVG_PI;
+    int n = arc_pieces(dt);
+    for (int k = 1; k < n; ++k) {
+        cf_status st = push_ellipse_point(b, m, cx, cy, rx, ry, cp, sp, t1 + dt * k / n);
+        if (st != CF_OK) return st;
+    }
+    return push_mapped(b, m, x2, y2);
+}
+
+/* A number of path data at *s (after separators) into *v; 0 when there is
+ * none. */
+static int path_number(const char **s, double *v)
+{
+    const char *r = skip_sep(*s);
+    char *e;
+    *v = strtod(r, &e);
+    if (e == r) return 0;
+    *s = e;
+    return 1;
+}
+
+/* An arc flag: the single character 0 or 1 (SVG writes "a1 1 0 01 2 2"). */
+static int path_flag(const char **s, int *flag)
+{
+    const char *r = skip_sep(*s);
+    if (*r != '0' && *r != '1') return 0;
+    *flag = *r == '1';
+    *s = r + 1;
+    return 1;
+}
+
 /* The first subpath of path data; *more is set when drawing commands
- * follow it (further subpaths, ignored by the caller with a warning). */
+ * follow it (further subpaths, ignored by the caller with a warning).
+ * Curves (C S Q T A) are flattened (push_cubic, push_quadratic, push_arc). */
 static cf_status parse_path(pbuf *b, const char *path, const affine *m, const char *s, int *more)
 {
-    char cmd = 0;
+    static const struct {
+        char cmd;
+        int numbers; /* per repeat */
+    } arity[] = {{'M', 2}, {'L', 2}, {'H', 1}, {'V', 1}, {'C', 6}, {'S', 4}, {'Q', 4}, {'T', 2}, {'A', 7}};
+    char cmd = 0, previous = 0;
+    int numbers = 0;
     double cx = 0.0, cy = 0.0;
+    double cubic_x = 0.0, cubic_y = 0.0, quad_x = 0.0, quad_y = 0.0; /* last control points, for S and T */
     int started = 0;
     *more = 0;
     for (;;) {
@@ -291,8 +437,12 @@ static cf_status parse_path(pbuf *b, const char *path, const affine *m, const ch
                 *more = *skip_sep(s) != '\0';
                 return CF_OK;
             }
-            if (!strchr("MmLlHhVv", cmd))
-                return cfi_error(b->ctx, CF_ERR_PARSE, "%s: unsupported path command '%c' (only M L H V Z)", path, cmd);
+            numbers = 0;
+            for (size_t i = 0; i < sizeof arity / sizeof arity[0]; ++i)
+                if (toupper((unsigned char)cmd) == arity[i].cmd) numbers = arity[i].numbers;
+            if (!numbers)
+                return cfi_error(b->ctx, CF_ERR_PARSE, "%s: unsupported path command '%c' (M L H V C S Q T A Z)", path,
+                                 cmd);
             if ((cmd == 'M' || cmd == 'm') && started) {
                 *more = 1;
                 return CF_OK;
@@ -300,29 +450,77 @@ static cf_status parse_path(pbuf *b, const char *path, const affine *m, const ch
             continue;
         }
         if (!cmd) return cfi_error(b->ctx, CF_ERR_PARSE, "%s: path data must start with a command", path);
-        char *e1, *e2;
-        double a = strtod(s, &e1);
-        if (e1 == s) return cfi_error(b->ctx, CF_ERR_PARSE, "%s: bad number in path near \"%.20s\"", path, s);
-        s = e1;
+        double v[7];
+        int flags[2] = {0, 0};
+        const char *at = s;
+        for (int i = 0; i < numbers; ++i) {
+            int ok = (toupper((unsigned char)cmd) == 'A' && (i == 3 || i == 4)) ? path_flag(&s, &flags[i - 3])
+                                                                                  : path_number(&s, &v[i]);
+            if (ok) continue;
+            if (toupper((unsigned char)cmd) == 'A' && (i == 3 || i == 4))
+                return cfi_error(b->ctx, CF_ERR_PARSE, "%s: arc flag must be 0 or 1 near \"%.20s\"", path, skip_sep(s));
+            if (i == 0) return cfi_error(b->ctx, CF_ERR_PARSE, "%s: bad number in path near \"%.20s\"", path, at);
+            return cfi_error(b->ctx, CF_ERR_PARSE, "%s: path command '%c' takes %d numbers; too few near \"%.20s\"",
+                             path, cmd, numbers, skip_sep(s));
+        }
         int rel = islower((unsigned char)cmd);
+        double ox = rel ? cx : 0.0, oy = rel ? cy : 0.0; /* origin of this command's coordinates */
+        char up = (char)toupper((unsigned char)cmd);
         double nx = cx, ny = cy;
-        switch (cmd) {
-        case 'H': case 'h': nx = rel ? cx + a : a; break;
-        case 'V': case 'v': ny = rel ? cy + a : a; break;
-        default: {
-            const char *r = skip_sep(s);
-            double c = strtod(r, &e2);
-            if (e2 == r) return cfi_error(b->ctx, CF_ERR_PARSE, "%s: path point needs two numbers near \"%.20s\"", path, r);
-            s = e2;
-            nx = rel ? cx + a : a;
-            ny = rel ? cy + c : c;
+        cf_status st = CF_OK;
+        switch (up) {
+        case 'H': nx = ox + v[0]; st = push_mapped(b, m, nx, ny); break;
+        case 'V': ny = oy + v[0]; st = push_mapped(b, m, nx, ny); break;
+        case 'M': case 'L': nx = ox + v[0]; ny = oy + v[1]; st = push_mapped(b, m, nx, ny); break;
+        case 'C': case 'S': {
+            /* S: the first control point is the previous C/S's second, reflected */
+            double c1x = cx, c1y = cy;
+            if (up == 'C') {
+                c1x = ox + v[0];
+                c1y = oy + v[1];
+            } else if (previous == 'C' || previous == 'S') {
+                c1x = 2.0 * cx - cubic_x;
+                c1y = 2.0 * cy - cubic_y;
+            }
+            const double *rest = up == 'C' ? v + 2 : v;
+            double q[8] = {cx, cy, c1x, c1y, ox + rest[0], oy + rest[1], ox + rest[2], oy + rest[3]};
+            st = push_cubic(b, m, q);
+            cubic_x = q[4];
+            cubic_y = q[5];
+            nx = q[6];
+            ny = q[7];
+            break;
         }
+        case 'Q': case 'T': {
+            /* T: the control point is the previous Q/T's, reflected */
+            double c1x = cx, c1y = cy;
+            if (up == 'Q') {
+                c1x = ox + v[0];
+                c1y = oy + v[1];
+            } else if (previous == 'Q' || previous == 'T') {
+                c1x = 2.0 * cx - quad_x;
+                c1y = 2.0 * cy - quad_y;
+            }
+            const double *rest = up == 'Q' ? v + 2 : v;
+            double q[6] = {cx, cy, c1x, c1y, ox + rest[0], oy + rest[1]};
+            st = push_quadratic(b, m, q);
+            quad_x = c1x;
+            quad_y = c1y;
+            nx = q[4];
+            ny = q[5];
+            break;
         }
-        cf_status st = push_mapped(b, m, nx, ny);
+        default: /* A rx ry x-axis-rotation large-arc-flag sweep-flag x y */
+            nx = ox + v[5];
+            ny = oy + v[6];
+            st = push_arc(b, m, cx, cy, v[0], v[1], v[2], flags[0], flags[1], nx, ny);
+            break;
+        }
         if (st != CF_OK) return st;
         started = 1;
         cx = nx;
         cy = ny;
+        previous = up;
         if (cmd == 'M') cmd = 'L';   /* implicit repeats of moveto are lineto */
         if (cmd == 'm') cmd = 'l';
     }
@@ -336,6 +534,94 @@ typedef struct svg_scope {
     int hidden; /* inside an element that is not drawn */
 } svg_scope;
 
+/* The basic shapes read as closed curves, and the attributes they take. */
+static const char *const basic_shapes[3] = {"rect", "circle", "ellipse"};
+enum { SHAPE_X, SHAPE_Y, SHAPE_WIDTH, SHAPE_HEIGHT, SHAPE_RX, SHAPE_RY, SHAPE_CX, SHAPE_CY, SHAPE_R, SHAPE_ATTRS };
+static const char *const shape_attr_names[SHAPE_ATTRS] = {"x", "y", "width", "height", "rx", "ry", "cx", "cy", "r"};
+
+/* An attribute's value as [*vs, *ve), *ve at its closing quote. */
+typedef struct svg_attr {
+    const char *vs, *ve;
+} svg_attr;
+
+/* A length attribute of a basic shape: a number in user units, "px"
+ * allowed; *given is 0 (and *out 0, SVG's initial value) when absent. */
+static cf_status shape_length(pbuf *b, const char *name, long line, int basic, int attr, const svg_attr *sizes,
+                              int *given, double *out)
+{
+    *given = sizes[attr].vs != NULL;
+    *out = 0.0;
+    if (!*given) return CF_OK;
+    const char *s = sizes[attr].vs, *e = sizes[attr].ve;
+    while (s < e && isspace((unsigned char)*s)) ++s;
+    char buf[64];
+    size_t n = (size_t)(e - s) < sizeof buf - 1 ? (size_t)(e - s) : sizeof buf - 1;
+    memcpy(buf, s, n);
+    buf[n] = '\0';
+    char *stop;
+    *out = strtod(buf, &stop);
+    if (stop != buf && strncmp(stop, "px", 2) == 0) stop += 2;
+    while (isspace((unsigned char)*stop)) ++stop;
+    if (stop == buf || *stop || (size_t)(e - s) >= sizeof buf - 1 || !isfinite(*out))
+        return cfi_error(b->ctx, CF_ERR_PARSE, "%s: line %ld: <%s> %s=\"%.20s\" is not a number in user units", name, line,
+                         basic_shapes[basic], shape_attr_names[attr], buf);
+    return CF_OK;
+}
+
+/* A <rect>, <circle> or <ellipse> (basic_shapes[basic]) as its closed
+ * outline, starting where SVG 2 starts it: a rect's at (x + rx, y) and
+ * clockwise on the screen (y down), with its rounded corners (rx, ry:
+ * one given stands for both, each at most half the side); a circle's or an
+ * ellipse's at (cx + rx, cy). */
+static cf_status push_basic_shape(pbuf *b, const char *name, long line, int basic, const svg_attr *sizes,
+                                  const affine *m)
+{
+    double v[SHAPE_ATTRS];
+    int given[SHAPE_ATTRS];
+    for (int i = 0; i < SHAPE_ATTRS; ++i) {
+        cf_status st = shape_length(b, name, line, basic, i, sizes, &given[i], &v[i]);
+        if (st != CF_OK) return st;
+    }
+    static const int size_attrs[3][2] = {{SHAPE_WIDTH, SHAPE_HEIGHT}, {SHAPE_R, SHAPE_R}, {SHAPE_RX, SHAPE_RY}};
+    for (int k = 0; k < 2; ++k) {
+        int a = size_attrs[basic][k];
+        if (!(v[a] > 0.0))
+            return cfi_error(b->ctx, CF_ERR_PARSE, "%s: line %ld: <%s> needs %s > 0 (got %g): it draws nothing", name,
+                             line, basic_shapes[basic], shape_attr_names[a], v[a]);
+    }
+    cf_status st = CF_OK;
+    if (basic > 0) { /* circle, ellipse */
+        double rx = basic == 1 ? v[SHAPE_R] : v[SHAPE_RX], ry = basic == 1 ? v[SHAPE_R] : v[SHAPE_RY];
+        int n = arc_pieces(2.0 * SVG_PI);
+        for (int k = 0; k < n && st == CF_OK; ++k)
+            st = push_ellipse_point(b, m, v[SHAPE_CX], v[SHAPE_CY], rx, ry, 1.0, 0.0, 2.0 * SVG_PI * k / n);
+        return st;
+    }
+    double x = v[SHAPE_X], y = v[SHAPE_Y], w = v[SHAPE_WIDTH], h = v[SHAPE_HEIGHT];
+    if (given[SHAPE_RX] && v[SHAPE_RX] < 0.0) return cfi_error(b->ctx, CF_ERR_PARSE, "%s: line %ld: <rect> rx is negative", name, line);
+    if (given[SHAPE_RY] && v[SHAPE_RY] < 0.0) return cfi_error(b->ctx, CF_ERR_PARSE, "%s: line %ld: <rect> ry is negative", name, line);
+    double rx = given[SHAPE_RX] ? v[SHAPE_RX] : v[SHAPE_RY], ry = given[SHAPE_RY] ? v[SHAPE_RY] : v[SHAPE_RX];
+    rx = fmin(rx, 0.5 * w);
+    ry = fmin(ry, 0.5 * h);
+    if (rx == 0.0 || ry == 0.0) {
+        const double corners[8] = {x, y, x + w, y, x + w, y + h, x, y + h};
+        for (int k = 0; k < 4 && st == CF_OK; ++k) st = push_mapped(b, m, corners[2 * k], corners[2 * k + 1]);
+        return st;
+    }
+    /* four sides (left out where the corners meet) and four quarter arcs;
+     * the last arc ends on the first point, which the reader then drops as
+     * the closing repeat */
+    const double sides[4][4] = {{x + rx, y, x + w - rx, y}, {x + w, y + ry, x + w, y + h - ry},
+                                {x + w - rx, y + h, x + rx, y + h}, {x, y + h - ry, x, y + ry}};
+    st = push_mapped(b, m, sides[0][0], sides[0][1]);
+    for (int k = 0; k < 4 && st == CF_OK; ++k) {
+        const double *side = sides[k], *next = sides[(k + 1) % 4];
+        if (side[0] != side[2] || side[1] != side[3]) st = push_mapped(b, m, side[2], side[3]);
+        if (st == CF_OK) st = push_arc(b, m, side[2], side[3], rx, ry, 0.0, 0, 1, next[0], next[1]);
+    }
+    return st;
+}
+
 /* 1 when the element name's local part (after a "svg:" style prefix)
  * equals `want`. */
 static int name_is(const char *name, size_t len, const char *want)
@@ -347,11 +633,6 @@ static int name_is(const char *name, size_t len, const char *want)
     }
     return strlen(want) == len && strncmp(name, want, len) == 0;
 }
-
-/* An attribute's value as [*vs, *ve), *ve at its closing quote. */
-typedef struct svg_attr {
-    const char *vs, *ve;
-} svg_attr;
 
 /* Reads the first drawn shape of an SVG text into b. The text is NUL
  * terminated; a value being parsed is NUL terminated in place for the
@@ -413,6 +694,7 @@ static cf_status parse_svg(pbuf *b, const char *name, char *text)
             continue;
         }
         svg_attr points = {NULL, NULL}, d = {NULL, NULL}, transform = {NULL, NULL};
+        svg_attr sizes[SHAPE_ATTRS] = {{NULL, NULL}};
         int self_closing = 0;
         for (;;) {
             while (isspace((unsigned char)*q)) ++q;
@@ -437,6 +719,8 @@ static cf_status parse_svg(pbuf *b, const char *name, char *text)
             if (an_len == 6 && strncmp(an, "points", 6) == 0) points = value;
             else if (an_len == 1 && an[0] == 'd') d = value;
             else if (an_len == 9 && strncmp(an, "transform", 9) == 0) transform = value;
+            for (int i = 0; i < SHAPE_ATTRS; ++i)
+                if (an_len == strlen(shape_attr_names[i]) && strncmp(an, shape_attr_names[i], an_len) == 0) sizes[i] = value;
             q = close + 1;
         }
         if (*q != '>') {
@@ -450,24 +734,31 @@ static cf_status parse_svg(pbuf *b, const char *name, char *text)
         for (int i = 0; i < 6; ++i) scope.hidden |= name_is(tag, tag_len, not_drawn[i]);
         int is_polygon = name_is(tag, tag_len, "polygon"), is_polyline = name_is(tag, tag_len, "polyline"),
             is_path = name_is(tag, tag_len, "path");
-        int shape = (is_polygon || is_polyline) ? points.vs != NULL : is_path ? d.vs != NULL : 0;
+        int basic = -1; /* index into basic_shapes */
+        for (int i = 0; i < 3; ++i)
+            if (name_is(tag, tag_len, basic_shapes[i])) basic = i;
+        int shape = (is_polygon || is_polyline) ? points.vs != NULL : is_path ? d.vs != NULL : basic >= 0;
         if (shape && scope.hidden) ++hidden_shapes;
         else if (shape && ++shapes == 1) {
             long line = line_of(text, p);
             first_line = line;
-            first_kind = is_polygon ? "polygon" : is_polyline ? "polyline" : "path";
+            first_kind = is_polygon ? "polygon" : is_polyline ? "polyline" : is_path ? "path" : basic_shapes[basic];
             if (transform.vs) {
                 affine own;
                 st = parse_transform(b, name, text, p, transform.vs, transform.ve, &own);
                 if (st != CF_OK) break;
                 scope.m = compose(scope.m, own);
             }
-            svg_attr v = is_path ? d : points;
-            char *end = (char *)v.ve, saved = *end;
-            *end = '\0';
             int more = 0;
-            st = is_path ? parse_path(b, name, &scope.m, v.vs, &more) : parse_points(b, name, &scope.m, v.vs);
-            *end = saved;
+            if (basic >= 0) {
+                st = push_basic_shape(b, name, line, basic, sizes, &scope.m);
+            } else {
+                svg_attr v = is_path ? d : points;
+                char *end = (char *)v.ve, saved = *end;
+                *end = '\0';
+                st = is_path ? parse_path(b, name, &scope.m, v.vs, &more) : parse_points(b, name, &scope.m, v.vs);
+                *end = saved;
+            }
             if (st != CF_OK) break;
             if (more) subpath_line = line;
         } else if (!self_closing && transform.vs) {
@@ -490,10 +781,11 @@ static cf_status parse_svg(pbuf *b, const char *name, char *text)
     if (st != CF_OK) return st;
     if (shapes == 0)
         return hidden_shapes ? cfi_error(b->ctx, CF_ERR_PARSE,
-                                         "%s: no drawn <polygon>, <polyline> or <path> (%d inside defs, clipPath, mask, "
+                                         "%s: no drawn <polygon>, <polyline>, <path>, <rect>, <circle> or <ellipse> (%d inside defs, clipPath, mask, "
                                          "symbol, marker or pattern, which are not drawn)",
                                          name, hidden_shapes)
-                             : cfi_error(b->ctx, CF_ERR_PARSE, "%s: no <polygon>, <polyline> or <path> found", name);
+                             : cfi_error(b->ctx, CF_ERR_PARSE, "%s: no <polygon>, <polyline>, <path>, <rect>, <circle> or <ellipse> found",
+                                         name);
     if (subpath_line)
         cfi_log(b->ctx, CF_LOG_WARNING,
                 "%s: line %ld: the <path> holds more than one subpath; the first is read and the others are ignored "

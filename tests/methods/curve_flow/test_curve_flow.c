@@ -277,10 +277,10 @@ static void test_files(void)
     for (int i = 0; c && i < 8; ++i) CHECK_NEAR(c->points[i], p[i], 0, 0);
     cf_curve_destroy(&c);
     fp = fopen(path, "w");
-    fprintf(fp, "<svg><path d=\"M0 0 C 1 1 2 2 3 3\"/></svg>\n");
+    fprintf(fp, "<svg><path d=\"M0 0 R 1 1 2 2 3 3\"/></svg>\n");
     fclose(fp);
     CHECK_STATUS(cf_curve_read(ctx, path, &c), CF_ERR_PARSE);
-    CHECK(strstr(cf_context_message(ctx), "'C'") != NULL);
+    CHECK(strstr(cf_context_message(ctx), "unsupported path command 'R'") != NULL);
     CHECK_STATUS(cf_curve_read(ctx, cft_temp_path(".csv"), &c), CF_ERR_IO);
     /* from memory (the fuzz targets' entry): same parse, messages name the
      * given name; a NUL byte is refused rather than silently ending the text */
@@ -386,12 +386,232 @@ static void test_svg_reader(void)
         {"<svg><!-- <polygon points=\"0,0 1,0 1,1\"/>", "t.svg: line 1: comment not closed (no '-->')"},
         {"<svg>\n<polygon points=\"0,0 1,0 1,1\"", "t.svg: line 2: malformed or unclosed tag <polygon"},
         {"<svg><defs><polygon points=\"0,0 1,0 1,1\"/></defs></svg>",
-         "t.svg: no drawn <polygon>, <polyline> or <path> (1 inside defs"},
+         "t.svg: no drawn <polygon>, <polyline>, <path>, <rect>, <circle> or <ellipse> (1 inside defs"},
         {"<svg><g transform=\"shear(2)\"><polygon points=\"0,0 1,0 1,1\"/></g></svg>",
          "t.svg: line 1: unsupported transform near \"shear(2)\""},
         {"<svg><polygon transform=\"rotate(1, 2)\" points=\"0,0 1,0 1,1\"/></svg>",
          "t.svg: line 1: rotate() takes 1 or 3 arguments, got 2"},
         {"<svg><polygon transform=\"scale(1e300)\" points=\"0,0 1,0 1,1\"/></svg>", "out of range"},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
+        cf_status st = read_svg(ctx, bad[i].svg, &c, &log);
+        CHECK(st == CF_ERR_PARSE || st == CF_ERR_NONFINITE);
+        CHECK(c == NULL);
+        int named = strstr(cf_context_message(ctx), bad[i].message) != NULL;
+        if (!named) fprintf(stderr, "   case %zu: '%s'\n", i, cf_context_message(ctx));
+        CHECK(named);
+    }
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
+/* Largest |distance of a point from (cx, cy) - r| */
+static double radial_error(const cf_curve *c, double cx, double cy, double r)
+{
+    double worst = 0.0;
+    for (int32_t i = 0; i < c->count; ++i)
+        worst = fmax(worst, fabs(hypot(c->points[2 * i] - cx, c->points[2 * i + 1] - cy) - r));
+    return worst;
+}
+
+/* Twice the signed area (positive: counter-clockwise with y up). */
+static double signed_area2(const cf_curve *c)
+{
+    double a = 0.0;
+    for (int32_t i = 0; i < c->count; ++i) {
+        int32_t j = (i + 1) % c->count;
+        a += c->points[2 * i] * c->points[2 * j + 1] - c->points[2 * j] * c->points[2 * i + 1];
+    }
+    return a;
+}
+
+/* Index of the point (x, y) to within tol, or -1. */
+static int32_t find_point(const cf_curve *c, double x, double y, double tol)
+{
+    for (int32_t i = 0; i < c->count; ++i)
+        if (fabs(c->points[2 * i] - x) <= tol && fabs(c->points[2 * i + 1] - y) <= tol) return i;
+    return -1;
+}
+
+/* Largest distance of a chord's midpoint from the circle (cx, cy, r): the
+ * flattening's error for a circle drawn with curves. */
+static double chord_sagitta(const cf_curve *c, double cx, double cy, double r)
+{
+    double worst = 0.0;
+    for (int32_t i = 0; i < c->count; ++i) {
+        int32_t j = (i + 1) % c->count;
+        double mx = 0.5 * (c->points[2 * i] + c->points[2 * j]), my = 0.5 * (c->points[2 * i + 1] + c->points[2 * j + 1]);
+        worst = fmax(worst, fabs(hypot(mx - cx, my - cy) - r));
+    }
+    return worst;
+}
+
+/* Curves as drawing programs write them (Inkscape's paths are cubic
+ * Beziers; its circles and rectangles are <circle> and <rect>): flattened
+ * into points on the curve, within 1e-3 of each segment's size between
+ * them (session 31; before, "unsupported path command 'c'"). */
+static void test_svg_curves(void)
+{
+    cf_context *ctx = cft_context();
+    cf_curve *c = NULL;
+    log_capture log;
+    /* a circle of radius 2 about (1, 1) as four cubics (kappa 0.5522847498,
+     * radial error 2.7e-4 of r), three by S, whose first control point is
+     * the previous one reflected: every point on the cubics, so within
+     * that of the circle, and the chords within 1e-3 of each cubic's
+     * control polygon (3.49) */
+    const char *cubics = "<svg><path d=\"M3,1 C3,2.1045695 2.1045695,3 1,3 S-1,2.1045695 -1,1 "
+                         "s0.8954305,-2 2,-2 S3,-0.1045695 3,1 Z\"/></svg>";
+    CHECK_OK(ctx, read_svg(ctx, cubics, &c, &log));
+    CHECK(c && c->count >= 40 && c->count <= 100);
+    if (c) {
+        CHECK(radial_error(c, 1.0, 1.0, 2.0) < 6e-4);
+        CHECK(chord_sagitta(c, 1.0, 1.0, 2.0) < 6e-4 + 3.5e-3);
+        CHECK(signed_area2(c) > 0.0); /* (3,1) -> (1,3) -> (-1,1): counter-clockwise with y up */
+    }
+    cf_curve_destroy(&c);
+    /* Q and T: T's control point is the previous one reflected, so the
+     * second segment is (2,0) (3,-1) (4,0); its middle, (3, -0.5), is a
+     * sample (14 pieces each) */
+    CHECK_OK(ctx, read_svg(ctx, "<svg><path d=\"M0,0 Q1,1 2,0 T4,0 L2,-3 Z\"/></svg>", &c, &log));
+    CHECK(c && find_point(c, 1.0, 0.5, 1e-12) > 0 && find_point(c, 3.0, -0.5, 1e-12) > 0);
+    CHECK(c && find_point(c, 4.0, 0.0, 0.0) > 0 && find_point(c, 2.0, -3.0, 0.0) == c->count - 1);
+    cf_curve_destroy(&c);
+    /* arcs: two half circles, end points as written and every point on the
+     * circle; sweep 1 turns the positive way (y down on the screen:
+     * clockwise there, counter-clockwise in these coordinates) */
+    CHECK_OK(ctx, read_svg(ctx, "<svg><path d=\"M3,1 A2,2 0 0 1 -1,1 A2,2 0 0 1 3,1 Z\"/></svg>", &c, &log));
+    CHECK(c && c->count >= 60 && radial_error(c, 1.0, 1.0, 2.0) < 1e-12 && signed_area2(c) > 0.0);
+    CHECK(c && chord_sagitta(c, 1.0, 1.0, 2.0) <= 2e-3 && find_point(c, -1.0, 1.0, 0.0) > 0);
+    cf_curve_destroy(&c);
+    /* the four arcs from (3,1) to (1,3) on circles of radius 2: large-arc and
+     * sweep flags choose the centre and the way, as SVG defines them; the
+     * same written compactly (flags without separators, relative) */
+    static const struct {
+        const char *d;
+        double cx, cy, quarter; /* centre, and how many quarter turns */
+    } arcs[] = {{"M3,1 A2,2 0 0 1 1,3 L1,1 Z", 1.0, 1.0, 1.0},  {"M3,1 A2,2 0 1 1 1,3 L3,3 Z", 3.0, 3.0, 3.0},
+                {"M3,1 A2,2 0 0 0 1,3 L3,3 Z", 3.0, 3.0, 1.0},  {"M3,1 A2,2 0 1 0 1,3 L1,1 Z", 1.0, 1.0, 3.0},
+                {"M3,1a2,2,0,01-2,2L1,1z", 1.0, 1.0, 1.0}};
+    int32_t quarter_count = 0;
+    for (size_t i = 0; i < sizeof arcs / sizeof arcs[0]; ++i) {
+        char svg[128];
+        snprintf(svg, sizeof svg, "<svg><path d=\"%s\"/></svg>", arcs[i].d);
+        CHECK_OK(ctx, read_svg(ctx, svg, &c, &log));
+        if (!c) continue;
+        /* the arc's points: all but the closing corner */
+        int32_t on = 0;
+        for (int32_t k = 0; k < c->count; ++k)
+            on += fabs(hypot(c->points[2 * k] - arcs[i].cx, c->points[2 * k + 1] - arcs[i].cy) - 2.0) < 1e-12;
+        CHECK(on == c->count - 1);
+        if (arcs[i].quarter == 1.0 && i == 0) quarter_count = c->count;
+        if (arcs[i].quarter == 1.0) CHECK(c->count == quarter_count);
+        else CHECK(c->count >= 3 * (quarter_count - 2));
+        cf_curve_destroy(&c);
+    }
+    /* radii too small for the end points grow until they fit (a half
+     * circle about the chord's middle); a zero radius is a line; a rotated
+     * ellipse's points satisfy its equation */
+    CHECK_OK(ctx, read_svg(ctx, "<svg><path d=\"M0,0 A1,1 0 0 1 4,0 A0,2 0 0 1 0,0\"/></svg>", &c, &log));
+    CHECK(c && radial_error(c, 2.0, 0.0, 2.0) < 1e-12 && c->count > 30);
+    cf_curve_destroy(&c);
+    CHECK_OK(ctx, read_svg(ctx, "<svg><path d=\"M0,0 A2,1 30 1 1 0.5,0.2 Z\"/></svg>", &c, &log));
+    if (c) {
+        /* the centre from the first, a middle and the last point is not
+         * needed: every point is at unit "ellipse distance" from the centre
+         * the arc's middle points share; measured through the two axes */
+        double phi = 30.0 * PI / 180.0, worst = 0.0;
+        /* centre by least squares would be circular; use SVG's formulas'
+         * invariant instead: all points p satisfy q(p - c) = 1 for one c,
+         * so q(p_i - c) - q(p_j - c) = 0; c from three points */
+        double ux = cos(phi), uy = sin(phi);
+        double px[3], py[3];
+        int32_t pick[3] = {1, c->count / 2, c->count - 2};
+        for (int k = 0; k < 3; ++k) {
+            double x = c->points[2 * pick[k]], y = c->points[2 * pick[k] + 1];
+            px[k] = (x * ux + y * uy) / 2.0; /* scaled to the unit circle */
+            py[k] = (-x * uy + y * ux) / 1.0;
+        }
+        /* circumcentre of the three scaled points */
+        double d = 2.0 * (px[0] * (py[1] - py[2]) + px[1] * (py[2] - py[0]) + px[2] * (py[0] - py[1]));
+        double s0 = px[0] * px[0] + py[0] * py[0], s1 = px[1] * px[1] + py[1] * py[1], s2 = px[2] * px[2] + py[2] * py[2];
+        double ccx = (s0 * (py[1] - py[2]) + s1 * (py[2] - py[0]) + s2 * (py[0] - py[1])) / d;
+        double ccy = (s0 * (px[2] - px[1]) + s1 * (px[0] - px[2]) + s2 * (px[1] - px[0])) / d;
+        for (int32_t k = 0; k < c->count; ++k) {
+            double x = c->points[2 * k], y = c->points[2 * k + 1];
+            worst = fmax(worst, fabs(hypot((x * ux + y * uy) / 2.0 - ccx, (-x * uy + y * ux) - ccy) - 1.0));
+        }
+        CHECK(worst < 1e-9);
+        CHECK(c->count > 50); /* the large arc */
+    }
+    cf_curve_destroy(&c);
+    /* basic shapes, with their transforms: a circle from (cx + r, cy) on, an
+     * ellipse, a rectangle's four corners, rounded corners (one radius given
+     * stands for both; clamped to half the side) */
+    CHECK_OK(ctx, read_svg(ctx, "<svg><circle cx=\"1\" cy=\"2px\" r=\" 3 \"/></svg>", &c, &log));
+    CHECK(c && c->count >= 60 && radial_error(c, 1.0, 2.0, 3.0) < 1e-12 && find_point(c, 4.0, 2.0, 0.0) == 0);
+    CHECK(c && chord_sagitta(c, 1.0, 2.0, 3.0) <= 3e-3);
+    cf_curve_destroy(&c);
+    CHECK_OK(ctx, read_svg(ctx, "<svg><g transform=\"translate(5,0)\"><ellipse rx=\"2\" ry=\"1\"/></g></svg>", &c, &log));
+    if (c) {
+        double worst = 0.0;
+        for (int32_t k = 0; k < c->count; ++k)
+            worst = fmax(worst, fabs(hypot((c->points[2 * k] - 5.0) / 2.0, c->points[2 * k + 1]) - 1.0));
+        CHECK(worst < 1e-12 && find_point(c, 7.0, 0.0, 0.0) == 0);
+    }
+    cf_curve_destroy(&c);
+    const double corners[8] = {1, 2, 5, 2, 5, 5, 1, 5};
+    CHECK_OK(ctx, read_svg(ctx, "<svg><rect x=\"1\" y=\"2\" width=\"4\" height=\"3\"/></svg>", &c, &log));
+    CHECK(points_are(c, 4, corners, 0.0));
+    cf_curve_destroy(&c);
+    CHECK_OK(ctx, read_svg(ctx, "<svg><rect x=\"1\" y=\"2\" width=\"4\" height=\"3\" ry=\"1\"/></svg>", &c, &log));
+    if (c) {
+        CHECK(find_point(c, 2.0, 2.0, 0.0) == 0 && find_point(c, 4.0, 2.0, 0.0) == 1 && find_point(c, 5.0, 3.0, 0.0) > 1);
+        CHECK(radial_error(c, 4.0, 3.0, 1.0) > 0.5); /* not all on one corner, but each arc point on its corner's circle */
+        int32_t on_corners = 0;
+        for (int32_t k = 0; k < c->count; ++k) {
+            double x = c->points[2 * k], y = c->points[2 * k + 1];
+            double kx = x < 3.0 ? 2.0 : 4.0, ky = y < 3.5 ? 3.0 : 4.0;
+            on_corners += fabs(hypot(x - kx, y - ky) - 1.0) < 1e-12;
+        }
+        CHECK(on_corners == c->count); /* the sides' ends are the arcs' ends */
+        CHECK(signed_area2(c) > 0.0);
+    }
+    cf_curve_destroy(&c);
+    /* rx 10 on a 4 x 2 rect: a stadium (rx 2, ry 1), no repeated point */
+    CHECK_OK(ctx, read_svg(ctx, "<svg><rect width=\"4\" height=\"2\" rx=\"10\"/></svg>", &c, &log));
+    if (c) {
+        int repeated = 0;
+        for (int32_t k = 0; k < c->count; ++k) {
+            int32_t j = (k + 1) % c->count;
+            repeated += c->points[2 * k] == c->points[2 * j] && c->points[2 * k + 1] == c->points[2 * j + 1];
+        }
+        CHECK(repeated == 0 && c->count > 40);
+        double worst = 0.0;
+        for (int32_t k = 0; k < c->count; ++k)
+            worst = fmax(worst, fabs(hypot((c->points[2 * k] - 2.0) / 2.0, c->points[2 * k + 1] - 1.0) - 1.0));
+        CHECK(worst < 1e-12); /* the ellipse inscribed in the rect */
+    }
+    cf_curve_destroy(&c);
+    /* the first drawn shape is read, whatever its kind */
+    CHECK_OK(ctx, read_svg(ctx, "<svg>\n<rect width=\"4\" height=\"3\"/>\n<path d=\"M0,0 L1,0 L1,1 Z\"/></svg>", &c, &log));
+    CHECK(c && c->count == 4 && strstr(log.text, "the first, the <rect> of line 2, is read") != NULL);
+    cf_curve_destroy(&c);
+    /* what is refused, and how */
+    static const struct {
+        const char *svg, *message;
+    } bad[] = {
+        {"<svg><circle r=\"0\"/></svg>", "t.svg: line 1: <circle> needs r > 0 (got 0): it draws nothing"},
+        {"<svg><ellipse rx=\"1\"/></svg>", "<ellipse> needs ry > 0"},
+        {"<svg><rect width=\"5mm\" height=\"1\"/></svg>", "<rect> width=\"5mm\" is not a number in user units"},
+        {"<svg><rect width=\"50%\" height=\"1\"/></svg>", "<rect> width=\"50%\" is not a number"},
+        {"<svg><rect width=\"1\" height=\"1\" rx=\"-1\"/></svg>", "<rect> rx is negative"},
+        {"<svg><circle r=\"1e400\"/></svg>", "is not a number in user units"},
+        {"<svg><circle r=\"1e60\"/></svg>", "out of range"},
+        {"<svg><path d=\"M0 0 A1 1 0 2 1 1 1\"/></svg>", "t.svg: arc flag must be 0 or 1 near \"2 1 1 1\""},
+        {"<svg><path d=\"M0 0 C1 1 2 2\"/></svg>", "t.svg: path command 'C' takes 6 numbers; too few near \"\""},
+        {"<svg><path d=\"M0 0 q1\"/></svg>", "path command 'q' takes 4 numbers"},
+        {"<svg><path d=\"M0 0 C1 1 2 2 3 nan 4 4\"/></svg>", "not finite"},
     };
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
         cf_status st = read_svg(ctx, bad[i].svg, &c, &log);
@@ -415,5 +635,6 @@ int main(void)
     CFT_RUN(test_divergence_detected);
     CFT_RUN(test_files);
     CFT_RUN(test_svg_reader);
+    CFT_RUN(test_svg_curves);
     return cft_finish();
 }

@@ -38,6 +38,9 @@ static void usage(FILE *out)
             "  -a, --anderson M      Anderson acceleration with M past iterates (0..10, 0 = off; default\n"
             "                        -1 = 5 for hybrid/stretch/bend, off for ARAP); a mixed step is\n"
             "                        kept only if it lowers the energy\n"
+            "      --arap-weights W  edge weights of arap and arap-rims: cotan (default, the paper's;\n"
+            "                        negative on non-Delaunay edges, where ARAP is unbounded below) or\n"
+            "                        clamped (negative ones set to 0)\n"
             "  -o, --output OUT      output mesh (required)\n"
             "  -l, --log FILE.jsonl  JSONL log, one object per iteration (energy terms stretch, bend),\n"
             "                        written atomically when the run ends\n"
@@ -82,7 +85,7 @@ static void edit_summary(const cli_flow_job *job, const cf_flow *flow)
 
 int cli_edit(int argc, char **argv)
 {
-    enum { OPT_MASS = 256, OPT_NO_SCALE_FREE, OPT_REPORT };
+    enum { OPT_MASS = 256, OPT_NO_SCALE_FREE, OPT_REPORT, OPT_ARAP_WEIGHTS };
     static const struct option longopts[] = {
         {"handles", required_argument, NULL, 'H'},    {"energy", required_argument, NULL, 'e'},
         {"lambda", required_argument, NULL, 'L'},     {"iterations", required_argument, NULL, 'n'},
@@ -91,7 +94,7 @@ int cli_edit(int argc, char **argv)
         {"output", required_argument, NULL, 'o'},     {"log", required_argument, NULL, 'l'},
         {"quiet", no_argument, NULL, 'q'},            {"help", no_argument, NULL, 'h'},
         {"anderson", required_argument, NULL, 'a'},   {"force", no_argument, NULL, 'f'},
-        {"report", required_argument, NULL, OPT_REPORT},
+        {"report", required_argument, NULL, OPT_REPORT}, {"arap-weights", required_argument, NULL, OPT_ARAP_WEIGHTS},
         {NULL, 0, NULL, 0}};
     static cli_flow_job job; /* large: not on the stack */
     memset(&job, 0, sizeof job);
@@ -124,6 +127,7 @@ int cli_edit(int argc, char **argv)
         case 's': job.start_path = optarg; break;
         case 'a': ok = cli_flow_job_param(&job, "--anderson", "anderson", optarg, true); break;
         case OPT_MASS: ok = cli_flow_job_param(&job, "--mass", "mass", optarg, true); break;
+        case OPT_ARAP_WEIGHTS: ok = cli_flow_job_param(&job, "--arap-weights", "arap_weights", optarg, true); break;
         case OPT_NO_SCALE_FREE: ok = cli_flow_job_param(&job, "--no-scale-free", "scale_free", "false", true); break;
         case 'o': job.output = optarg; break;
         case 'l': job.log_path = optarg; break;

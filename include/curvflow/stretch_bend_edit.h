@@ -74,6 +74,16 @@ typedef enum cf_stretch_bend_mass {
     CF_STRETCH_BEND_MASS_BARYCENTRIC = 1
 } cf_stretch_bend_mass;
 
+/* Edge weights of the ARAP energies (Eq. 6, 7): W = cot a + cot b is
+ * negative on an edge whose opposite angles sum to more than pi (a
+ * non-Delaunay edge), and there the energy is not bounded below: a needle
+ * triangle beside a vertex lets the iteration pull that vertex far off
+ * while the energy goes negative (docs/edit.md, "ARAP edge weights"). */
+typedef enum cf_stretch_bend_arap_weights {
+    CF_STRETCH_BEND_ARAP_COTAN = 0,   /* W as the paper writes it (default) */
+    CF_STRETCH_BEND_ARAP_CLAMPED = 1  /* max(W, 0): a sum of squares, bounded below by 0 */
+} cf_stretch_bend_arap_weights;
+
 /* ---- Handles ------------------------------------------------------------ */
 
 /* The handles are a cf_handle_set (vertices with target positions) of the
@@ -96,6 +106,8 @@ typedef struct cf_stretch_bend_options {
                                     stretch and bend, 0 for the ARAP energies). A step is kept only if it
                                     lowers the energy, else the plain step is taken, so the energy still
                                     never increases. */
+    int32_t arap_weights;        /* cf_stretch_bend_arap_weights of the ARAP energies, default
+                                    CF_STRETCH_BEND_ARAP_COTAN; the other energies ignore it */
     const cf_handle_set *handles;   /* table parameter "handles" (point set, required): copied by create
                                        (a caller may free it once create returned) */
     const double *rest_positions;   /* 3 nv rest pose, NULL = the mesh's positions; copied by create */

@@ -132,7 +132,8 @@ class SpinWillmoreOptions(Structure):
 class StretchBendOptions(Structure):
     _fields_ = [("energy", c_int32), ("lambda_", c_double), ("max_iterations", c_int32),
                 ("relative_tolerance", c_double), ("mass", c_int32), ("scale_free", c_int32),
-                ("anderson", c_int32), ("handles", c_void_p), ("rest_positions", c_void_p)]
+                ("anderson", c_int32), ("arap_weights", c_int32), ("handles", c_void_p),
+                ("rest_positions", c_void_p)]
 
 
 class HandleSet(Structure):
@@ -184,7 +185,7 @@ _LAYOUT = {
     "stretch-bend-edit": (StretchBendOptions, {
         "energy": ("energy", 0), "lambda": ("lambda_", 0), "max_iterations": ("max_iterations", 0),
         "relative_tolerance": ("relative_tolerance", 0), "mass": ("mass", 0), "scale_free": ("scale_free", 0),
-        "anderson": ("anderson", 0), "handles": ("handles", 0)}),
+        "anderson": ("anderson", 0), "arap_weights": ("arap_weights", 0), "handles": ("handles", 0)}),
 }
 
 

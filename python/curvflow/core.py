@@ -516,7 +516,8 @@ def edit(V, F, handles, energy="hybrid", iterations=100, tol=1e-6, start=None, c
     docs/edit.md), or a pair (vertices (k,), targets (k, 3)).
     energy: hybrid, stretch, bend, arap, arap-rims. iterations, tol: as the
     CLI's --iterations and --tol. params: lambda_ (or "lambda" via **),
-    mass, scale_free, anderson. Returns (V_out, log) as curvflow.flow.
+    mass, scale_free, anderson, arap_weights ("cotan" or "clamped", as the
+    CLI's --arap-weights). Returns (V_out, log) as curvflow.flow.
     """
     params = dict(params)
     if "lambda_" in params:

@@ -146,6 +146,38 @@ def test_edit_lambda_and_start_equal_cli(cli, meshes, tmp_path):
     assert np.array_equal(got, curvflow.load(out)[0])
 
 
+def test_edit_arap_weights_equal_cli(cli, meshes, tmp_path):
+    """arap_weights="clamped" is --arap-weights clamped; beside a needle
+    triangle (179.6 degrees) it keeps the vertices that the paper's weights
+    pull off (docs/edit.md, "ARAP edge weights")."""
+    V, F, _ = curvflow.load(meshes["bumpy"])
+    v = int(np.argmin(np.abs(V[:, 1]) + np.abs(V[:, 0] - 1)))
+    f = F[np.flatnonzero((F == v).any(axis=1))[0]]
+    k = int(np.flatnonzero(f == v)[0])
+    mid = 0.5 * (V[f[(k + 1) % 3]] + V[f[(k + 2) % 3]])
+    V[v] = mid + 0.003 * (V[v] - mid)
+    needle = tmp_path / "needle.obj"
+    curvflow.save(needle, V, F)
+    hf = tmp_path / "h.json"
+    hf.write_text(json.dumps({"sets": [
+        {"name": "base", "relative_box": {"min": [0, 0, 0], "max": [1, 0.1, 1]}, "fixed": True},
+        {"name": "top", "relative_box": {"min": [0, 0.9, 0], "max": [1, 1, 1]},
+         "transform": {"rotate": {"axis": [1, 0, 0], "angle_degrees": 30}}}]}))
+    diag = np.linalg.norm(np.ptp(V, axis=0))
+    moves = {}
+    for weights in ("cotan", "clamped"):
+        out = tmp_path / (weights + ".obj")
+        done = run_cli(cli, "edit", needle, "--handles", hf, "--energy", "arap", "--arap-weights", weights,
+                       "-o", out, "-q")
+        got, log = curvflow.edit(V, F, str(hf), energy="arap", arap_weights=weights)
+        assert np.array_equal(got, curvflow.load(out)[0])
+        moves[weights] = np.linalg.norm(got - V, axis=1).max() / diag
+        assert ("energy is negative" in done.stderr) == (weights == "cotan")
+        assert (min(step["energy"] for step in log) < 0) == (weights == "cotan")
+    assert moves["cotan"] > 0.5 and moves["clamped"] < 0.15
+    with pytest.raises(curvflow.UsageError):
+        curvflow.edit(V, F, str(hf), energy="arap", arap_weights="uniform")
+
 def test_spin_equals_cli(cli, meshes, tmp_path):
     V, F, _ = curvflow.load(meshes["bumpy"])
     rho = 0.3 * np.sin(3 * V[:, 0]) * np.cos(2 * V[:, 1])

@@ -49,10 +49,12 @@ typedef struct stretch_bend_state {
     cf_anderson *aa;
     double *aa_g, *aa_x;      /* 3 nv each: G(x) and the mixed candidate */
     int64_t aa_accepted, aa_rejected;
+    int32_t negative_warned;  /* the warning of a negative ARAP energy was logged */
 } stretch_bend_state;
 
 static const char *const energy_names[] = {"hybrid", "stretch", "bend", "arap", "arap-rims", NULL};
 static const char *const mass_names[] = {"voronoi", "barycentric", NULL};
+static const char *const arap_weight_names[] = {"cotan", "clamped", NULL};
 
 const char *cf_stretch_bend_energy_name(cf_stretch_bend_energy_kind energy)
 {
@@ -105,6 +107,9 @@ static const cf_param_desc params[] = {
     {"anderson", CF_PARAM_INT, offsetof(cf_stretch_bend_options, anderson), -1, 10, NULL,
      "Anderson acceleration depth (0 = plain local/global; -1 = 5 for hybrid/stretch/bend, 0 for ARAP); "
      "energy-safeguarded"},
+    {"arap_weights", CF_PARAM_CHOICE, offsetof(cf_stretch_bend_options, arap_weights), 0, 1, arap_weight_names,
+     "edge weights of arap and arap-rims: cotan (cot a + cot b, Eq. 6/7; negative on non-Delaunay edges, where the "
+     "energy is not bounded below) or clamped (negative ones set to 0)"},
     {"handles", CF_PARAM_POINT_SETS, offsetof(cf_stretch_bend_options, handles), 1, 1, NULL,
      "handle vertices with their targets: a JSON handle file (format in docs/edit.md); required"},
 };
@@ -438,6 +443,9 @@ static cf_status stretch_bend_create(cf_flow *flow, const void *options)
         s->model.rhs = s->rhs;
         s->model.hu = s->hu;
         st = build_full_matrix(s, ctx);
+        if (s->model.clamped && s->model.negative_edges > 0)
+            cfi_log(ctx, CF_LOG_INFO, "stretch-bend-edit: arap_weights clamped: %d of %d edge weights were negative "
+                                      "and are 0", (int)s->model.negative_edges, (int)mesh->ne);
     }
     if (st == CF_OK) st = setup_system(s, ctx, mesh, o->handles);
     if (st != CF_OK) return st;
@@ -510,6 +518,26 @@ cfi_stretch_bend_model *cfi_stretch_bend_flow_model(cf_flow *flow)
 {
     if (!flow || flow->method != &cfi_stretch_bend_edit_method || !flow->impl) return NULL;
     return &((stretch_bend_state *)flow->impl)->model;
+}
+
+/* A negative ARAP energy (possible only with negative edge weights, where
+ * Eq. 6/7 is not bounded below) comes with vertices pulled off beside the
+ * most negative edges: on chinese_lion_statue_10k one vertex beside a
+ * 179.6 degree triangle moves half the bounding-box diagonal. Said once,
+ * with the cure (docs/edit.md, "ARAP edge weights"). */
+static void warn_negative_arap(const cf_flow *flow, stretch_bend_state *s)
+{
+    const cfi_stretch_bend_model *m = &s->model;
+    if (s->negative_warned || m->clamped || m->negative_edges == 0 || !(s->energy < 0.0)) return;
+    s->negative_warned = 1;
+    const int32_t *ev = flow->mesh->edge_vertices + 2 * (size_t)m->most_negative_edge;
+    cfi_log(flow->ctx, CF_LOG_WARNING,
+            "stretch-bend-edit: iteration %lld: the %s energy is negative (%.6g): %d of %d edges have negative "
+            "cotan weights (non-Delaunay; cot a + cot b down to %.3g at edge (%d, %d)), where the energy is not "
+            "bounded below and vertices beside them can be pulled far off; arap_weights=clamped (edit "
+            "--arap-weights clamped) sets those weights to 0",
+            (long long)flow->info.iteration + 1, cf_stretch_bend_energy_name(m->energy), s->energy,
+            (int)m->negative_edges, (int)flow->mesh->ne, m->most_negative_weight, (int)ev[0], (int)ev[1]);
 }
 
 /* One local/global iteration: global solve with the rotations and u' of the
@@ -587,6 +615,7 @@ static cf_status stretch_bend_step(cf_flow *flow, cf_flow_info *info)
         }
         t3 = cfi_now_seconds();
     }
+    warn_negative_arap(flow, s);
     /* Stopping rule (the flow layer's step policy, see the vtable): relative
      * energy decrease below relative_tolerance; a rise stops the run. */
     double scale = fabs(previous) > 0.0 ? fabs(previous) : 1.0;

@@ -188,6 +188,25 @@ cf_status cfi_stretch_bend_model_init(cfi_stretch_bend_model *m, cf_context *ctx
     }
     cf_status st = cf_corner_cotangents(ctx, mesh, rest, cot);
     if (st == CF_OK) st = cf_cotan_weights(ctx, mesh, rest, w_edge);
+    if (st == CF_OK && arap) {
+        if (o->arap_weights != CF_STRETCH_BEND_ARAP_COTAN && o->arap_weights != CF_STRETCH_BEND_ARAP_CLAMPED) {
+            st = cfi_error(ctx, CF_ERR_INVALID_ARG, "stretch-bend-edit: arap_weights %d out of range",
+                           (int)o->arap_weights);
+            goto done;
+        }
+        /* the negative weights, for the flow's warning; clamped: set to 0 */
+        m->most_negative_edge = -1;
+        for (int32_t e = 0; e < ne; ++e) {
+            if (!(w_edge[e] < 0.0)) continue;
+            ++m->negative_edges;
+            if (m->most_negative_edge < 0 || w_edge[e] < w_edge[m->most_negative_edge]) m->most_negative_edge = e;
+        }
+        if (m->negative_edges > 0)
+            m->most_negative_weight = 2.0 * w_edge[m->most_negative_edge];
+        if (o->arap_weights == CF_STRETCH_BEND_ARAP_CLAMPED)
+            for (int32_t e = 0; e < ne; ++e) w_edge[e] = fmax(w_edge[e], 0.0);
+        m->clamped = o->arap_weights == CF_STRETCH_BEND_ARAP_CLAMPED;
+    }
     double area = 0.0;
     if (st == CF_OK) st = cf_total_area(ctx, mesh, rest, &area);
     if (st != CF_OK) goto done;

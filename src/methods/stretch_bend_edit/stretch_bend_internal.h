@@ -46,6 +46,10 @@ typedef struct cfi_stretch_bend_model {
     double *u;               /* 3 nv interleaved unit vectors u' (beta > 0) */
     double *xcol;            /* 3 nv scratch */
     double *kx;              /* 3 nv interleaved scratch (K x') */
+    int32_t negative_edges;       /* ARAP: edges whose rest weight cot a + cot b is negative */
+    int32_t most_negative_edge;   /* ARAP: the most negative of them (-1: none) */
+    double most_negative_weight;  /* ARAP: its cot a + cot b */
+    int32_t clamped;              /* ARAP: those weights were set to 0 (arap_weights clamped) */
     double term_energy;      /* last local step: E_s or E_arap (unweighted) */
     double bend_energy;      /* last local step: E_db (unweighted) */
 } cfi_stretch_bend_model;

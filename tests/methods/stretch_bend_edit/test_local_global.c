@@ -15,6 +15,7 @@
 #include "methods/stretch_bend_edit/stretch_bend_internal.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -455,6 +456,154 @@ static void test_first_step_candidates(void)
     cf_context_destroy(&ctx);
 }
 
+/* Warnings logged during a run. */
+typedef struct warning_capture {
+    char text[4096];
+} warning_capture;
+
+static void capture_warning(void *user, cf_log_level level, const char *line)
+{
+    warning_capture *w = user;
+    if (level != CF_LOG_WARNING) return;
+    size_t n = strlen(w->text);
+    snprintf(w->text + n, sizeof w->text - n, "%s\n", line);
+}
+
+/* An ARAP edit of `mesh` (base fixed, top turned 30 degrees): 100 plain
+ * iterations with the given edge weights; returns the largest vertex move
+ * over the bounding-box diagonal, the lowest energy of any iteration in
+ * *lowest, whether it never rose in *monotone, the result in out (3 nv). */
+static double arap_edit(cf_context *ctx, const cf_mesh *mesh, cf_stretch_bend_energy_kind energy, int32_t weights,
+                        double *lowest, int *monotone, double *out, warning_capture *log)
+{
+    static const char *const handles =
+        "{ \"sets\": [ { \"name\": \"base\", \"relative_box\": { \"min\": [0, 0, 0], \"max\": [1, 0.1, 1] }, "
+        "\"fixed\": true }, { \"name\": \"top\", \"relative_box\": { \"min\": [0, 0.9, 0], \"max\": [1, 1, 1] }, "
+        "\"transform\": { \"rotate\": { \"axis\": [1, 0, 0], \"angle_degrees\": 30 } } } ] }";
+    const double *rest = cf_mesh_positions(mesh);
+    int32_t nv = cf_mesh_vertex_count(mesh);
+    cf_handle_set *h = NULL;
+    CHECK_OK(ctx, cf_handle_set_parse_json(ctx, mesh, rest, handles, "h.json", &h));
+    cf_flow_options fo;
+    CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_STRETCH_BEND_EDIT, &fo));
+    cf_stretch_bend_options *o = cf_flow_options_method(&fo);
+    o->energy = energy;
+    o->handles = h;
+    o->relative_tolerance = 0.0;
+    o->anderson = 0;
+    o->arap_weights = weights;
+    log->text[0] = '\0';
+    cf_context_set_log(ctx, capture_warning, log, CF_LOG_WARNING);
+    cf_flow *flow = NULL;
+    CHECK_OK(ctx, cf_flow_create(ctx, mesh, NULL, &fo, &flow));
+    *lowest = INFINITY;
+    *monotone = 1;
+    double previous = flow ? cf_flow_energy(flow) : 0.0;
+    for (int k = 0; flow && k < 100; ++k) {
+        cf_flow_info info;
+        CHECK_OK(ctx, cf_flow_step(flow, &info));
+        *lowest = fmin(*lowest, info.energy);
+        *monotone &= info.energy <= previous + 1e-10 * fabs(previous);
+        previous = info.energy;
+    }
+    cf_context_set_log(ctx, NULL, NULL, CF_LOG_WARNING);
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY}, move = 0.0;
+    if (flow) memcpy(out, cf_flow_positions(flow), 3 * (size_t)nv * sizeof(double));
+    for (int32_t v = 0; v < nv; ++v) {
+        const double *p = rest + 3 * (size_t)v, *q = out + 3 * (size_t)v;
+        for (int c = 0; c < 3; ++c) {
+            lo[c] = fmin(lo[c], p[c]);
+            hi[c] = fmax(hi[c], p[c]);
+        }
+        move = fmax(move, hypot(hypot(q[0] - p[0], q[1] - p[1]), q[2] - p[2]));
+    }
+    cf_flow_destroy(&flow);
+    cf_handle_set_destroy(&h);
+    return move / hypot(hypot(hi[0] - lo[0], hi[1] - lo[1]), hi[2] - lo[2]);
+}
+
+/* ARAP's edge weights cot a + cot b are negative on non-Delaunay edges, and
+ * there Eq. 6/7 is not bounded below. One needle triangle (angles 0.2,
+ * 179.6, 0.2 degrees, as on chinese_lion_statue_10k, where a vertex then
+ * moved half the diagonal) in a bumpy sphere: the paper's weights pull a
+ * vertex beside it 0.78 of the diagonal while the energy goes negative,
+ * and the edit says so once; clamped weights give a sum of squares
+ * (never negative, monotone) and the edit of the sphere without the
+ * needle (a largest move of 0.087); on a mesh without negative weights
+ * both are the same bit for bit. */
+static void test_arap_negative_weights(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *sphere = NULL;
+    CHECK_OK(ctx, cf_generate_bumpy_sphere(ctx, 3, 0.25, 1, &sphere));
+    if (!sphere) {
+        cf_context_destroy(&ctx);
+        return;
+    }
+    int32_t nv = cf_mesh_vertex_count(sphere), nf = cf_mesh_face_count(sphere);
+    const int32_t *tri = cf_mesh_triangles(sphere);
+    double *p = malloc(3 * (size_t)nv * sizeof(double)), *out = malloc(3 * (size_t)nv * sizeof(double));
+    memcpy(p, cf_mesh_positions(sphere), 3 * (size_t)nv * sizeof(double));
+    /* the vertex nearest (1, 0, 0) moved to 0.003 of its way from the
+     * middle of the opposite edge of its first face */
+    int32_t v = 0;
+    for (int32_t i = 1; i < nv; ++i)
+        if (fabs(p[3 * i + 1]) + fabs(p[3 * i] - 1.0) < fabs(p[3 * v + 1]) + fabs(p[3 * v] - 1.0)) v = i;
+    int32_t f = 0;
+    while (f < nf && tri[3 * f] != v && tri[3 * f + 1] != v && tri[3 * f + 2] != v) ++f;
+    int32_t k = tri[3 * f] == v ? 0 : tri[3 * f + 1] == v ? 1 : 2;
+    int32_t q = tri[3 * f + (k + 1) % 3], r = tri[3 * f + (k + 2) % 3];
+    for (int c = 0; c < 3; ++c) {
+        double mid = 0.5 * (p[3 * q + c] + p[3 * r + c]);
+        p[3 * v + c] = mid + 0.003 * (p[3 * v + c] - mid);
+    }
+    cf_mesh_desc desc = {nv, p, nf, tri, 0, NULL, NULL};
+    cf_mesh *needle = NULL;
+    CHECK_OK(ctx, cf_mesh_create(ctx, &desc, &needle));
+    warning_capture log;
+    double lowest = 0.0, clamped_move = 0.0;
+    int monotone = 0;
+    if (needle) {
+        double move = arap_edit(ctx, needle, CF_STRETCH_BEND_ARAP, CF_STRETCH_BEND_ARAP_COTAN, &lowest, &monotone, out, &log);
+        fprintf(stderr, "   needle, cotan weights: largest move %.3f of the diagonal, lowest energy %.4g\n", move, lowest);
+        CHECK(move > 0.5 && lowest < 0.0);
+        CHECK(strstr(log.text, "the arap energy is negative") != NULL && strstr(log.text, "cot a + cot b down to") != NULL);
+        CHECK(strstr(log.text, "arap_weights=clamped") != NULL);
+        for (int e = CF_STRETCH_BEND_ARAP; e <= CF_STRETCH_BEND_ARAP_RIMS; ++e) {
+            move = arap_edit(ctx, needle, (cf_stretch_bend_energy_kind)e, CF_STRETCH_BEND_ARAP_CLAMPED, &lowest,
+                             &monotone, out, &log);
+            fprintf(stderr, "   needle, %s, clamped weights: largest move %.3f, lowest energy %.4g\n",
+                    cf_stretch_bend_energy_name((cf_stretch_bend_energy_kind)e), move, lowest);
+            CHECK(move < 0.15 && lowest >= 0.0 && monotone && log.text[0] == '\0');
+            if (e == CF_STRETCH_BEND_ARAP) clamped_move = move;
+        }
+        /* the same edit of the sphere without the needle */
+        double plain = arap_edit(ctx, sphere, CF_STRETCH_BEND_ARAP, CF_STRETCH_BEND_ARAP_COTAN, &lowest, &monotone, out, &log);
+        fprintf(stderr, "   without the needle: largest move %.3f\n", plain);
+        CHECK(fabs(clamped_move - plain) < 0.01);
+    }
+    /* the icosphere's edges are all Delaunay: clamping changes nothing */
+    cf_mesh *ico = NULL;
+    CHECK_OK(ctx, cf_generate_icosphere(ctx, 3, 1.0, &ico));
+    if (ico) {
+        int32_t n3 = 3 * cf_mesh_vertex_count(ico);
+        double *a = malloc((size_t)n3 * sizeof(double)), *b = malloc((size_t)n3 * sizeof(double));
+        arap_edit(ctx, ico, CF_STRETCH_BEND_ARAP, CF_STRETCH_BEND_ARAP_COTAN, &lowest, &monotone, a, &log);
+        CHECK(lowest >= 0.0 && log.text[0] == '\0');
+        arap_edit(ctx, ico, CF_STRETCH_BEND_ARAP, CF_STRETCH_BEND_ARAP_CLAMPED, &lowest, &monotone, b, &log);
+        CHECK(memcmp(a, b, (size_t)n3 * sizeof(double)) == 0);
+        free(a);
+        free(b);
+    }
+    cf_mesh_destroy(&ico);
+    cf_mesh_destroy(&needle);
+    cf_mesh_destroy(&sphere);
+    free(p);
+    free(out);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 int main(void)
 {
     CFT_RUN(test_no_allocation_in_loop);
@@ -464,5 +613,6 @@ int main(void)
     CFT_RUN(test_gradient_finite_difference);
     CFT_RUN(test_rigid_motion);
     CFT_RUN(test_first_step_candidates);
+    CFT_RUN(test_arap_negative_weights);
     return cft_finish();
 }

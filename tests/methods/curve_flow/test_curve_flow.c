@@ -326,6 +326,27 @@ static cf_status read_svg(cf_context *ctx, const char *svg, cf_curve **c, log_ca
     return st;
 }
 
+/* An SVG text the reader refuses, and the part of the message that says why. */
+typedef struct svg_refusal {
+    const char *svg, *message;
+} svg_refusal;
+
+/* Each case refused (parse or range error, no curve) with its message. */
+static void expect_refused(cf_context *ctx, const svg_refusal *cases, size_t n)
+{
+    log_capture log;
+    for (size_t i = 0; i < n; ++i) {
+        cf_curve *c = NULL;
+        cf_status st = read_svg(ctx, cases[i].svg, &c, &log);
+        CHECK(st == CF_ERR_PARSE || st == CF_ERR_NONFINITE);
+        CHECK(c == NULL);
+        cf_curve_destroy(&c);
+        int named = strstr(cf_context_message(ctx), cases[i].message) != NULL;
+        if (!named) fprintf(stderr, "   case %zu: '%s'\n", i, cf_context_message(ctx));
+        CHECK(named);
+    }
+}
+
 static int points_are(const cf_curve *c, int32_t n, const double *xy, double tol)
 {
     if (!c || c->count != n) return 0;
@@ -380,9 +401,7 @@ static void test_svg_reader(void)
                            "ignored") != NULL);
     cf_curve_destroy(&c);
     /* what is refused, and how */
-    static const struct {
-        const char *svg, *message;
-    } bad[] = {
+    static const svg_refusal bad[] = {
         {"<svg><!-- <polygon points=\"0,0 1,0 1,1\"/>", "t.svg: line 1: comment not closed (no '-->')"},
         {"<svg>\n<polygon points=\"0,0 1,0 1,1\"", "t.svg: line 2: malformed or unclosed tag <polygon"},
         {"<svg><defs><polygon points=\"0,0 1,0 1,1\"/></defs></svg>",
@@ -393,14 +412,7 @@ static void test_svg_reader(void)
          "t.svg: line 1: rotate() takes 1 or 3 arguments, got 2"},
         {"<svg><polygon transform=\"scale(1e300)\" points=\"0,0 1,0 1,1\"/></svg>", "out of range"},
     };
-    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
-        cf_status st = read_svg(ctx, bad[i].svg, &c, &log);
-        CHECK(st == CF_ERR_PARSE || st == CF_ERR_NONFINITE);
-        CHECK(c == NULL);
-        int named = strstr(cf_context_message(ctx), bad[i].message) != NULL;
-        if (!named) fprintf(stderr, "   case %zu: '%s'\n", i, cf_context_message(ctx));
-        CHECK(named);
-    }
+    expect_refused(ctx, bad, sizeof bad / sizeof bad[0]);
     CHECK(cf_context_bytes_in_use(ctx) == 0);
     cf_context_destroy(&ctx);
 }
@@ -598,9 +610,7 @@ static void test_svg_curves(void)
     CHECK(c && c->count == 4 && strstr(log.text, "the first, the <rect> of line 2, is read") != NULL);
     cf_curve_destroy(&c);
     /* what is refused, and how */
-    static const struct {
-        const char *svg, *message;
-    } bad[] = {
+    static const svg_refusal bad[] = {
         {"<svg><circle r=\"0\"/></svg>", "t.svg: line 1: <circle> needs r > 0 (got 0): it draws nothing"},
         {"<svg><ellipse rx=\"1\"/></svg>", "<ellipse> needs ry > 0"},
         {"<svg><rect width=\"5mm\" height=\"1\"/></svg>", "<rect> width=\"5mm\" is not a number in user units"},
@@ -613,14 +623,7 @@ static void test_svg_curves(void)
         {"<svg><path d=\"M0 0 q1\"/></svg>", "path command 'q' takes 4 numbers"},
         {"<svg><path d=\"M0 0 C1 1 2 2 3 nan 4 4\"/></svg>", "not finite"},
     };
-    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
-        cf_status st = read_svg(ctx, bad[i].svg, &c, &log);
-        CHECK(st == CF_ERR_PARSE || st == CF_ERR_NONFINITE);
-        CHECK(c == NULL);
-        int named = strstr(cf_context_message(ctx), bad[i].message) != NULL;
-        if (!named) fprintf(stderr, "   case %zu: '%s'\n", i, cf_context_message(ctx));
-        CHECK(named);
-    }
+    expect_refused(ctx, bad, sizeof bad / sizeof bad[0]);
     CHECK(cf_context_bytes_in_use(ctx) == 0);
     cf_context_destroy(&ctx);
 }

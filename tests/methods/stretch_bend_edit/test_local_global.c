@@ -47,16 +47,24 @@ static cf_handle_set *bar_handles(cf_context *ctx, const cf_mesh *mesh, double s
     return stretch_bend_handles_where(ctx, mesh, bar_rule, &b);
 }
 
-static cf_flow *make_flow_aa(cf_context *ctx, const cf_mesh *mesh, const double *start, const cf_handle_set *h,
-                             cf_stretch_bend_energy_kind energy, int32_t anderson)
+/* Options of a test edit: `energy` with handles h, no stopping rule. */
+static cf_stretch_bend_options *edit_options(cf_context *ctx, cf_flow_options *fo, const cf_handle_set *h,
+                                             cf_stretch_bend_energy_kind energy, int32_t anderson)
 {
-    cf_flow_options fo;
-    CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_STRETCH_BEND_EDIT, &fo));
-    cf_stretch_bend_options *o = cf_flow_options_method(&fo);
+    CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_STRETCH_BEND_EDIT, fo));
+    cf_stretch_bend_options *o = cf_flow_options_method(fo);
     o->energy = energy;
     o->handles = h;
     o->relative_tolerance = 0.0;
     o->anderson = anderson;
+    return o;
+}
+
+static cf_flow *make_flow_aa(cf_context *ctx, const cf_mesh *mesh, const double *start, const cf_handle_set *h,
+                             cf_stretch_bend_energy_kind energy, int32_t anderson)
+{
+    cf_flow_options fo;
+    edit_options(ctx, &fo, h, energy, anderson);
     cf_flow *flow = NULL;
     CHECK_OK(ctx, cf_flow_create(ctx, mesh, start, &fo, &flow));
     return flow;
@@ -485,13 +493,7 @@ static double arap_edit(cf_context *ctx, const cf_mesh *mesh, cf_stretch_bend_en
     cf_handle_set *h = NULL;
     CHECK_OK(ctx, cf_handle_set_parse_json(ctx, mesh, rest, handles, "h.json", &h));
     cf_flow_options fo;
-    CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_STRETCH_BEND_EDIT, &fo));
-    cf_stretch_bend_options *o = cf_flow_options_method(&fo);
-    o->energy = energy;
-    o->handles = h;
-    o->relative_tolerance = 0.0;
-    o->anderson = 0;
-    o->arap_weights = weights;
+    edit_options(ctx, &fo, h, energy, 0)->arap_weights = weights;
     log->text[0] = '\0';
     cf_context_set_log(ctx, capture_warning, log, CF_LOG_WARNING);
     cf_flow *flow = NULL;

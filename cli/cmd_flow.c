@@ -291,10 +291,14 @@ static int run_loaded(cf_context *ctx, const cli_flow_job *job, cf_flow_options 
         if (job->summary) {
             job->summary(job, flow);
         } else {
+            /* a run that ends before its steps says so: converged, by the
+             * method's tolerance or where no time step lowers the energy
+             * any more (the step policy's stop; as edit and demo say it) */
             const cf_flow_info *last = cf_flow_last_info(flow);
-            fprintf(stderr, "curvflow: %s: %lld steps, energy %.9g, area drift %+.3e, volume drift %+.3e; wrote %s\n",
-                    job->label, (long long)last->iteration, last->energy, last->area_drift, last->volume_drift,
-                    job->output);
+            fprintf(stderr,
+                    "curvflow: %s: %lld steps%s, energy %.9g, area drift %+.3e, volume drift %+.3e; wrote %s\n",
+                    job->label, (long long)last->iteration, cf_flow_converged(flow) ? " (converged)" : "",
+                    last->energy, last->area_drift, last->volume_drift, job->output);
         }
     }
 done:

@@ -314,6 +314,14 @@ static void test_flow(void)
         json_decref(o);
     }
 
+    /* a run that ends before its steps says so in its summary (a flat
+     * grid: W is 0, no step lowers it), one that runs them all does not */
+    CHECK_RUN("flow grid.off -o g.off --method spin-willmore --steps 50", 0);
+    CHECK(strstr(cft_err, "curvflow: spin-willmore: ") != NULL && strstr(cft_err, " steps (converged), energy ") != NULL);
+    CHECK_RUN("flow bumpy.obj -o b2.obj --method spin-willmore --steps 2", 0);
+    CHECK(strstr(cft_err, "curvflow: spin-willmore: 2 steps, energy ") != NULL);
+    remove(cft_in_dir("g.off"));
+    remove(cft_in_dir("b2.obj"));
     CHECK_RUN("flow bumpy.obj -o p.ply -m conformal-mcf -n 2 -p rescale=true -p mass=voronoi -q", 0);
     CHECK(cft_err[0] == '\0');
     CHECK(cft_exists("p.ply"));

@@ -19,20 +19,6 @@
 static int contains(const char *s, const char *part) { return strstr(s, part) != NULL; }
 
 /* Collects warning lines for the warning tests. */
-typedef struct log_capture {
-    int warnings;
-    char text[2048];
-} log_capture;
-
-static void capture(void *user, cf_log_level level, const char *line)
-{
-    log_capture *c = user;
-    if (level != CF_LOG_WARNING) return;
-    ++c->warnings;
-    size_t len = strlen(c->text);
-    snprintf(c->text + len, sizeof c->text - len, "%s\n", line);
-}
-
 static void test_point_sets(void)
 {
     cf_context *ctx = cft_context();
@@ -247,8 +233,8 @@ static void test_warnings(void)
 {
     cf_context *ctx = NULL;
     CHECK(cf_context_create(&ctx) == CF_OK);
-    log_capture cap = {0, ""};
-    cf_context_set_log(ctx, capture, &cap, CF_LOG_WARNING);
+    cft_warnings cap;
+    cft_capture_warnings(ctx, &cap);
     cf_mesh *mesh = NULL;
     CHECK_OK(ctx, cf_generate_sheet(ctx, 4, 1.0, 0, &mesh));
     if (!mesh) return;
@@ -258,23 +244,22 @@ static void test_warnings(void)
     cf_handle_set *h = NULL;
     CHECK_OK(ctx, cf_handle_set_parse_json(ctx, mesh, NULL, json, "w.json", &h));
     CHECK(h && h->count == 3);
-    CHECK(cap.warnings == 4);
+    CHECK(cap.count == 4);
     CHECK(contains(cap.text, "w.json: unknown top-level key 'version' ignored"));
     CHECK(contains(cap.text, "w.json: unknown top-level key 'handles' ignored"));
     CHECK(contains(cap.text, "w.json: set #0 has no \"name\""));
     CHECK(contains(cap.text, "w.json: set #1: \"name\" is not a string"));
-    if (cap.warnings != 4) fprintf(stderr, "warnings:\n%s", cap.text);
+    if (cap.count != 4) fprintf(stderr, "warnings:\n%s", cap.text);
     cf_handle_set_destroy(&h);
     /* a clean file warns about nothing; the point-set reader warns too */
-    cap.warnings = 0;
-    cap.text[0] = '\0';
+    cft_capture_warnings(ctx, &cap);
     const char *clean = "{\"sets\": [{\"name\": \"a\", \"vertices\": [1], \"fixed\": true}]}";
     CHECK_OK(ctx, cf_handle_set_parse_json(ctx, mesh, NULL, clean, "c.json", &h));
-    CHECK(cap.warnings == 0);
+    CHECK(cap.count == 0);
     cf_handle_set_destroy(&h);
     cf_point_set *s = NULL;
     CHECK_OK(ctx, cf_point_set_parse_json(ctx, mesh, NULL, "{\"set\": 1, \"sets\": [{\"vertices\": [1]}]}", "p.json", &s));
-    CHECK(cap.warnings == 2);
+    CHECK(cap.count == 2);
     CHECK(contains(cap.text, "p.json: unknown top-level key 'set' ignored"));
     cf_point_set_destroy(&s);
     cf_mesh_destroy(&mesh);

@@ -88,6 +88,24 @@ static void log_to_stderr(void *user, cf_log_level level, const char *line)
     fprintf(stderr, "  [curvflow %s] %s\n", names[level], line);
 }
 
+static void log_to_warnings(void *user, cf_log_level level, const char *line)
+{
+    cft_warnings *w = user;
+    if (level != CF_LOG_WARNING) return;
+    ++w->count;
+    size_t n = strlen(w->text);
+    snprintf(w->text + n, sizeof w->text - n, "%s\n", line);
+}
+
+void cft_capture_warnings(cf_context *ctx, cft_warnings *w)
+{
+    w->count = 0;
+    w->text[0] = '\0';
+    cf_context_set_log(ctx, log_to_warnings, w, CF_LOG_WARNING);
+}
+
+void cft_capture_end(cf_context *ctx) { cf_context_set_log(ctx, log_to_stderr, NULL, CF_LOG_WARNING); }
+
 cf_context *cft_context(void)
 {
     cf_context *ctx = NULL;

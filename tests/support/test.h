@@ -57,6 +57,15 @@ double cft_flow_residual(const cf_flow_info *info, const char *name);
 #endif
 /* A context that prints library log lines to stderr. */
 cf_context *cft_context(void);
+/* The library's warnings collected as lines of text: cft_capture_warnings
+ * empties w and sends ctx's warnings to it, cft_capture_end sends them to
+ * stderr again (as cft_context does). */
+typedef struct cft_warnings {
+    int count;
+    char text[4096];
+} cft_warnings;
+void cft_capture_warnings(cf_context *ctx, cft_warnings *w);
+void cft_capture_end(cf_context *ctx);
 /* A test case on one mesh of ../shared/meshes: a new context (cft_context)
  * with the mesh loaded. cft_shared_case_open returns 0, with nothing left to
  * close, when the mesh is absent (with `required` the whole program skips,

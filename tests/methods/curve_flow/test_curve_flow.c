@@ -303,26 +303,12 @@ static void test_files(void)
     cf_context_destroy(&ctx);
 }
 
-/* Log lines of a read, for the reader's warnings. */
-typedef struct log_capture {
-    char text[2048];
-} log_capture;
-
-static void capture(void *user, cf_log_level level, const char *line)
-{
-    log_capture *c = user;
-    if (level != CF_LOG_WARNING) return;
-    size_t n = strlen(c->text);
-    snprintf(c->text + n, sizeof c->text - n, "%s\n", line);
-}
-
 /* Reads svg from memory; returns the status, the points in *c. */
-static cf_status read_svg(cf_context *ctx, const char *svg, cf_curve **c, log_capture *log)
+static cf_status read_svg(cf_context *ctx, const char *svg, cf_curve **c, cft_warnings *log)
 {
-    log->text[0] = '\0';
-    cf_context_set_log(ctx, capture, log, CF_LOG_WARNING);
+    cft_capture_warnings(ctx, log);
     cf_status st = cf_curve_read_memory(ctx, svg, strlen(svg), 1, "t.svg", c);
-    cf_context_set_log(ctx, NULL, NULL, CF_LOG_WARNING);
+    cft_capture_end(ctx);
     return st;
 }
 
@@ -334,7 +320,7 @@ typedef struct svg_refusal {
 /* Each case refused (parse or range error, no curve) with its message. */
 static void expect_refused(cf_context *ctx, const svg_refusal *cases, size_t n)
 {
-    log_capture log;
+    cft_warnings log;
     for (size_t i = 0; i < n; ++i) {
         cf_curve *c = NULL;
         cf_status st = read_svg(ctx, cases[i].svg, &c, &log);
@@ -364,7 +350,7 @@ static void test_svg_reader(void)
 {
     cf_context *ctx = cft_context();
     cf_curve *c = NULL;
-    log_capture log;
+    cft_warnings log;
     /* transforms of the ancestors and the element, composed as SVG does:
      * the unit square under translate(10 20) scale(2, 1) rotate(90) */
     const char *nested = "<?xml version=\"1.0\"?>\n"
@@ -466,7 +452,7 @@ static void test_svg_curves(void)
 {
     cf_context *ctx = cft_context();
     cf_curve *c = NULL;
-    log_capture log;
+    cft_warnings log;
     /* a circle of radius 2 about (1, 1) as four cubics (kappa 0.5522847498,
      * radial error 2.7e-4 of r), three by S, whose first control point is
      * the previous one reflected: every point on the cubics, so within

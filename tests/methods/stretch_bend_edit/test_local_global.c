@@ -464,25 +464,12 @@ static void test_first_step_candidates(void)
     cf_context_destroy(&ctx);
 }
 
-/* Warnings logged during a run. */
-typedef struct warning_capture {
-    char text[4096];
-} warning_capture;
-
-static void capture_warning(void *user, cf_log_level level, const char *line)
-{
-    warning_capture *w = user;
-    if (level != CF_LOG_WARNING) return;
-    size_t n = strlen(w->text);
-    snprintf(w->text + n, sizeof w->text - n, "%s\n", line);
-}
-
 /* An ARAP edit of `mesh` (base fixed, top turned 30 degrees): 100 plain
  * iterations with the given edge weights; returns the largest vertex move
  * over the bounding-box diagonal, the lowest energy of any iteration in
  * *lowest, whether it never rose in *monotone, the result in out (3 nv). */
 static double arap_edit(cf_context *ctx, const cf_mesh *mesh, cf_stretch_bend_energy_kind energy, int32_t weights,
-                        double *lowest, int *monotone, double *out, warning_capture *log)
+                        double *lowest, int *monotone, double *out, cft_warnings *log)
 {
     static const char *const handles =
         "{ \"sets\": [ { \"name\": \"base\", \"relative_box\": { \"min\": [0, 0, 0], \"max\": [1, 0.1, 1] }, "
@@ -494,8 +481,7 @@ static double arap_edit(cf_context *ctx, const cf_mesh *mesh, cf_stretch_bend_en
     CHECK_OK(ctx, cf_handle_set_parse_json(ctx, mesh, rest, handles, "h.json", &h));
     cf_flow_options fo;
     edit_options(ctx, &fo, h, energy, 0)->arap_weights = weights;
-    log->text[0] = '\0';
-    cf_context_set_log(ctx, capture_warning, log, CF_LOG_WARNING);
+    cft_capture_warnings(ctx, log);
     cf_flow *flow = NULL;
     CHECK_OK(ctx, cf_flow_create(ctx, mesh, NULL, &fo, &flow));
     *lowest = INFINITY;
@@ -508,7 +494,7 @@ static double arap_edit(cf_context *ctx, const cf_mesh *mesh, cf_stretch_bend_en
         *monotone &= info.energy <= previous + 1e-10 * fabs(previous);
         previous = info.energy;
     }
-    cf_context_set_log(ctx, NULL, NULL, CF_LOG_WARNING);
+    cft_capture_end(ctx);
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY}, move = 0.0;
     if (flow) memcpy(out, cf_flow_positions(flow), 3 * (size_t)nv * sizeof(double));
     for (int32_t v = 0; v < nv; ++v) {
@@ -562,7 +548,7 @@ static void test_arap_negative_weights(void)
     cf_mesh_desc desc = {nv, p, nf, tri, 0, NULL, NULL};
     cf_mesh *needle = NULL;
     CHECK_OK(ctx, cf_mesh_create(ctx, &desc, &needle));
-    warning_capture log;
+    cft_warnings log;
     double lowest = 0.0, clamped_move = 0.0;
     int monotone = 0;
     if (needle) {

@@ -104,6 +104,11 @@ void cft_capture_warnings(cf_context *ctx, cft_warnings *w)
     cf_context_set_log(ctx, log_to_warnings, w, CF_LOG_WARNING);
 }
 
+const char *const cft_turn_top_handles =
+    "{ \"sets\": [ { \"name\": \"base\", \"relative_box\": { \"min\": [0, 0, 0], \"max\": [1, 0.1, 1] }, "
+    "\"fixed\": true }, { \"name\": \"top\", \"relative_box\": { \"min\": [0, 0.9, 0], \"max\": [1, 1, 1] }, "
+    "\"transform\": { \"rotate\": { \"axis\": [1, 0, 0], \"angle_degrees\": 30 } } } ] }";
+
 void cft_capture_end(cf_context *ctx) { cf_context_set_log(ctx, log_to_stderr, NULL, CF_LOG_WARNING); }
 
 cf_context *cft_context(void)

@@ -66,6 +66,10 @@ typedef struct cft_warnings {
 } cft_warnings;
 void cft_capture_warnings(cf_context *ctx, cft_warnings *w);
 void cft_capture_end(cf_context *ctx);
+/* An edit's handle file (docs/edit.md) that fits every mesh: relative
+ * boxes, the lowest tenth in y fixed, the highest turned 30 degrees about
+ * x (the zoo's edit rows, the ARAP weight test). */
+extern const char *const cft_turn_top_handles;
 /* A test case on one mesh of ../shared/meshes: a new context (cft_context)
  * with the mesh loaded. cft_shared_case_open returns 0, with nothing left to
  * close, when the mesh is absent (with `required` the whole program skips,

@@ -471,14 +471,10 @@ static void test_first_step_candidates(void)
 static double arap_edit(cf_context *ctx, const cf_mesh *mesh, cf_stretch_bend_energy_kind energy, int32_t weights,
                         double *lowest, int *monotone, double *out, cft_warnings *log)
 {
-    static const char *const handles =
-        "{ \"sets\": [ { \"name\": \"base\", \"relative_box\": { \"min\": [0, 0, 0], \"max\": [1, 0.1, 1] }, "
-        "\"fixed\": true }, { \"name\": \"top\", \"relative_box\": { \"min\": [0, 0.9, 0], \"max\": [1, 1, 1] }, "
-        "\"transform\": { \"rotate\": { \"axis\": [1, 0, 0], \"angle_degrees\": 30 } } } ] }";
     const double *rest = cf_mesh_positions(mesh);
     int32_t nv = cf_mesh_vertex_count(mesh);
     cf_handle_set *h = NULL;
-    CHECK_OK(ctx, cf_handle_set_parse_json(ctx, mesh, rest, handles, "h.json", &h));
+    CHECK_OK(ctx, cf_handle_set_parse_json(ctx, mesh, rest, cft_turn_top_handles, "h.json", &h));
     cf_flow_options fo;
     edit_options(ctx, &fo, h, energy, 0)->arap_weights = weights;
     cft_capture_warnings(ctx, log);

@@ -164,6 +164,23 @@ CF_API int32_t cf_context_threads(const cf_context *ctx);
  * another BLAS. Process-wide; takes no context, never fails. */
 CF_API int cf_blas_threads_stuck(void);
 
+/* The name of the kernels OpenBLAS runs in this process ("SkylakeX",
+ * "Haswell", "Prescott", ...), or NULL with another BLAS. Never fails. */
+CF_API const char *cf_blas_core(void);
+/* The value for OPENBLAS_CORETYPE that would make OpenBLAS run faster
+ * kernels, or NULL when its own choice stands. OpenBLAS chooses once, when
+ * it is loaded, from the CPU's model; one that its release does not know
+ * gets the generic SSE3 "Prescott" kernels even with AVX-512 (OpenBLAS
+ * 0.3.21 on family 6 model 207 Xeons: supernodal factorisations about
+ * 1.8x slower). Non-NULL only then: OPENBLAS_CORETYPE unset, a
+ * DYNAMIC_ARCH OpenBLAS running "Prescott" on a CPU with AVX2 and FMA
+ * ("Haswell") or AVX-512 ("SkylakeX"). The library never changes the
+ * environment: OpenBLAS reads the variable only at load time, so a program
+ * sets it and re-executes itself (the command-line tool does), or sets it
+ * before anything loads OpenBLAS (the Python package does; docs/linalg.md,
+ * "OpenBLAS's kernels"). Never fails. */
+CF_API const char *cf_blas_core_advice(void);
+
 /* "0.1.0" */
 CF_API const char *cf_version_string(void);
 

@@ -13,6 +13,11 @@ every computation is the library's. Quick start::
 See docs/python.md for the array conventions, errors, cancellation and the
 batch runner (python3 -m curvflow.batch).
 """
+from . import _blas_kernels, _lib
+
+# before numpy (imported by .core) loads OpenBLAS: its kernels (_blas_kernels.py)
+_blas_kernels.choose_before_loading(_lib.first_candidate())
+
 from .core import (check_params, compare, edit, flow, info, load, loop_subdivide, method_params, methods, read_log,
                    save, spin, write_log, write_text_atomic)
 from .errors import (CancelledError, CurvflowError, CurvflowMemoryError, InvalidMeshError, LibraryNotFoundError,

@@ -23,6 +23,7 @@ import threading
 from ctypes import (CFUNCTYPE, POINTER, Structure, c_char, c_char_p, c_double, c_int, c_int32, c_int64,
                     c_size_t, c_void_p)
 
+from . import _blas_kernels
 from .errors import LibraryNotFoundError
 
 # The major.minor the mirrors below were written for (CF_VERSION_*).
@@ -204,21 +205,29 @@ def _find_in(directory):
     return None
 
 
-def candidates():
-    """The places searched, in order, as (description, path-or-None)."""
-    out = []
+def _search():
     env = os.environ.get("CURVFLOW_LIB_DIR")
     if env:
-        out.append(("$CURVFLOW_LIB_DIR=%s" % env, _find_in(env)))
-        return out  # explicit: nothing else
-    out.append(("the installed package (%s)" % _PACKAGE_DIR, _find_in(_PACKAGE_DIR)))
+        yield "$CURVFLOW_LIB_DIR=%s" % env, _find_in(env)
+        return  # explicit: nothing else
+    yield "the installed package (%s)" % _PACKAGE_DIR, _find_in(_PACKAGE_DIR)
     build = os.environ.get("BUILD_DIR")
     if build:
-        out.append(("$BUILD_DIR=%s" % build, _find_in(build)))
-    out.append(("the checkout's build tree (%s)" % (_CHECKOUT / "build"), _find_in(_CHECKOUT / "build")))
-    system = ctypes.util.find_library("curvflow")
-    out.append(("the system library path", system))
-    return out
+        yield "$BUILD_DIR=%s" % build, _find_in(build)
+    yield "the checkout's build tree (%s)" % (_CHECKOUT / "build"), _find_in(_CHECKOUT / "build")
+    yield "the system library path", ctypes.util.find_library("curvflow")
+
+
+def candidates():
+    """The places searched, in order, as (description, path-or-None)."""
+    return list(_search())
+
+
+def first_candidate():
+    """The library that lib() would try first, or None (for the kernels'
+    question, asked before numpy is imported; the system's search path,
+    slow to ask, only when nothing comes before it)."""
+    return next((path for _, path in _search() if path is not None), None)
 
 
 def _declare(lib):
@@ -239,6 +248,8 @@ def _declare(lib):
     f("cf_context_status", S, P)
     f("cf_context_clear_error", None, P)
     f("cf_version_string", c_char_p)
+    f("cf_blas_core", c_char_p)
+    f("cf_blas_core_advice", c_char_p)
     # mesh.h
     f("cf_mesh_create", S, P, POINTER(MeshDesc), POINTER(c_void_p))
     f("cf_mesh_destroy", None, POINTER(c_void_p))
@@ -329,6 +340,7 @@ def lib():
             if major_minor != ABI_VERSION:
                 tried.append("%s: version %s, this package needs %d.%d.x" % ((where, version) + ABI_VERSION))
                 continue
+            _blas_kernels.settle_after_loading(loaded)
             loaded.curvflow_path = str(path)
             _lib = loaded
             return _lib

@@ -65,6 +65,17 @@ CF_API void cf_sparse_multiply(const cf_sparse *a, const double *x, double *y);
 /* y = alpha A x + beta y. */
 CF_API void cf_sparse_multiply_add(const cf_sparse *a, double alpha, const double *x, double beta, double *y);
 
+/* y = (A - diag(A 1)) x, i.e. y_i = sum over j != i of a_ij (x_j - x_i):
+ * A x for a square matrix whose rows sum to zero (a Laplacian), with the
+ * diagonal never read. Adding a constant to x leaves y unchanged, exactly:
+ * where x holds coordinates far from the origin (a georeferenced scan,
+ * 1e6 away with millimetre detail) x_j - x_i keeps the detail, while A x
+ * through the diagonal loses it to cancellation (error eps |A| |x|). Also
+ * the off-diagonal part of a matrix M + t K, K with zero row sums, applied
+ * this way gives t K x. For upper_only matrices the mirrored lower
+ * triangle is included. */
+CF_API void cf_sparse_multiply_zero_row_sums(const cf_sparse *a, const double *x, double *y);
+
 /* Copy of A with every scalar entry replaced by a b x b identity block
  * scaled by the entry (A kron I_b); used to lift vertex operators to 3-vectors
  * or quaternions. Entry (i, j) goes to rows b i .. b i + b - 1. */

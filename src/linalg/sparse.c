@@ -182,6 +182,20 @@ void cf_sparse_multiply_add(const cf_sparse *a, double alpha, const double *x, d
 
 void cf_sparse_multiply(const cf_sparse *a, const double *x, double *y) { cf_sparse_multiply_add(a, 1.0, x, 0.0, y); }
 
+void cf_sparse_multiply_zero_row_sums(const cf_sparse *a, const double *x, double *y)
+{
+    if (!a || !x || !y) return;
+    memset(y, 0, (size_t)a->nrows * sizeof *y);
+    for (int32_t j = 0; j < a->ncols; ++j)
+        for (int32_t p = a->colptr[j]; p < a->colptr[j + 1]; ++p) {
+            int32_t i = a->rowind[p];
+            if (i == j) continue;
+            y[i] += a->values[p] * (x[j] - x[i]);
+            /* mirrored strictly-lower entry (j, i) of an upper-only matrix */
+            if (a->upper_only && i < j) y[j] += a->values[p] * (x[i] - x[j]);
+        }
+}
+
 cf_status cf_sparse_kron_identity(cf_context *ctx, const cf_sparse *a, int32_t b, cf_sparse **out)
 {
     if (!ctx) return CF_ERR_INVALID_ARG;

@@ -292,6 +292,69 @@ static cf_status sparse_ops_call(cf_context *ctx, void *user)
 
 /* Fails the k-th allocation for every k of the unhindered run: each failure
  * must give CF_ERR_NOMEM and leave nothing allocated. */
+/* cf_sparse_multiply_zero_row_sums: a random symmetric matrix with zero
+ * row sums (a graph Laplacian with random weights, diagonal stored) gives
+ * A x as cf_sparse_multiply does (to rounding), both storages; the
+ * diagonal is never read (a wrong one changes nothing); and a shift of x
+ * by a constant changes nothing, bit for bit, where the shift is exact
+ * (x on a 2^-20 grid, shift 2^20); a shift by 1e6 costs only the rounding
+ * of the shifted data. */
+static void test_zero_row_sums(void)
+{
+    cf_context *ctx = cft_context();
+    rng_seed(11);
+    const int32_t n = 40;
+    int32_t r[4 * 120], c[4 * 120];
+    double v[4 * 120];
+    int64_t k = 0;
+    for (int e = 0; e < 120; ++e) {
+        int32_t i = (int32_t)(rng_u32() % n), j = (int32_t)(rng_u32() % n);
+        if (i == j) continue;
+        double w = 0.5 + rng_unit();
+        r[k] = i; c[k] = i; v[k++] = w;
+        r[k] = j; c[k] = j; v[k++] = w;
+        r[k] = i; c[k] = j; v[k++] = -w;
+        r[k] = j; c[k] = i; v[k++] = -w;
+    }
+    cf_sparse *a = NULL, *u = NULL;
+    CHECK_OK(ctx, cf_sparse_from_triplets(ctx, n, n, k, r, c, v, 1, &a, NULL));
+    /* the upper triangle alone */
+    int64_t ku = 0;
+    for (int64_t q = 0; q < k; ++q)
+        if (r[q] <= c[q]) { r[ku] = r[q]; c[ku] = c[q]; v[ku++] = v[q]; }
+    CHECK_OK(ctx, cf_sparse_from_triplets(ctx, n, n, ku, r, c, v, 1, &u, NULL));
+    if (!a || !u) return;
+    u->upper_only = 1;
+    double x[40], xs[40], xf[40], y[40], yd[40], yu[40], ys[40], yf[40];
+    for (int32_t i = 0; i < n; ++i) {
+        x[i] = (double)(int32_t)(rng_unit() * 1048576.0) / 1048576.0; /* on the 2^-20 grid */
+        xs[i] = x[i] + 1048576.0;                                       /* exact */
+        xf[i] = x[i] + 1e6;
+    }
+    cf_sparse_multiply(a, x, yd);
+    cf_sparse_multiply_zero_row_sums(a, x, y);
+    cf_sparse_multiply_zero_row_sums(u, x, yu);
+    CHECK_LE(max_abs_diff(y, yd, (size_t)n), 1e-13);
+    CHECK_LE(max_abs_diff(yu, yd, (size_t)n), 1e-13);
+    cf_sparse_multiply_zero_row_sums(a, xs, ys);
+    CHECK(memcmp(ys, y, sizeof y) == 0);
+    cf_sparse_multiply_zero_row_sums(u, xs, ys);
+    CHECK(memcmp(ys, yu, sizeof yu) == 0);
+    /* the diagonal is not read */
+    for (int32_t j = 0; j < n; ++j)
+        for (int32_t p = a->colptr[j]; p < a->colptr[j + 1]; ++p)
+            if (a->rowind[p] == j) a->values[p] = 1e300;
+    cf_sparse_multiply_zero_row_sums(a, x, ys);
+    CHECK(memcmp(ys, y, sizeof y) == 0);
+    /* 1e6 away: as good as the shifted data allows (x + 1e6 is rounded to
+     * 1.2e-10, times weights below 1.5 and a few neighbours) */
+    cf_sparse_multiply_zero_row_sums(a, xf, yf);
+    CHECK_LE(max_abs_diff(yf, y, (size_t)n), 1e-8);
+    cf_sparse_destroy(&a);
+    cf_sparse_destroy(&u);
+    cf_context_destroy(&ctx);
+}
+
 static void test_allocation_failures(void)
 {
     cf_context *ctx = cft_context();
@@ -309,6 +372,7 @@ int main(void)
     CFT_RUN(test_invalid_input);
     CFT_RUN(test_operations_match_dense);
     CFT_RUN(test_upper_only);
+    CFT_RUN(test_zero_row_sums);
     CFT_RUN(test_allocation_failures);
     return cft_finish();
 }

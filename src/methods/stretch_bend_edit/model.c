@@ -125,23 +125,33 @@ static cf_status build_k(cfi_stretch_bend_model *m, const double *w_edge)
     return st;
 }
 
-/* out = K x for interleaved 3-vectors (K symmetric, both triangles stored,
- * so row v is column v): one pass over K for all three coordinates. */
+/* (K x)_v for interleaved positions x (K symmetric, both triangles
+ * stored, so row v is column v; rows summing to zero): sum over w != v of
+ * K_vw (x_w - x_v), from the differences of the positions, so that a mesh
+ * far from the origin keeps its precision (cf_sparse_multiply_zero_row_sums;
+ * through the diagonal, spot 1e6 away had |H| and u' off in their 6th
+ * digit). */
+static void k_apply3_at(const cf_sparse *k, const double *x, int32_t v, double out[3])
+{
+    const double xv0 = x[3 * (size_t)v], xv1 = x[3 * (size_t)v + 1], xv2 = x[3 * (size_t)v + 2];
+    double a = 0.0, b = 0.0, c = 0.0;
+    for (int32_t p = k->colptr[v]; p < k->colptr[v + 1]; ++p) {
+        int32_t w = k->rowind[p];
+        const double *xw = x + 3 * (size_t)w;
+        double kw = w == v ? 0.0 : k->values[p];
+        a += kw * (xw[0] - xv0);
+        b += kw * (xw[1] - xv1);
+        c += kw * (xw[2] - xv2);
+    }
+    out[0] = a;
+    out[1] = b;
+    out[2] = c;
+}
+
+/* out = K x for interleaved positions (k_apply3_at at every vertex). */
 static void k_apply3(const cf_sparse *k, const double *x, double *out)
 {
-    for (int32_t v = 0; v < k->ncols; ++v) {
-        double a = 0.0, b = 0.0, c = 0.0;
-        for (int32_t p = k->colptr[v]; p < k->colptr[v + 1]; ++p) {
-            const double *xw = x + 3 * (size_t)k->rowind[p];
-            double w = k->values[p];
-            a += w * xw[0];
-            b += w * xw[1];
-            c += w * xw[2];
-        }
-        out[3 * (size_t)v] = a;
-        out[3 * (size_t)v + 1] = b;
-        out[3 * (size_t)v + 2] = c;
-    }
+    for (int32_t v = 0; v < k->ncols; ++v) k_apply3_at(k, x, v, out + 3 * (size_t)v);
 }
 
 /* out += alpha K x, interleaved. */
@@ -590,14 +600,11 @@ double cfi_stretch_bend_fixed_energy(const cfi_stretch_bend_model *m, const doub
     }
     double e_bend = 0.0;
     if (m->beta > 0.0) {
-        /* sum_v M_v |(K x)_v / M_v - |H_v| u'_v|^2 (Eq. 15), K applied by
-         * its columns so the model's scratch buffers stay untouched. */
+        /* sum_v M_v |(K x)_v / M_v - |H_v| u'_v|^2 (Eq. 15), K applied
+         * vertex by vertex so the model's scratch buffers stay untouched. */
         for (int32_t v = 0; v < nv; ++v) {
-            double kx[3] = {0, 0, 0};
-            for (int32_t p = m->k->colptr[v]; p < m->k->colptr[v + 1]; ++p) {
-                int32_t w = m->k->rowind[p];
-                for (int d = 0; d < 3; ++d) kx[d] += m->k->values[p] * x[3 * w + d]; /* K symmetric */
-            }
+            double kx[3];
+            k_apply3_at(m->k, x, v, kx);
             double s = 0.0;
             for (int d = 0; d < 3; ++d) {
                 double q = kx[d] / m->mass[v] - m->hm[v] / m->mass[v] * m->u[3 * (size_t)v + d];

@@ -285,8 +285,10 @@ CF_API cf_status cf_angle_defect(cf_context *ctx, const cf_mesh *mesh, const dou
 CF_API cf_status cf_willmore_energy(cf_context *ctx, const cf_mesh *mesh, const double *positions, double *energy);
 
 /* Signed enclosed volume (1/6) sum_f x_a . (x_b x x_c); positive for a
- * closed outward-oriented mesh. For meshes with boundary it is the volume
- * of the cone from the origin and depends on the origin. */
+ * closed outward-oriented mesh (computed with the x relative to the centre
+ * of the bounding box, which changes nothing in exact arithmetic and keeps
+ * the digits of a mesh far from the origin). For meshes with boundary it is
+ * the volume of the cone from the origin and depends on the origin. */
 CF_API cf_status cf_enclosed_volume(cf_context *ctx, const cf_mesh *mesh, const double *positions, double *volume);
 
 /* Total surface area. */

@@ -5,6 +5,7 @@
 #include "curvflow/ops.h"
 #include "test.h"
 
+#include <math.h>
 #include <stdlib.h>
 
 #define PI 3.14159265358979323846
@@ -157,9 +158,43 @@ static void test_rigid_and_scale_invariance(void)
     cf_context_destroy(&ctx);
 }
 
+/* The same bumpy sphere moved far from the origin (a georeferenced scan:
+ * by (1e6, -2e6, 5e5)): area, volume and W as at the origin, to what the
+ * rounding of the moved coordinates (2.3e-10 near 2e6) allows. Before the
+ * volume took its cones from the bounding box's centre it came out 108
+ * times off here (spot_3k moved by 1e6: 0.7181662 against 0.7182588). */
+static void test_far_from_origin(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *mesh = NULL;
+    CHECK_OK(ctx, cf_generate_bumpy_sphere(ctx, 3, 0.3, 7u, &mesh));
+    if (!mesh) return;
+    const double *x = cf_mesh_positions(mesh);
+    int32_t nv = cf_mesh_vertex_count(mesh);
+    const double offset[3] = {1e6, -2e6, 5e5};
+    double *y = malloc(sizeof(double) * 3 * nv);
+    for (int32_t i = 0; i < 3 * nv; ++i) y[i] = x[i] + offset[i % 3];
+    double a0, a1, v0, v1, w0, w1;
+    CHECK_OK(ctx, cf_total_area(ctx, mesh, x, &a0));
+    CHECK_OK(ctx, cf_total_area(ctx, mesh, y, &a1));
+    CHECK_OK(ctx, cf_enclosed_volume(ctx, mesh, x, &v0));
+    CHECK_OK(ctx, cf_enclosed_volume(ctx, mesh, y, &v1));
+    CHECK_OK(ctx, cf_willmore_energy(ctx, mesh, x, &w0));
+    CHECK_OK(ctx, cf_willmore_energy(ctx, mesh, y, &w1));
+    fprintf(stderr, "  moved by 2e6: relative change of area %.2e, volume %.2e, W %.2e\n", fabs(a1 / a0 - 1),
+            fabs(v1 / v0 - 1), fabs(w1 / w0 - 1));
+    CHECK_NEAR(a1, a0, 1e-8, 0);
+    CHECK_NEAR(v1, v0, 1e-8, 0);
+    CHECK_NEAR(w1, w0, 1e-6, 0);
+    free(y);
+    cf_mesh_destroy(&mesh);
+    cf_context_destroy(&ctx);
+}
+
 int main(void)
 {
     CFT_RUN(test_icosphere_convergence);
     CFT_RUN(test_rigid_and_scale_invariance);
+    CFT_RUN(test_far_from_origin);
     return cft_finish();
 }

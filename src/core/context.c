@@ -251,6 +251,26 @@ double cfi_now_seconds(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+void cfi_bounding_box(const double *x, int64_t n, double lo[3], double hi[3])
+{
+    for (int c = 0; c < 3; ++c) {
+        lo[c] = INFINITY;
+        hi[c] = -INFINITY;
+    }
+    for (int64_t i = 0; i < n; ++i)
+        for (int c = 0; c < 3; ++c) {
+            lo[c] = fmin(lo[c], x[3 * i + c]);
+            hi[c] = fmax(hi[c], x[3 * i + c]);
+        }
+}
+
+void cfi_bounding_box_centre(const double *x, int64_t n, double centre[3])
+{
+    double lo[3], hi[3];
+    cfi_bounding_box(x, n, lo, hi);
+    for (int c = 0; c < 3; ++c) centre[c] = n > 0 ? 0.5 * (lo[c] + hi[c]) : 0.0;
+}
+
 int64_t cfi_first_unusable_point(const double *x, int64_t n, int dim)
 {
     for (int64_t i = 0; i < n; ++i)

@@ -84,6 +84,13 @@ double cfi_now_seconds(void);
  * coordinate that is NaN, infinite or beyond CF_MAX_COORDINATE; -1 if none. */
 int64_t cfi_first_unusable_point(const double *x, int64_t n, int dim);
 
+/* Smallest and largest coordinates of the n points x[3 i .. 3 i + 3)
+ * (lo = +inf, hi = -inf for n = 0; NaN coordinates are skipped). */
+void cfi_bounding_box(const double *x, int64_t n, double lo[3], double hi[3]);
+/* The centre of that box: coordinates relative to it keep the digits of
+ * points far from the origin (0 for n = 0). */
+void cfi_bounding_box_centre(const double *x, int64_t n, double centre[3]);
+
 /* ---- workspace (src/core/workspace.c) ----
  *
  * A per-object workspace (issue 12 item 6): a record of the arrays one

@@ -15,16 +15,7 @@ cf_status cf_enclosed_volume(cf_context *ctx, const cf_mesh *mesh, const double 
     cf_status s = cfi_ops_check(ctx, mesh, positions, volume, "enclosed_volume");
     if (s != CF_OK) return s;
     double apex[3] = {0.0, 0.0, 0.0};
-    if (mesh->boundary_loop_count == 0 && mesh->nv > 0) {
-        for (int d = 0; d < 3; ++d) {
-            double lo = positions[d], hi = positions[d];
-            for (int32_t v = 1; v < mesh->nv; ++v) {
-                lo = fmin(lo, positions[3 * (size_t)v + d]);
-                hi = fmax(hi, positions[3 * (size_t)v + d]);
-            }
-            apex[d] = 0.5 * (lo + hi);
-        }
-    }
+    if (mesh->boundary_loop_count == 0) cfi_bounding_box_centre(positions, mesh->nv, apex);
     double sum = 0.0;
     for (int32_t f = 0; f < mesh->nf; ++f) {
         const int32_t *t = mesh->triangles + 3 * f;

@@ -672,9 +672,10 @@ static cf_status implicit_step(cf_flow *flow, cf_flow_info *info)
     /* A x' = M x solved for the displacement d = x' - x: A d = -(A - M) x
      * = -tau K x (K = L, L0 or L P M^-1 L, whose rows sum to zero), with
      * K x from the coordinates' differences (A's off-diagonal part is
-     * tau K's; for the bi-Laplacian L x from them, then L P M^-1 of it). Same step; but a mesh far from the origin keeps its
-     * precision: solving for x' directly carried cond(A) eps |x| of error,
-     * 0.19 of spot's size after 10 implicit bi-Laplacian steps 1e6 away. */
+     * tau K's; for the bi-Laplacian L x from them, then L P M^-1 of it).
+     * The same step; but a mesh far from the origin keeps its precision:
+     * solving for x' directly carried cond(A) eps |x| of error, 0.19 of
+     * spot's size after 10 implicit bi-Laplacian steps 1e6 away. */
     if (kind == CF_FLOW_IMPLICIT_BILAPLACIAN) {
         /* tau L P M^-1 (L x): two passes over L rather than one over A,
          * whose pattern (L L's) has ~3.5 times L's entries */

@@ -70,12 +70,8 @@ cf_status cf_spin_transform(cf_context *ctx, const cf_mesh *mesh, const double *
     if (bad >= 0)
         return cfi_error(ctx, CF_ERR_NONFINITE, "vertex %d: position is not finite or beyond %.0e", (int)bad,
                          CF_MAX_COORDINATE);
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (int32_t i = 0; i < nv; ++i)
-        for (int c = 0; c < 3; ++c) {
-            lo[c] = fmin(lo[c], positions[3 * i + c]);
-            hi[c] = fmax(hi[c], positions[3 * i + c]);
-        }
+    double lo[3], hi[3];
+    cfi_bounding_box(positions, nv, lo, hi);
     /* rho is a curvature (1 / length): measured against the mesh's size it
      * must stay inside the range of lengths the library computes with, or its
      * square overflows in the matrix of App. G */

@@ -370,15 +370,17 @@ static void snap_handles(const stretch_bend_state *s, double *x)
         memcpy(x + 3 * (size_t)s->handle_vertices[k], s->handle_rel + 3 * (size_t)k, 3 * sizeof(double));
 }
 
-/* flow->positions = origin + xr, the handles exactly on their targets. */
-static void publish_state(cf_flow *flow, const stretch_bend_state *s)
+/* out = origin + rel (out may be rel), the handles exactly on their targets. */
+static void to_absolute(const stretch_bend_state *s, const double *rel, double *out)
 {
     for (int32_t v = 0; v < s->model.nv; ++v)
-        for (int d = 0; d < 3; ++d) flow->positions[3 * (size_t)v + d] = s->origin[d] + s->xr[3 * (size_t)v + d];
+        for (int d = 0; d < 3; ++d) out[3 * (size_t)v + d] = s->origin[d] + rel[3 * (size_t)v + d];
     for (int32_t k = 0; k < s->handle_count; ++k)
-        memcpy(flow->positions + 3 * (size_t)s->handle_vertices[k], s->handle_targets + 3 * (size_t)k,
-               3 * sizeof(double));
+        memcpy(out + 3 * (size_t)s->handle_vertices[k], s->handle_targets + 3 * (size_t)k, 3 * sizeof(double));
 }
+
+/* flow->positions = origin + xr. */
+static void publish_state(cf_flow *flow, const stretch_bend_state *s) { to_absolute(s, s->xr, flow->positions); }
 
 /* xr = flow->positions - origin, then the starting state (start_state). */
 static cf_status start_state(stretch_bend_state *s, double *x);
@@ -491,14 +493,7 @@ static cf_status stretch_bend_create(cf_flow *flow, const void *options)
     for (int32_t i = 0; i < 3 * nv; ++i)
         if (!isfinite(rest[i]))
             return cfi_error(ctx, CF_ERR_NONFINITE, "vertex %d: rest position is not finite", i / 3);
-    for (int d = 0; d < 3; ++d) {
-        double lo = rest[d], hi = rest[d];
-        for (int32_t v = 1; v < nv; ++v) {
-            lo = fmin(lo, rest[3 * (size_t)v + d]);
-            hi = fmax(hi, rest[3 * (size_t)v + d]);
-        }
-        s->origin[d] = 0.5 * (lo + hi);
-    }
+    cfi_bounding_box_centre(rest, nv, s->origin);
     for (int32_t i = 0; i < 3 * nv; ++i) s->rest[i] = rest[i] - s->origin[i % 3];
     cf_status st = cfi_stretch_bend_model_init(&s->model, ctx, mesh, s->rest, o);
     if (st == CF_OK) {
@@ -566,9 +561,7 @@ cf_status cfi_stretch_bend_flow_global_solve(cf_flow *flow, double *x)
     stretch_bend_state *s = flow->impl;
     cf_status st = global_solve(s, x, NULL, NULL);
     if (st != CF_OK) return st;
-    for (int32_t i = 0; i < 3 * s->model.nv; ++i) x[i] += s->origin[i % 3]; /* absolute, as the flow's positions */
-    for (int32_t k = 0; k < s->handle_count; ++k)
-        memcpy(x + 3 * (size_t)s->handle_vertices[k], s->handle_targets + 3 * (size_t)k, 3 * sizeof(double));
+    to_absolute(s, x, x); /* as the flow's positions */
     return CF_OK;
 }
 

@@ -587,6 +587,105 @@ static void test_browser_catches_problems(void)
     free(dom);
 }
 
+/* The float32 values of a base64 string (malloc'd; *n set), NULL if malformed. */
+static float *decode_f32(const char *b64, size_t *n)
+{
+    static const char alphabet[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    size_t len = strlen(b64), bytes = 0;
+    unsigned char *raw = malloc(len);
+    if (!raw) return NULL;
+    uint32_t acc = 0;
+    int bits = 0;
+    for (size_t k = 0; k < len && b64[k] != '='; ++k) {
+        const char *at = strchr(alphabet, b64[k]);
+        if (!at) {
+            free(raw);
+            return NULL;
+        }
+        acc = (acc << 6) | (uint32_t)(at - alphabet);
+        bits += 6;
+        if (bits >= 8) {
+            bits -= 8;
+            raw[bytes++] = (unsigned char)(acc >> bits);
+        }
+    }
+    *n = bytes / 4;
+    float *out = malloc(sizeof(float) * (*n > 0 ? *n : 1));
+    for (size_t i = 0; out && i < *n; ++i) {
+        uint32_t u = (uint32_t)raw[4 * i] | (uint32_t)raw[4 * i + 1] << 8 | (uint32_t)raw[4 * i + 2] << 16 |
+                     (uint32_t)raw[4 * i + 3] << 24;
+        memcpy(&out[i], &u, 4);
+    }
+    free(raw);
+    return out;
+}
+
+/* Largest |offset + value - x| over a mesh's positions as the report holds
+ * them (mesh.<name> float32 relative to mesh.<name>_offset); -1 if absent. */
+static double report_position_error(json_t *m, const char *name, const double *x, int32_t nv)
+{
+    char key[64];
+    snprintf(key, sizeof key, "%s_offset", name);
+    json_t *off = json_object_get(m, key);
+    const char *b64 = json_string_value(json_object_get(m, name));
+    if (!json_is_array(off) || json_array_size(off) != 3 || !b64) return -1.0;
+    size_t n = 0;
+    float *f = decode_f32(b64, &n);
+    if (!f || n != 3 * (size_t)nv) {
+        free(f);
+        return -1.0;
+    }
+    double err = 0.0;
+    for (size_t i = 0; i < n; ++i)
+        err = fmax(err, fabs(json_number_value(json_array_get(off, i % 3)) + (double)f[i] - x[i]));
+    free(f);
+    return err;
+}
+
+/* A mesh far from the origin (a georeferenced scan) keeps its shape in the
+ * report: float32 holds ~7 digits, so raw coordinates near 1e6 were
+ * rounded to 0.06 (the star below, 2.5 across, became a pile of blocks);
+ * the positions are stored relative to their bounding box's centre, the
+ * centre beside them. Read back: within 1e-6 of the star's size, at the
+ * origin and 1e6 away alike. */
+static void test_report_positions(void)
+{
+    CHECK_RUN("generate limb-sphere --subdivisions 3 -o near.obj", 0);
+    cf_context *ctx = cft_context();
+    cf_mesh *near = NULL, *far = NULL;
+    CHECK_OK(ctx, cf_load_mesh(ctx, cft_in_dir("near.obj"), &near));
+    if (!near) return;
+    int32_t nv = cf_mesh_vertex_count(near);
+    double *x = malloc(sizeof(double) * 3 * (size_t)nv);
+    const double *x0 = cf_mesh_positions(near);
+    for (int32_t i = 0; i < 3 * nv; ++i) x[i] = x0[i] + (i % 3 == 1 ? -2e6 : 1e6);
+    CHECK_OK(ctx, cf_write_mesh_file(ctx, cft_in_dir("far.obj"), near, x, NULL, 0));
+    CHECK_RUN("report far.obj far.obj -o far.html", 0);
+    CHECK_RUN("report near.obj near.obj -o near.html", 0);
+    CHECK_OK(ctx, cf_load_mesh(ctx, cft_in_dir("far.obj"), &far));
+    const char *pages[2] = {"near.html", "far.html"};
+    const cf_mesh *meshes[2] = {near, far};
+    for (int k = 0; k < 2 && far; ++k) {
+        char *html = slurp(cft_in_dir(pages[k]));
+        json_t *data = html ? report_data(html) : NULL;
+        free(html);
+        CHECK(data != NULL);
+        if (!data) continue;
+        json_t *m = json_object_get(data, "mesh");
+        const double *xs = cf_mesh_positions(meshes[k]);
+        double e_in = report_position_error(m, "input", xs, nv), e_out = report_position_error(m, "result", xs, nv);
+        fprintf(stderr, "   %s: largest error of the positions read back %.3g / %.3g\n", pages[k], e_in, e_out);
+        CHECK(e_in >= 0.0 && e_out >= 0.0);
+        CHECK_LE(e_in, 2.5e-6);
+        CHECK_LE(e_out, 2.5e-6);
+        json_decref(data);
+    }
+    free(x);
+    cf_mesh_destroy(&far);
+    cf_mesh_destroy(&near);
+    cf_context_destroy(&ctx);
+}
+
 int main(void)
 {
     if (cft_cli_setup("report")) return 1;
@@ -594,6 +693,7 @@ int main(void)
     if (!viewer_built()) return skip_rest("the report viewer is not built into this curvflow (node and npm at build time)");
     CFT_RUN(test_flow_report_data);
     CFT_RUN(test_report_command);
+    CFT_RUN(test_report_positions);
     if (!have_chromium()) return skip_rest("chromium is not installed (apt-get install chromium): no browser test");
     CFT_RUN(test_browser_page);
     CFT_RUN(test_browser_screenshot);

@@ -10,6 +10,11 @@ imports it. The library answers the question (cf_blas_core_advice); asking
 it loads OpenBLAS, so a child process asks, once, and the answer goes into
 os.environ, where the CLI runs and worker processes started later find it.
 
+The answer is also kept in CURVFLOW_BLAS_ADVICE (a kernel name, or "none"
+when OpenBLAS's own choice is right), so that processes started from here
+(the batch runner's workers, scripts run by this one) skip the question,
+even if something removed OPENBLAS_CORETYPE from their environment.
+
 If OpenBLAS was loaded before the package (numpy imported first), this
 process keeps OpenBLAS's choice; the variable is then set to that choice so
 that the CLI runs started from here use the same kernels and results stay
@@ -21,6 +26,7 @@ import subprocess
 import sys
 
 _VARIABLE = "OPENBLAS_CORETYPE"
+_ANSWER = "CURVFLOW_BLAS_ADVICE"
 _PROBE = ("import ctypes, sys\n"
           "lib = ctypes.CDLL(sys.argv[1])\n"
           "lib.cf_blas_core_advice.restype = ctypes.c_char_p\n"
@@ -43,15 +49,25 @@ def choose_before_loading(library_path):
     cannot be asked (no library, no interpreter to run it in)."""
     if os.environ.get(_VARIABLE) or not sys.platform.startswith("linux"):
         return
-    if library_path is None or not sys.executable or _openblas_loaded():
+    if _openblas_loaded():
+        return
+    known = os.environ.get(_ANSWER)
+    if known:
+        if known != "none":
+            os.environ[_VARIABLE] = known
+        return
+    if library_path is None or not sys.executable:
         return
     try:
         answer = subprocess.run([sys.executable, "-c", _PROBE, str(library_path)], capture_output=True,
                                 text=True, timeout=60)
     except (OSError, subprocess.SubprocessError):
         return
+    if answer.returncode != 0:
+        return
     core = answer.stdout.strip()
-    if answer.returncode == 0 and core:
+    os.environ[_ANSWER] = core or "none"
+    if core:
         os.environ[_VARIABLE] = core
 
 

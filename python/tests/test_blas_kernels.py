@@ -4,7 +4,9 @@ runs the same kernels as the CLI, never the generic Prescott ones on a CPU
 with AVX2; when numpy loaded OpenBLAS first, the process keeps OpenBLAS's
 choice, says so, and the CLI runs it starts use that choice too (so that
 their results stay equal bit for bit); a user's OPENBLAS_CORETYPE stands.
-Each case runs in a fresh interpreter: the choice is made once, at load."""
+The answer is kept in CURVFLOW_BLAS_ADVICE for the processes started from
+there. Each case runs in a fresh interpreter: the choice is made once, at
+load."""
 import json
 import os
 import subprocess
@@ -19,7 +21,8 @@ _REPORT = ("import json, os, subprocess, sys\n"
            "running = _lib.lib().cf_blas_core()\n"
            "child = subprocess.run([sys.argv[1], '--version'], capture_output=True, text=True).stdout\n"
            "print(json.dumps({'running': running.decode() if running else None,\n"
-           "                  'variable': os.environ.get('OPENBLAS_CORETYPE'), 'cli': child}))\n")
+           "                  'variable': os.environ.get('OPENBLAS_CORETYPE'), 'cli': child,\n"
+           "                  'answer': os.environ.get('CURVFLOW_BLAS_ADVICE')}))\n")
 
 
 def _cpu_has_avx2():
@@ -30,8 +33,10 @@ def _cpu_has_avx2():
         return False
 
 
-def _fresh_process(cli, first_import="", coretype=None):
-    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_CORETYPE"}
+def _fresh_process(cli, first_import="", coretype=None, answer=None):
+    env = {k: v for k, v in os.environ.items() if k not in ("OPENBLAS_CORETYPE", "CURVFLOW_BLAS_ADVICE")}
+    if answer is not None:
+        env["CURVFLOW_BLAS_ADVICE"] = answer
     if coretype is not None:
         env["OPENBLAS_CORETYPE"] = coretype
     env["PYTHONPATH"] = str(ROOT / "python")
@@ -51,6 +56,11 @@ def test_package_runs_the_clis_kernels(cli):
     if _cpu_has_avx2():
         assert report["running"] != "Prescott", report
     assert "OpenBLAS was loaded before curvflow" not in stderr
+    # the answer is kept for the processes started from there: "none" when OpenBLAS chose right
+    assert report["answer"] == (report["variable"] or "none"), report
+    # a process that inherits the answer but lost OPENBLAS_CORETYPE runs the same kernels
+    again, _ = _fresh_process(cli, answer=report["answer"])
+    assert again["running"] == report["running"] and again["cli"] == report["cli"], again
 
 
 def test_numpy_first_keeps_one_choice_for_the_process_and_its_cli_runs(cli):
@@ -66,5 +76,5 @@ def test_numpy_first_keeps_one_choice_for_the_process_and_its_cli_runs(cli):
 
 def test_users_choice_stands(cli):
     report, stderr = _fresh_process(cli, coretype="Prescott")
-    assert report == {"running": "Prescott", "variable": "Prescott", "cli": "Prescott"}, report
+    assert report == {"running": "Prescott", "variable": "Prescott", "cli": "Prescott", "answer": None}, report
     assert "OpenBLAS was loaded before curvflow" not in stderr

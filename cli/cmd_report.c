@@ -133,9 +133,9 @@ static json_t *base64_array(const double *d, const int32_t *i, size_t n)
 
 /* Positions as float32 relative to the centre of their bounding box, with
  * that centre beside them (`<name>_offset`, doubles): float32 keeps ~7
- * digits, so raw coordinates of a mesh 1e6 from the origin would lose
- * everything below 0.06 (spot_3k, 2.6 across, became a pile of blocks);
- * relative to the centre they keep 1e-7 of the mesh's size. The viewer
+ * digits, so raw coordinates of a mesh 1e6 from the origin would be
+ * rounded to steps of 0.0625 (float32's spacing there; spot_3k is 2.6
+ * across); relative to the centre they keep 1e-7 of the mesh's size. The viewer
  * centres each shape on its box anyway; a reader adds the offset back. */
 static void set_positions(json_t *m, const char *name, const double *x, int32_t nv)
 {

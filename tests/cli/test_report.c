@@ -644,7 +644,7 @@ static double report_position_error(json_t *m, const char *name, const double *x
 
 /* A mesh far from the origin (a georeferenced scan) keeps its shape in the
  * report: float32 holds ~7 digits, so raw coordinates near 1e6 were
- * rounded to 0.06 (the star below, 2.5 across, became a pile of blocks);
+ * rounded to steps of 0.0625 (the star below is 2.5 across);
  * the positions are stored relative to their bounding box's centre, the
  * centre beside them. Read back: within 1e-6 of the star's size, at the
  * origin and 1e6 away alike. */

@@ -28,14 +28,15 @@ import sys
 import tempfile
 import time
 
-import numpy as np
-
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "python"))
 BUILD = pathlib.Path(os.environ.get("BUILD_DIR") or ROOT / "build").resolve()
 os.environ.setdefault("CURVFLOW_LIB_DIR", str(BUILD))
 
+# curvflow before numpy: the package picks OpenBLAS's kernels only if it is
+# loaded first (docs/python.md), and the CLI runs timed here inherit them
 import curvflow  # noqa: E402
+import numpy as np  # noqa: E402
 
 
 def knotted_tube(n_along=240, n_around=14):

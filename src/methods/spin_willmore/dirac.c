@@ -178,8 +178,9 @@ double cfi_dirac_quotient(const cfi_dirac *d, const double *area, const double *
 
 /* Hamilton product of (w, x, y, z) arrays: cf_quat_mul's arithmetic in the
  * same order, inline because the edge transform runs 8 products per edge
- * per step and the rho-derivative 9 per face per direction (the library calls cost +150 % instructions in cfi_spin_transform_edges,
- * 1-2 ms per step on spot_3k; test spin_transform checks the edges against
+ * per step and the rho-derivative 3 per face plus 3 per face and direction (the library
+ * calls cost +150 % instructions in cfi_spin_transform_edges, 1-2 ms per
+ * step on spot_3k; test spin_transform checks the edges against
  * cf_quat_conj_sandwich). */
 static inline void qmul(const double *a, const double *b, double *o)
 {
@@ -204,29 +205,40 @@ static inline double face_edges(const double *positions, const int32_t *tri, dou
     return 0.5 * sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
 }
 
-void cfi_dirac_rho_derivative(const cf_mesh *mesh, const double *positions, const double *rho, const double *drho,
-                              const double *lambda, double *out)
+void cfi_dirac_rho_derivative(const cf_mesh *mesh, const double *positions, const double *rho, int32_t count,
+                              const double *drho, const double *lambda, double *out)
 {
-    memset(out, 0, 4 * (size_t)mesh->nv * sizeof(double));
+    int64_t nv = mesh->nv, n4 = 4 * nv;
+    memset(out, 0, (size_t)(n4 * count) * sizeof(double));
     for (int32_t k = 0; k < mesh->nf; ++k) {
         const int32_t *tri = mesh->triangles + 3 * k;
         double e[3][3];
         double area = face_edges(positions, tri, e);
-        double r[3], dr[3];
-        for (int m = 0; m < 3; ++m) {
-            r[m] = rho ? rho[tri[m]] : 0.0;
-            dr[m] = drho[tri[m]];
+        /* X_mn's derivative along drho is linear in it:
+         *   q_mn = dr_m (A r_n / 9, e_n / 6) + dr_n (A r_m / 9, -e_m / 6),
+         * so sum_n q_mn lambda_n = dr_m u + p_m s with the face's
+         *   u = sum_n (A r_n / 9, e_n / 6) lambda_n,  p_m = (A r_m / 9, -e_m / 6),
+         * and s = sum_n dr_n lambda_n the only part that depends on the
+         * direction: the geometry once per face for every direction. */
+        const double *lam[3] = {lambda + 4 * (int64_t)tri[0], lambda + 4 * (int64_t)tri[1],
+                                lambda + 4 * (int64_t)tri[2]};
+        double u[4] = {0.0, 0.0, 0.0, 0.0}, p[3][4];
+        for (int n = 0; n < 3; ++n) {
+            double r = rho ? rho[tri[n]] : 0.0;
+            double c[4] = {area * r / 9.0, e[n][0] / 6.0, e[n][1] / 6.0, e[n][2] / 6.0}, cl[4];
+            qmul(c, lam[n], cl);
+            for (int q = 0; q < 4; ++q) u[q] += cl[q];
+            p[n][0] = c[0];
+            for (int q = 1; q < 4; ++q) p[n][q] = -c[q];
         }
-        for (int m = 0; m < 3; ++m) {
-            double *o = out + 4 * (int64_t)tri[m];
-            for (int n = 0; n < 3; ++n) {
-                /* d/drho of face_quaternion's X_mn along drho */
-                double q[4] = {area * (dr[m] * r[n] + r[m] * dr[n]) / 9.0, 0.0, 0.0, 0.0};
-                for (int c = 0; c < 3; ++c) q[1 + c] = (dr[m] * e[n][c] - dr[n] * e[m][c]) / 6.0;
-                /* o += q lambda_n (the block is q's left multiplication) */
-                double ql[4];
-                qmul(q, lambda + 4 * (int64_t)tri[n], ql);
-                for (int c = 0; c < 4; ++c) o[c] += ql[c];
+        for (int32_t l = 0; l < count; ++l) {
+            const double *dl = drho + l * nv;
+            double dr[3] = {dl[tri[0]], dl[tri[1]], dl[tri[2]]}, sl[4];
+            for (int q = 0; q < 4; ++q) sl[q] = dr[0] * lam[0][q] + dr[1] * lam[1][q] + dr[2] * lam[2][q];
+            for (int m = 0; m < 3; ++m) {
+                double *o = out + l * n4 + 4 * (int64_t)tri[m], ps[4];
+                qmul(p[m], sl, ps);
+                for (int q = 0; q < 4; ++q) o[q] += dr[m] * u[q] + ps[q];
             }
         }
     }
@@ -408,6 +420,38 @@ void cfi_spin_transform_edges(const cf_mesh *mesh, const double *positions, cons
         sandwich(lj, v, lj, bb);
         /* Crane et al. 2011 (NOTES.md): average of the similarity transforms at both ends */
         for (int c = 0; c < 3; ++c) out[3 * e + c] = (aa[c] + bb[c]) / 3.0 + (ab[c] + ba[c]) / 6.0;
+    }
+}
+
+void cfi_spin_transform_edges_derivative(const cf_mesh *mesh, const double *positions, const double *lambda,
+                                         int32_t count, const double *dlambda, int32_t first, int32_t n, double *out)
+{
+    int64_t n4 = 4 * (int64_t)mesh->nv;
+    for (int32_t e = first; e < first + n; ++e) {
+        int32_t i = mesh->edge_vertices[2 * e], j = mesh->edge_vertices[2 * e + 1];
+        double vq[4] = {0.0, positions[3 * j] - positions[3 * i], positions[3 * j + 1] - positions[3 * i + 1],
+                        positions[3 * j + 2] - positions[3 * i + 2]};
+        const double *a = lambda + 4 * i, *b = lambda + 4 * j;
+        double ac[4] = {a[0], -a[1], -a[2], -a[3]}, bc[4] = {b[0], -b[1], -b[2], -b[3]}, ta[4], tb[4];
+        qmul(ac, vq, ta);
+        qmul(bc, vq, tb);
+        /* With S(p, q) = Im(conj(p) v q), which is symmetric for imaginary
+         * v (conj(conj(p) v q) = -conj(q) v p), the transform above is
+         * e~ = (S(a, a) + S(b, b) + S(a, b)) / 3, whose derivative is
+         * (2 S(a, da) + 2 S(b, db) + S(b, da) + S(a, db)) / 3
+         *   = Im(ta (2 da + db) + tb (2 db + da)) / 3. */
+        double *o = out + (int64_t)(e - first) * 3 * count;
+        for (int32_t l = 0; l < count; ++l) {
+            const double *da = dlambda + l * n4 + 4 * i, *db = dlambda + l * n4 + 4 * j;
+            double u[4], w[4], tu[4], tw[4];
+            for (int q = 0; q < 4; ++q) {
+                u[q] = 2.0 * da[q] + db[q];
+                w[q] = 2.0 * db[q] + da[q];
+            }
+            qmul(ta, u, tu);
+            qmul(tb, w, tw);
+            for (int c = 0; c < 3; ++c) o[3 * l + c] = (tu[1 + c] + tw[1 + c]) / 3.0;
+        }
     }
 }
 

@@ -140,9 +140,10 @@ static cf_status allocate_arrays(cfi_spin_state *s, int32_t dim)
         WS_ARRAY(s->period_dx, 4 * nv * nz);
         WS_ARRAY(s->period_sol, 4 * nv * nz);
         WS_ARRAY(s->period_lambda, 4 * nv);
-        WS_ARRAY(s->period_edges, 3 * ne);
+        WS_ARRAY(s->period_block, CFI_SPIN_PERIOD_BLOCK * 3 * nz);
+        WS_ARRAY(s->period_acc, nz * nz);
         WS_ARRAY(s->period_matrix, nz * nz);
-        WS_ARRAY(s->period_values, 2 * nz);
+        WS_ARRAY(s->period_values, nz);
         WS_ARRAY(s->period_work, cf_dense_least_squares_work_size((int32_t)nz, (int32_t)nz));
     }
     if (s->restricted_boundary) {

@@ -20,11 +20,13 @@
  *  - one inverse iteration lambda ~ X(rho)^-1 M 1 changes by
  *    dlambda = -X(rho)^-1 dX lambda (the normalisation only rescales lambda
  *    and P, which vanishes at the solution);
- *  - e~ is quadratic in lambda (dirac.c), so (P(lambda + dl) - P(lambda -
- *    dl)) / 2 is exactly dP along dl.
- * The Jacobian (3 dim x zcount) costs one pass over the faces and two edge
- * transforms per direction and one solve with the step's factor for all
- * directions together; the least-squares update one more factorisation.
+ *  - e~ is quadratic in lambda (dirac.c), so its derivative along dl
+ *    (cfi_spin_transform_edges_derivative) is exactly (P(lambda + dl) -
+ *    P(lambda - dl)) / 2, the two edge transforms per direction that the
+ *    Jacobian took until session 33.
+ * The Jacobian (3 dim x zcount) costs one pass over the faces and one over
+ * the edges for all directions together, one solve with the step's factor
+ * for all of them, and the least-squares update one more factorisation.
  */
 #include "methods/spin_willmore/spin_flow.h"
 
@@ -66,31 +68,43 @@ cf_status cfi_spin_period_correction(cf_flow *flow, cfi_spin_state *s, cfi_spin_
     const cf_mesh *mesh = flow->mesh;
     const double *x = flow->positions;
     int32_t nv = s->nv, nz = 3 * s->harmonic_dim, nc = s->zcount;
-    int64_t n4 = 4 * (int64_t)nv;
     const double *rho0 = s->period_rho;
-    /* the periods in period_values[0, nz) become the right-hand side, then
-     * the solution; [nz, 2 nz) is scratch */
-    double *jac = s->period_matrix, *rhs = s->period_values, *tmp = s->period_values + nz;
+    /* the periods in period_values become the right-hand side, then the
+     * solution */
+    double *jac = s->period_matrix, *rhs = s->period_values;
     /* dX along each direction, applied to lambda; then all solved at once */
     double ta = cfi_now_seconds();
-    for (int32_t l = 0; l < nc; ++l)
-        cfi_dirac_rho_derivative(mesh, x, rho0, s->basis + (int64_t)(s->zfirst + l) * nv, s->lambda,
-                                 s->period_dx + l * n4);
+    cfi_dirac_rho_derivative(mesh, x, rho0, nc, s->basis + (int64_t)s->zfirst * nv, s->lambda, s->period_dx);
     double tb = cfi_now_seconds();
     t->assemble += tb - ta;
     cf_status st = cf_cholesky_solve(s->chol, nc, s->period_dx, s->period_sol); /* -dlambda per direction */
     double tc = cfi_now_seconds();
     t->solve += tc - tb;
     if (st != CF_OK) return st;
-    for (int32_t l = 0; l < nc; ++l) {
-        const double *sol = s->period_sol + l * n4;
-        double *col = jac + (int64_t)l * nz;
-        for (int64_t k = 0; k < n4; ++k) s->period_lambda[k] = s->lambda[k] - sol[k];
-        (void)cfi_spin_periods(mesh, s, x, s->period_lambda, s->period_edges, col);
-        for (int64_t k = 0; k < n4; ++k) s->period_lambda[k] = s->lambda[k] + sol[k];
-        (void)cfi_spin_periods(mesh, s, x, s->period_lambda, s->period_edges, tmp);
-        for (int32_t k = 0; k < nz; ++k) col[k] = 0.5 * (col[k] - tmp[k]);
+    /* The Jacobian: dP_gc along dlambda_l = sum_e w_e h_g[e] de~_e,c, from
+     * the edges' derivative (exact: e~ is quadratic in lambda) in blocks
+     * of CFI_SPIN_PERIOD_BLOCK edges, summed per form g into acc[g][l][c]
+     * (contiguous in l, c). */
+    int32_t dim = s->harmonic_dim, ne = s->ne, width = 3 * nc;
+    double *acc = s->period_acc, *block = s->period_block;
+    memset(acc, 0, (size_t)dim * (size_t)width * sizeof *acc);
+    for (int32_t first = 0; first < ne; first += CFI_SPIN_PERIOD_BLOCK) {
+        int32_t n = ne - first < CFI_SPIN_PERIOD_BLOCK ? ne - first : CFI_SPIN_PERIOD_BLOCK;
+        cfi_spin_transform_edges_derivative(mesh, x, s->lambda, nc, s->period_sol, first, n, block);
+        for (int32_t g = 0; g < dim; ++g) {
+            const double *h = s->harmonic + (int64_t)g * ne + first;
+            double *a = acc + (int64_t)g * width;
+            for (int32_t e = 0; e < n; ++e) {
+                double wh = s->hweights[first + e] * h[e];
+                const double *d = block + (int64_t)e * width;
+                for (int32_t k = 0; k < width; ++k) a[k] += wh * d[k];
+            }
+        }
     }
+    /* column l of the Jacobian: the derivative along dlambda = -sol_l */
+    for (int32_t l = 0; l < nc; ++l)
+        for (int32_t g = 0; g < dim; ++g)
+            for (int c = 0; c < 3; ++c) jac[(int64_t)l * nz + 3 * g + c] = -acc[(int64_t)g * width + 3 * l + c];
     t->assemble += cfi_now_seconds() - tc;
     for (int32_t k = 0; k < nz; ++k) rhs[k] = -rhs[k];
     int32_t rank = 0;

@@ -62,7 +62,8 @@ typedef struct cfi_spin_state {
     double *period_dx;       /* 4 nv x 3 dim: dX lambda per direction */
     double *period_sol;      /* 4 nv x 3 dim: X^-1 dX lambda */
     double *period_lambda;   /* 4 nv: lambda +- its change (Jacobian), then the lambda before a correction (undo) */
-    double *period_edges;    /* 3 ne */
+    double *period_block;    /* CFI_SPIN_PERIOD_BLOCK x 3 (3 dim): the edges' derivative, a block (periods.c) */
+    double *period_acc;      /* 3 dim x 3 dim: the Jacobian by form, summed over the blocks */
     double *period_matrix;   /* 3 dim x 3 dim: the periods' Jacobian */
     double *period_values;   /* 3 dim (the right-hand side, then the solution) */
     double *period_work;     /* cf_dense_least_squares_work_size(3 dim, 3 dim) */
@@ -156,6 +157,9 @@ typedef struct cfi_spin_timers {
 } cfi_spin_timers;
 
 /* ---- periods.c ---- */
+/* Edges per block of the periods' Jacobian: the block of their derivative
+ * along every direction (3 x 3 dim each: 72 at genus 4) stays in cache. */
+#define CFI_SPIN_PERIOD_BLOCK 128
 /* Periods of the transformed edges of lambda on x: periods[3 g + c] =
  * <e~_c, h_g>_*1 (3 dim; edges: 3 ne scratch, left holding e~). Returns the
  * relative harmonic part |P| / |e~|_*1 (*1 of the input). */

@@ -63,12 +63,14 @@ cf_status cfi_dirac_factorize(const cfi_dirac *d, cf_cholesky *chol);
 double cfi_dirac_quotient(const cfi_dirac *d, const double *area, const double *lambda, double *work);
 /* out = X lambda (4 nv each, quaternion per vertex) for the filled X, either form. */
 void cfi_dirac_multiply(const cfi_dirac *d, const double *lambda, double *out);
-/* out = (dX(rho)/drho [drho]) lambda (4 nv): the derivative of App. G's X
- * along drho applied to lambda, face by face without the matrix (X is
- * quadratic in rho: (rho_m e_n - rho_n e_m) / 6 + A rho_m rho_n / 9). rho
- * NULL: rho = 0. Faces of zero area contribute only their linear term. */
-void cfi_dirac_rho_derivative(const cf_mesh *mesh, const double *positions, const double *rho, const double *drho,
-                              const double *lambda, double *out);
+/* out = (dX(rho)/drho [drho]) lambda (4 nv) for `count` directions drho
+ * (nv each, one after the other; out: 4 nv each): the derivative of App. G's
+ * X along drho applied to lambda, face by face without the matrix (X is
+ * quadratic in rho: (rho_m e_n - rho_n e_m) / 6 + A rho_m rho_n / 9), the
+ * face's geometry once for all directions. rho NULL: rho = 0. Faces of
+ * zero area contribute only their linear term. */
+void cfi_dirac_rho_derivative(const cf_mesh *mesh, const double *positions, const double *rho, int32_t count,
+                              const double *drho, const double *lambda, double *out);
 
 /* Fills X(rho) + shift * M (M: barycentric vertex areas) for `positions`.
  * rho may be NULL (rho = 0). Sign: X = (D - P rho)^* A (D - P rho) with
@@ -109,6 +111,13 @@ void cfi_dirac_restrict_boundary(cfi_dirac *d, const cf_mesh *mesh, const double
  * e~_ij = 1/3 l_i' e l_i + 1/6 l_i' e l_j + 1/6 l_j' e l_i + 1/3 l_j' e l_j
  * (l' = conj(l)), e = f_j - f_i for every edge i < j. out: 3 ne. */
 void cfi_spin_transform_edges(const cf_mesh *mesh, const double *positions, const double *lambda, double *out);
+/* Its derivative at lambda along `count` directions dlambda (4 nv each, one
+ * after the other), for the edges [first, first + n): out[(e - first) *
+ * 3 count + 3 l + c] is component c of d e~_e along direction l. e~ is
+ * quadratic in lambda, so this is exactly (e~(lambda + dl) - e~(lambda -
+ * dl)) / 2 (test `dirac_forms`). */
+void cfi_spin_transform_edges_derivative(const cf_mesh *mesh, const double *positions, const double *lambda,
+                                         int32_t count, const double *dlambda, int32_t first, int32_t n, double *out);
 /* Relative shift of the Dirac eigenproblem: X + eps M with
  * eps = CFI_SPIN_SHIFT * 4 pi / area (a fraction of 1/R^2 of the sphere of
  * equal area), so that the singular X(0) can be factorised. 1e-3 rather than

@@ -9,7 +9,13 @@
  * The derivative of X along a change of rho applied to lambda, assembled
  * face by face (cfi_dirac_rho_derivative, the Jacobian of the period
  * corrections): against central differences of the filled matrix in both
- * forms (exact for a quadratic, any step) and one-sided differences.
+ * forms (exact for a quadratic, any step) and one-sided differences; for
+ * several directions at once, bit for bit each direction's own.
+ * The derivative of the transformed edges along changes of lambda
+ * (cfi_spin_transform_edges_derivative, the periods' Jacobian since session
+ * 33, which took two edge transforms per direction before): against central
+ * differences of cfi_spin_transform_edges (exact for a quadratic), on a
+ * block of edges and for several directions.
  */
 #include "test.h"
 
@@ -129,7 +135,7 @@ static void test_rho_derivative(void)
         drho[i] = cos(4.0 * p[0] + p[1]) - 0.2 * p[2];
         for (int c = 0; c < 4; ++c) lambda[4 * i + c] = (c == 0 ? 1.0 : 0.0) + 0.3 * sin((c + 1.0) * p[c % 3] + i);
     }
-    cfi_dirac_rho_derivative(mesh, x, rho, drho, lambda, direct);
+    cfi_dirac_rho_derivative(mesh, x, rho, 1, drho, lambda, direct);
     for (int form = 0; form < 2; ++form) {
         cfi_dirac *d = NULL;
         CHECK_OK(ctx, cfi_dirac_create_form(ctx, mesh, form, &d));
@@ -173,9 +179,88 @@ static void test_rho_derivative(void)
     cf_context_destroy(&ctx);
 }
 
+/* Three directions at once: each is bit for bit its own single pass (the
+ * face's shared part is the same arithmetic), so the batching changes no
+ * result. */
+static void test_rho_derivative_batched(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *mesh = NULL;
+    CHECK_OK(ctx, cf_generate_icosphere(ctx, 2, 1.0, &mesh));
+    if (!mesh) return;
+    int32_t nv = mesh->nv, n = 4 * nv;
+    double *x = malloc(3 * (size_t)nv * sizeof *x), *rho = malloc((size_t)nv * sizeof *rho);
+    double *drho = malloc(3 * (size_t)nv * sizeof *drho), *lambda = malloc((size_t)n * sizeof *lambda);
+    double *all = malloc(3 * (size_t)n * sizeof *all), *one = malloc((size_t)n * sizeof *one);
+    bumpy_fixture(mesh, x, rho);
+    for (int32_t i = 0; i < nv; ++i) {
+        const double *p = mesh->positions + 3 * i;
+        for (int l = 0; l < 3; ++l) drho[l * nv + i] = cos((l + 2.0) * p[l] + p[(l + 1) % 3]) - 0.1 * l;
+        for (int c = 0; c < 4; ++c) lambda[4 * i + c] = (c == 0 ? 1.0 : 0.0) + 0.3 * sin((c + 1.0) * p[c % 3] + i);
+    }
+    cfi_dirac_rho_derivative(mesh, x, rho, 3, drho, lambda, all);
+    for (int l = 0; l < 3; ++l) {
+        cfi_dirac_rho_derivative(mesh, x, rho, 1, drho + l * nv, lambda, one);
+        CHECK(memcmp(one, all + (int64_t)l * n, (size_t)n * sizeof *one) == 0);
+        CHECK(rel_diff(one, all, n) > 1e-3 || l == 0); /* the directions differ */
+    }
+    free(x); free(rho); free(drho); free(lambda); free(all); free(one);
+    cf_mesh_destroy(&mesh);
+    cf_context_destroy(&ctx);
+}
+
+static void test_edges_derivative(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *mesh = NULL;
+    CHECK_OK(ctx, cf_generate_icosphere(ctx, 3, 1.0, &mesh));
+    if (!mesh) return;
+    int32_t nv = mesh->nv, ne = mesh->ne, n = 4 * nv;
+    double *x = malloc(3 * (size_t)nv * sizeof *x), *rho = malloc((size_t)nv * sizeof *rho);
+    double *lambda = malloc((size_t)n * sizeof *lambda), *dl = malloc(3 * (size_t)n * sizeof *dl);
+    double *trial = malloc((size_t)n * sizeof *trial), *plus = malloc(3 * (size_t)ne * sizeof *plus);
+    double *minus = malloc(3 * (size_t)ne * sizeof *minus), *diff = malloc(3 * (size_t)ne * sizeof *diff);
+    bumpy_fixture(mesh, x, rho);
+    for (int32_t i = 0; i < nv; ++i) {
+        const double *p = mesh->positions + 3 * i;
+        for (int c = 0; c < 4; ++c) {
+            lambda[4 * i + c] = (c == 0 ? 1.0 : 0.0) + 0.3 * sin((c + 1.0) * p[c % 3] + i);
+            for (int l = 0; l < 3; ++l) dl[(int64_t)l * n + 4 * i + c] = 0.5 * cos((l + 1.0) * p[(c + l) % 3] - c + 0.7 * i);
+        }
+    }
+    /* edges [first, first + count) only: the block form the Jacobian uses */
+    int32_t first = ne / 3, count = ne / 2;
+    double *block = malloc((size_t)count * 9 * sizeof *block), *column = malloc((size_t)count * 3 * sizeof *column);
+    cfi_spin_transform_edges_derivative(mesh, x, lambda, 3, dl, first, count, block);
+    for (int l = 0; l < 3; ++l) {
+        for (int hs = 0; hs < 2; ++hs) {
+            double h = hs ? 1e-3 : 1.0; /* central differences: exact for a quadratic, any step */
+            for (int32_t k = 0; k < n; ++k) trial[k] = lambda[k] + h * dl[(int64_t)l * n + k];
+            cfi_spin_transform_edges(mesh, x, trial, plus);
+            for (int32_t k = 0; k < n; ++k) trial[k] = lambda[k] - h * dl[(int64_t)l * n + k];
+            cfi_spin_transform_edges(mesh, x, trial, minus);
+            for (int32_t k = 0; k < 3 * count; ++k) {
+                int64_t g = 3 * (int64_t)first + k;
+                diff[k] = (plus[g] - minus[g]) / (2.0 * h);
+            }
+            for (int32_t e = 0; e < count; ++e)
+                for (int c = 0; c < 3; ++c) column[3 * e + c] = block[9 * (int64_t)e + 3 * l + c];
+            double r = rel_diff(column, diff, 3 * count);
+            fprintf(stderr, "   direction %d, central difference with step %g: relative difference %.2e\n", l, h, r);
+            CHECK_LE(r, hs ? 1e-9 : 1e-13);
+        }
+    }
+    free(x); free(rho); free(lambda); free(dl); free(trial); free(plus); free(minus); free(diff); free(block);
+    free(column);
+    cf_mesh_destroy(&mesh);
+    cf_context_destroy(&ctx);
+}
+
 int main(void)
 {
     CFT_RUN(test_forms_agree);
     CFT_RUN(test_rho_derivative);
+    CFT_RUN(test_rho_derivative_batched);
+    CFT_RUN(test_edges_derivative);
     return cft_finish();
 }

@@ -49,6 +49,15 @@ static void bumpy_fixture(const cf_mesh *mesh, double *x, double *rho)
     }
 }
 
+/* A lambda near 1 that varies from vertex to vertex in all four components. */
+static void lambda_fixture(const cf_mesh *mesh, double *lambda)
+{
+    for (int32_t i = 0; i < mesh->nv; ++i) {
+        const double *p = mesh->positions + 3 * i;
+        for (int c = 0; c < 4; ++c) lambda[4 * i + c] = (c == 0 ? 1.0 : 0.0) + 0.3 * sin((c + 1.0) * p[c % 3] + i);
+    }
+}
+
 static void test_forms_agree(void)
 {
     cf_context *ctx = cft_context();
@@ -130,10 +139,10 @@ static void test_rho_derivative(void)
     double *lambda = malloc((size_t)n * sizeof *lambda), *direct = malloc((size_t)n * sizeof *direct);
     double *plus = malloc((size_t)n * sizeof *plus), *minus = malloc((size_t)n * sizeof *minus);
     bumpy_fixture(mesh, x, rho);
+    lambda_fixture(mesh, lambda);
     for (int32_t i = 0; i < nv; ++i) {
         const double *p = mesh->positions + 3 * i;
         drho[i] = cos(4.0 * p[0] + p[1]) - 0.2 * p[2];
-        for (int c = 0; c < 4; ++c) lambda[4 * i + c] = (c == 0 ? 1.0 : 0.0) + 0.3 * sin((c + 1.0) * p[c % 3] + i);
     }
     cfi_dirac_rho_derivative(mesh, x, rho, 1, drho, lambda, direct);
     for (int form = 0; form < 2; ++form) {
@@ -193,10 +202,10 @@ static void test_rho_derivative_batched(void)
     double *drho = malloc(3 * (size_t)nv * sizeof *drho), *lambda = malloc((size_t)n * sizeof *lambda);
     double *all = malloc(3 * (size_t)n * sizeof *all), *one = malloc((size_t)n * sizeof *one);
     bumpy_fixture(mesh, x, rho);
+    lambda_fixture(mesh, lambda);
     for (int32_t i = 0; i < nv; ++i) {
         const double *p = mesh->positions + 3 * i;
         for (int l = 0; l < 3; ++l) drho[l * nv + i] = cos((l + 2.0) * p[l] + p[(l + 1) % 3]) - 0.1 * l;
-        for (int c = 0; c < 4; ++c) lambda[4 * i + c] = (c == 0 ? 1.0 : 0.0) + 0.3 * sin((c + 1.0) * p[c % 3] + i);
     }
     cfi_dirac_rho_derivative(mesh, x, rho, 3, drho, lambda, all);
     for (int l = 0; l < 3; ++l) {
@@ -221,12 +230,11 @@ static void test_edges_derivative(void)
     double *trial = malloc((size_t)n * sizeof *trial), *plus = malloc(3 * (size_t)ne * sizeof *plus);
     double *minus = malloc(3 * (size_t)ne * sizeof *minus), *diff = malloc(3 * (size_t)ne * sizeof *diff);
     bumpy_fixture(mesh, x, rho);
+    lambda_fixture(mesh, lambda);
     for (int32_t i = 0; i < nv; ++i) {
         const double *p = mesh->positions + 3 * i;
-        for (int c = 0; c < 4; ++c) {
-            lambda[4 * i + c] = (c == 0 ? 1.0 : 0.0) + 0.3 * sin((c + 1.0) * p[c % 3] + i);
+        for (int c = 0; c < 4; ++c)
             for (int l = 0; l < 3; ++l) dl[(int64_t)l * n + 4 * i + c] = 0.5 * cos((l + 1.0) * p[(c + l) % 3] - c + 0.7 * i);
-        }
     }
     /* edges [first, first + count) only: the block form the Jacobian uses */
     int32_t first = ne / 3, count = ne / 2;

@@ -4,10 +4,12 @@ a knotted tube (genus 1), marching-tetrahedra plates of genus 1-5 (slivers down
 to about 0.1 degrees, staircase noise), a sphere with 7 holes and a disk; with
 --subdivided, cow_3k and dino_4k Loop-subdivided twice (curvflow.loop_subdivide);
 with --stretched, spot_3k stretched 5x and 10x along y and an icosphere
-stretched 8x (elongated shapes, docs/spin.md "Elongated shapes").
+stretched 8x (elongated shapes, docs/spin.md "Elongated shapes"); with --tubes,
+14 more knotted tubes (docs/spin.md, "The period tolerance on knotted tubes").
 
     BUILD_DIR=build python3 bench/bench_unseen_kinds.py [--curvflow PATH] [--steps N] [--keep DIR]
-        [--subdivided ../shared/meshes] [--stretched ../shared/meshes] [METHOD ...]
+        [--subdivided ../shared/meshes] [--stretched ../shared/meshes] [--tubes]
+        [--param KEY=VALUE ...] [METHOD ...]
 
 Writes the meshes (to a temporary directory, or DIR), runs every METHOD
 (default: spin-willmore and conformal-mcf) with its defaults for N steps
@@ -39,11 +41,24 @@ import curvflow  # noqa: E402
 import numpy as np  # noqa: E402
 
 
-def knotted_tube(n_along=240, n_around=14):
-    """Trefoil centre line, tube radius 0.35 +- 0.1 (five thick and thin
-    stretches), parallel-transport frame closed up by spreading its holonomy."""
+def trefoil(t):
+    return np.stack([np.sin(t) + 2 * np.sin(2 * t), np.cos(t) - 2 * np.cos(2 * t), -np.sin(3 * t)], 1)
+
+
+def figure_eight(t):
+    return np.stack([(2 + np.cos(2 * t)) * np.cos(3 * t), (2 + np.cos(2 * t)) * np.sin(3 * t), np.sin(4 * t)], 1)
+
+
+def torus_knot_2_5(t):
+    return np.stack([(2 + np.cos(5 * t)) * np.cos(2 * t), (2 + np.cos(5 * t)) * np.sin(2 * t), -np.sin(5 * t)], 1)
+
+
+def knotted_tube(n_along=240, n_around=14, mean=0.35, amplitude=0.1, centre_line=trefoil):
+    """Tube around a knot (trefoil by default), radius mean + amplitude sin 5t
+    (five thick and thin stretches), parallel-transport frame closed up by
+    spreading its holonomy."""
     t = np.linspace(0.0, 2.0 * np.pi, n_along, endpoint=False)
-    centre = np.stack([np.sin(t) + 2 * np.sin(2 * t), np.cos(t) - 2 * np.cos(2 * t), -np.sin(3 * t)], 1)
+    centre = centre_line(t)
     tangent = np.roll(centre, -1, 0) - np.roll(centre, 1, 0)
     tangent /= np.linalg.norm(tangent, axis=1)[:, None]
     normal = np.zeros_like(tangent)
@@ -57,7 +72,7 @@ def knotted_tube(n_along=240, n_around=14):
     last = normal[-1] - tangent[0] * (normal[-1] @ tangent[0])
     holonomy = math.atan2(last @ binormal[0], last @ normal[0])
     phi = np.linspace(0.0, 2.0 * np.pi, n_around, endpoint=False)
-    radius = 0.35 + 0.1 * np.sin(5 * t)
+    radius = mean + amplitude * np.sin(5 * t)
     vertices = []
     for i in range(n_along):
         angle = phi - holonomy * i / n_along
@@ -147,6 +162,19 @@ def generated_sphere(cli, path):
     return vertices, faces
 
 
+# --tubes: the knotted tubes of docs/spin.md ("Long tubes", "The period
+# tolerance on knotted tubes"): name, rings, vertices a ring, mean radius,
+# amplitude, centre line
+TUBES = [("tube_trefoil_480x28", 480, 28, 0.35, 0.1, trefoil), ("tube_trefoil_360x20", 360, 20, 0.35, 0.1, trefoil),
+         ("tube_trefoil_120x10", 120, 10, 0.35, 0.1, trefoil), ("tube_trefoil_35pm05", 240, 14, 0.35, 0.05, trefoil),
+         ("tube_trefoil_35pm15", 240, 14, 0.35, 0.15, trefoil), ("tube_trefoil_35", 240, 14, 0.35, 0.0, trefoil),
+         ("tube_trefoil_30pm10", 240, 14, 0.30, 0.1, trefoil), ("tube_trefoil_40pm10", 240, 14, 0.40, 0.1, trefoil),
+         ("tube_trefoil_25", 240, 14, 0.25, 0.0, trefoil), ("tube_trefoil_50", 240, 14, 0.50, 0.0, trefoil),
+         ("tube_figure_eight_35pm10", 300, 14, 0.35, 0.1, figure_eight),
+         ("tube_figure_eight_30", 300, 14, 0.30, 0.0, figure_eight),
+         ("tube_2_5_30pm10", 300, 14, 0.30, 0.1, torus_knot_2_5), ("tube_2_5_25", 300, 12, 0.25, 0.0, torus_knot_2_5)]
+
+
 def cut_holes(vertices, faces, count, angular_radius):
     """Faces whose direction lies within angular_radius of one of count
     directions spread over the sphere are removed (unused vertices too)."""
@@ -164,7 +192,7 @@ def cut_holes(vertices, faces, count, angular_radius):
     return vertices[used], remap[faces]
 
 
-def run(cli, mesh, method, steps, out_dir):
+def run(cli, mesh, method, steps, out_dir, params=()):
     base = os.path.splitext(os.path.basename(mesh))[0]
     out = os.path.join(out_dir, "%s.%s.obj" % (base, method))
     log = os.path.join(out_dir, "%s.%s.jsonl" % (base, method))
@@ -172,8 +200,10 @@ def run(cli, mesh, method, steps, out_dir):
         if os.path.exists(path):
             os.remove(path)
     start = time.time()
-    proc = subprocess.run([cli, "flow", mesh, "-o", out, "--method", method, "--steps", str(steps), "-q", "-f",
-                           "--log", log], capture_output=True, text=True)
+    command = [cli, "flow", mesh, "-o", out, "--method", method, "--steps", str(steps), "-q", "-f", "--log", log]
+    for param in params:
+        command += ["-p", param]
+    proc = subprocess.run(command, capture_output=True, text=True)
     ms = 1000.0 * (time.time() - start) / steps
     # W/4pi from the flow's log where the method reports it (boundary
     # meshes included: interior vertices, as the method's W), else from
@@ -206,6 +236,11 @@ def main():
                              "(46k and 63k vertices, closed: the 50k-vertex kind)")
     parser.add_argument("--stretched", metavar="MESH_DIR",
                         help="also spot_3k from MESH_DIR stretched 5x and 10x along y, and an icosphere stretched 8x")
+    parser.add_argument("--tubes", action="store_true",
+                        help="also 14 more knotted tubes: trefoils of other radii and resolutions, figure-eight "
+                             "and (2,5) torus knots")
+    parser.add_argument("--param", action="append", default=[], metavar="KEY=VALUE",
+                        help="a method parameter for every run (repeatable), e.g. period_tolerance=1e-3")
     parser.add_argument("methods", nargs="*", default=["spin-willmore", "conformal-mcf"])
     args = parser.parse_args()
     if not os.path.exists(args.curvflow):
@@ -221,6 +256,8 @@ def main():
             meshes.append(path)
 
         add("knot", *knotted_tube())
+        for name, rings, around, mean, amplitude, centre_line in TUBES if args.tubes else ():
+            add(name, *knotted_tube(rings, around, mean, amplitude, centre_line))
         for genus in (1, 2, 3, 4, 5):
             add("plate_genus%d" % genus, *holed_plate(genus))
         sphere = generated_sphere(args.curvflow, os.path.join(out_dir, "sphere_source.obj"))
@@ -249,7 +286,7 @@ def main():
         print("mesh\tmethod\texit\tW0/4pi\tW/4pi\tQ_mean\tQ_max\tmin_angle\tms_per_step")
         for mesh in meshes:
             for method in args.methods:
-                run(args.curvflow, mesh, method, args.steps, out_dir)
+                run(args.curvflow, mesh, method, args.steps, out_dir, args.param)
 
 
 if __name__ == "__main__":

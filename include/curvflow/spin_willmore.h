@@ -113,7 +113,9 @@ typedef struct cf_spin_willmore_options {
                                 * constraint leaves at second order in tau. Default 3; 0: the
                                 * constraint alone (docs/spin.md, "Periods") */
     double period_tolerance;   /* stop the corrections when the harmonic part of the transformed edges
-                                * is below this fraction of them (*1 norm of the input). Default 3e-3 */
+                                * is below this fraction of them (*1 norm of the input). Default 3e-3;
+                                * 1e-3 lowers W further on knotted tubes (docs/spin.md, "The period
+                                * tolerance on knotted tubes") */
     double max_integrability_error; /* with adaptive: redo a step (tau halved) whose transformed edges
                                 * are non-integrable by more than this fraction (the `integrability`
                                 * residual). Default 0 = no bound: it trades W for triangle quality

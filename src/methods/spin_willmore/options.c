@@ -94,7 +94,8 @@ static const cf_param_desc spin_params[] = {
      "closed genus > 0: Newton corrections of rho per step that cancel the periods of the transformed edges (0: "
      "first-order exactness only)"},
     {"period_tolerance", CF_PARAM_DOUBLE, OPT(period_tolerance), 0.0, 1.0, NULL,
-     "stop the period corrections below this harmonic part of the transformed edges (relative)"},
+     "stop the period corrections below this harmonic part of the transformed edges (relative; 1e-3 lowers W "
+     "further on knotted and long-handled tubes at 1.0-1.4x the time per step, docs/spin.md)"},
     {"max_integrability_error", CF_PARAM_DOUBLE, OPT(max_integrability_error), 0.0, 1.0, NULL,
      "adaptive: redo a step with half tau while its transformed edges are non-integrable by more than this "
      "(relative; 0: no bound; e.g. 0.04 keeps triangles better at some cost in W)"},

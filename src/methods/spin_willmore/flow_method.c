@@ -459,7 +459,7 @@ static cf_status correct_periods(cf_flow *flow, cfi_spin_state *s, cfi_spin_time
         memcpy(s->period_rho, s->rho, (size_t)nv * sizeof(double));
         cf_status st = cfi_spin_period_correction(flow, s, t);
         if (st != CF_OK) return st;
-        /* the correction's scratch is free again: it keeps lambda for an undo */
+        /* lambda before the corrected rho, for an undo */
         memcpy(s->period_lambda, s->lambda, 4 * (size_t)nv * sizeof(double));
         double eigenvalue = s->diag.eigenvalue;
         st = solve_lambda(flow, s, t);

@@ -20,10 +20,10 @@
  *  - one inverse iteration lambda ~ X(rho)^-1 M 1 changes by
  *    dlambda = -X(rho)^-1 dX lambda (the normalisation only rescales lambda
  *    and P, which vanishes at the solution);
- *  - e~ is quadratic in lambda (dirac.c), so its derivative along dl
- *    (cfi_spin_transform_edges_derivative) is exactly (P(lambda + dl) -
- *    P(lambda - dl)) / 2, the two edge transforms per direction that the
- *    Jacobian took until session 33.
+ *  - e~ is quadratic in lambda (dirac.c), so the periods' derivative along
+ *    dl, summed from the edges' (cfi_spin_transform_edges_derivative),
+ *    equals (P(lambda + dl) - P(lambda - dl)) / 2 exactly: the two edge
+ *    transforms per direction that the Jacobian took until session 33.
  * The Jacobian (3 dim x zcount) costs one pass over the faces and one over
  * the edges for all directions together, one solve with the step's factor
  * for all of them, and the least-squares update one more factorisation.

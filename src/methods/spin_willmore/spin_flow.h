@@ -61,7 +61,7 @@ typedef struct cfi_spin_state {
     double *period_rho;      /* nv: rho before a correction (periods.c) */
     double *period_dx;       /* 4 nv x 3 dim: dX lambda per direction */
     double *period_sol;      /* 4 nv x 3 dim: X^-1 dX lambda */
-    double *period_lambda;   /* 4 nv: lambda +- its change (Jacobian), then the lambda before a correction (undo) */
+    double *period_lambda;   /* 4 nv: the lambda before a correction (undo) */
     double *period_block;    /* CFI_SPIN_PERIOD_BLOCK x 3 (3 dim): the edges' derivative, a block (periods.c) */
     double *period_acc;      /* 3 dim x 3 dim: the Jacobian by form, summed over the blocks */
     double *period_matrix;   /* 3 dim x 3 dim: the periods' Jacobian */

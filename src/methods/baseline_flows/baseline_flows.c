@@ -67,7 +67,20 @@ typedef struct baseline_state {
     const uint8_t *held;    /* boundary=fixed on a mesh with boundary: the held vertices; else NULL */
     double *held_positions; /* 3 nv: the held vertices' positions (written back after each solve) */
     int32_t rise_reported;  /* explicit bi-Laplacian: a stable step raised the energy (said once) */
+    double first_auto_tau;  /* explicit flows, time_step 0: the first automatic step over the area (MCF) or
+                             * its square (bi-Laplacian); 0: none yet */
+    int32_t stall_reported; /* the automatic step so measured fell below CFI_AUTO_STEP_STALL of it (said once) */
 } baseline_state;
+
+/* The automatic explicit step (time_step 0) follows forward Euler's
+ * stability limit, which a collapsing triangle drives toward 0: below this
+ * fraction of the run's first automatic step the flow hardly moves, and
+ * says so once (measured, 10 default steps: hand_1k's explicit MCF takes
+ * 2.4e-8 of its first step by step 10, t 1.04e-5 -> 1.42e-5 over the
+ * last nine; bull_6k, bunny_scan_35k, plane_841 and the bi-Laplacian on
+ * bull, hand, man_slivers_17k fall below 5e-3; the other shared meshes stay
+ * above 0.04). */
+#define CFI_AUTO_STEP_STALL 1e-3
 
 static const char *const mass_choices[] = {"barycentric", "voronoi", NULL};
 static const char *const boundary_choices[] = {"free", "fixed", NULL};
@@ -460,6 +473,9 @@ static cf_status baseline_reset(cf_flow *flow)
     flow->info.energy = energy;
     flow->info.energy_terms[0] = energy;
     flow->converged = 0;
+    /* the automatic step is measured against the new positions' */
+    s->first_auto_tau = 0.0;
+    s->stall_reported = 0;
     return CF_OK;
 }
 
@@ -550,15 +566,19 @@ static cf_status explain_not_posdef(cf_flow *flow)
  * step 5 with 0.9), recomputed every step since L and M change.
  * On a near-equilateral mesh it is about 1/4 of h^2 (MCF); slivers and
  * small triangles lower it, which is what makes explicit flows slow. */
-static double explicit_auto_tau(const baseline_state *s, cf_flow_kind kind)
+static double explicit_auto_tau(const baseline_state *s, cf_flow_kind kind, int32_t *bounding_vertex)
 {
     const cf_sparse *l = s->l;
     double bound = 0.0;
+    *bounding_vertex = -1;
     for (int32_t j = 0; j < l->ncols; ++j) {
         double sum = 0.0;
         for (int32_t p = l->colptr[j]; p < l->colptr[j + 1]; ++p) sum += fabs(l->values[p]);
         double r = sum / s->mass[j]; /* L is symmetric: column sums are row sums */
-        if (r > bound) bound = r;
+        if (r > bound) {
+            bound = r;
+            *bounding_vertex = j;
+        }
     }
     if (!(bound > 0.0)) return 0.0;
     return kind == CF_FLOW_EXPLICIT_MCF ? 0.9 * 2.0 / bound : 0.5 * 2.0 / (bound * bound);
@@ -574,10 +594,28 @@ static cf_status explicit_step(cf_flow *flow, cf_flow_info *info)
     cf_status st = assemble(flow, s);
     if (st != CF_OK) return st;
     if (s->opt.time_step == 0.0) {
-        s->tau = explicit_auto_tau(s, kind_of(flow));
+        int32_t vertex = -1;
+        s->tau = explicit_auto_tau(s, kind_of(flow), &vertex);
         if (!(s->tau > 0.0) || !isfinite(s->tau))
             return cfi_error(flow->ctx, CF_ERR_NUMERICAL, "%s: no stable time step on this mesh (Laplacian bound %g)",
                              flow->method->name, s->tau);
+        /* scale-free: per unit of the current area (MCF) or its square
+         * (bi-Laplacian), so that a surface shrinking as a whole does not
+         * count; the lumped masses sum to the area */
+        double area = 0.0;
+        for (int32_t i = 0; i < nv; ++i) area += s->mass[i];
+        double scaled = s->tau / (bilaplacian ? area * area : area);
+        if (s->first_auto_tau == 0.0) {
+            s->first_auto_tau = scaled;
+        } else if (!s->stall_reported && scaled < CFI_AUTO_STEP_STALL * s->first_auto_tau) {
+            s->stall_reported = 1;
+            cfi_log(flow->ctx, CF_LOG_WARNING,
+                    "iteration %lld: %s: the automatic time step fell to %.3g of the first step's, relative to the "
+                    "surface's size (forward Euler's stability limit, set at vertex %d, where triangles degenerate): "
+                    "the flow hardly moves any more; %s take larger steps (said once)",
+                    (long long)info->iteration, flow->method->name, scaled / s->first_auto_tau, vertex,
+                    bilaplacian ? "implicit-bilaplacian and spin-willmore" : "implicit-mcf and conformal-mcf");
+        }
     }
     double t1 = t0;
     if (!bilaplacian) {

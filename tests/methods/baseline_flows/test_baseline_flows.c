@@ -391,11 +391,6 @@ static void test_conformal_mcf_is_conformal(void)
     cf_context_destroy(&ctx);
 }
 
-/* Without rescaling the implicit flows shrink a closed surface to a point in
- * finite time; the step that takes the area below 1e-6 of the start is
- * refused with a message that says so (before: the next factorisation failed
- * with "not positive definite at column ..."), the last good state is kept,
- * and with rescale=true the same run goes on. */
 /* The warnings the library logs, counted, the last one kept. */
 static int warning_count;
 static char last_warning[1024];
@@ -492,6 +487,11 @@ static void test_auto_step_stall_reported(void)
     cf_context_destroy(&ctx);
 }
 
+/* Without rescaling the implicit flows shrink a closed surface to a point in
+ * finite time; the step that takes the area below 1e-6 of the start is
+ * refused with a message that says so (before: the next factorisation failed
+ * with "not positive definite at column ..."), the last good state is kept,
+ * and with rescale=true the same run goes on. */
 static void test_collapse_reported(void)
 {
     cf_context *ctx = cft_context();

@@ -432,7 +432,8 @@ static int64_t auto_step_stall(cf_context *ctx, const cf_mesh *mesh, double scal
             /* the first step per unit area below 1e-3 of the first one's */
             CHECK(scaled < 1e-3 * first);
             CHECK(before >= 1e-3 * first);
-            CHECK(sscanf(strstr(last_warning, "vertex ") ? strstr(last_warning, "vertex ") : "", "vertex %d", vertex) == 1);
+            const char *named = strstr(last_warning, "vertex ");
+            CHECK(named && sscanf(named, "vertex %d", vertex) == 1);
         }
         before = scaled;
         area = info.area;

@@ -34,6 +34,8 @@ static void usage(FILE *out)
             "               field log_scale, the fitted log conformal factor (OUT.ply: PLY properties;\n"
             "               OUT.obj: side CSVs <stem>.face.csv, <stem>.vertex.csv; OFF cannot hold them)\n"
             "  -f, --force  replace read-only output files\n"
+            "  --no-weld    keep boundary vertices that share a position apart (by default each file's\n"
+            "               seams are welded, as flow does: docs/io.md)\n"
             "  -h, --help   show this help\n\n"
             "Exit status: 0 ok, 1 usage, 2 unreadable / invalid mesh, different connectivity, or an\n"
             "output that cannot or must not be written (checked before reading).\n");
@@ -59,6 +61,7 @@ int cli_compare(int argc, char **argv)
                                              {"ply", required_argument, NULL, 'p'},
                                              {"help", no_argument, NULL, 'h'},
                                              {"force", no_argument, NULL, 'f'},
+                                             {"no-weld", no_argument, NULL, 'w'},
                                              {NULL, 0, NULL, 0}};
     int as_json = 0, c;
     bool force = false;
@@ -69,6 +72,7 @@ int cli_compare(int argc, char **argv)
         case 'j': as_json = 1; break;
         case 'p': ply = optarg; break;
         case 'f': force = true; break;
+        case 'w': cli_set_weld(false); break;
         case 'h': usage(stdout); return CLI_EXIT_OK;
         default: return cli_option_error("compare", c, argv);
         }

@@ -47,6 +47,8 @@ static void usage(FILE *out)
             "  -q, --quiet           no status lines\n"
             "      --report FILE.html  also write the one-file HTML report of the edit (docs/report.md)\n"
             "  -f, --force           replace read-only output files\n"
+            "      --no-weld         keep boundary vertices that share a position apart (by default a\n"
+            "                        file's seams are welded and the mesh has the welded vertices: docs/io.md)\n"
             "  -h, --help            show this help\n\n"
             "Example:\n"
             "  curvflow generate bar -o bar.obj\n"
@@ -85,7 +87,7 @@ static void edit_summary(const cli_flow_job *job, const cf_flow *flow)
 
 int cli_edit(int argc, char **argv)
 {
-    enum { OPT_MASS = 256, OPT_NO_SCALE_FREE, OPT_REPORT, OPT_ARAP_WEIGHTS };
+    enum { OPT_MASS = 256, OPT_NO_SCALE_FREE, OPT_REPORT, OPT_ARAP_WEIGHTS, OPT_NO_WELD };
     static const struct option longopts[] = {
         {"handles", required_argument, NULL, 'H'},    {"energy", required_argument, NULL, 'e'},
         {"lambda", required_argument, NULL, 'L'},     {"iterations", required_argument, NULL, 'n'},
@@ -95,7 +97,7 @@ int cli_edit(int argc, char **argv)
         {"quiet", no_argument, NULL, 'q'},            {"help", no_argument, NULL, 'h'},
         {"anderson", required_argument, NULL, 'a'},   {"force", no_argument, NULL, 'f'},
         {"report", required_argument, NULL, OPT_REPORT}, {"arap-weights", required_argument, NULL, OPT_ARAP_WEIGHTS},
-        {NULL, 0, NULL, 0}};
+        {"no-weld", no_argument, NULL, OPT_NO_WELD},  {NULL, 0, NULL, 0}};
     static cli_flow_job job; /* large: not on the stack */
     memset(&job, 0, sizeof job);
     job.command = "edit";
@@ -132,6 +134,7 @@ int cli_edit(int argc, char **argv)
         case 'o': job.output = optarg; break;
         case 'l': job.log_path = optarg; break;
         case OPT_REPORT: job.report_path = optarg; break;
+        case OPT_NO_WELD: cli_set_weld(false); break;
         case 'q': job.quiet = true; break;
         case 'f': job.force = true; break;
         case 'h': usage(stdout); return CLI_EXIT_OK;

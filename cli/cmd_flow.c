@@ -42,6 +42,8 @@ static void usage(FILE *out)
             "                        input metric, targets, rest areas and the drifts are IN's\n"
             "      --report FILE.html  also write the one-file HTML report of the run (docs/report.md):\n"
             "                        3D view of IN and OUT with per-face Q, energy and residual curves\n"
+"      --no-weld         keep boundary vertices that share a position apart (by default a\n"
+            "                        file's seams are welded and the mesh has the welded vertices: docs/io.md)\n"
             "  -p NAME=FILE, -p NAME=@PROP\n"
             "                        an array parameter (type vertex-scalars, vertex-vectors, face-scalars or\n"
             "                        point-set in --list-params): a file (numbers in vertex/face order; lines\n"
@@ -342,7 +344,7 @@ int cli_flow_execute(const cli_flow_job *job)
 
 int cli_flow(int argc, char **argv)
 {
-    enum { OPT_LIST_METHODS = 256, OPT_LIST_PARAMS, OPT_BOUNDARY_TARGETS, OPT_HANDLES, OPT_REPORT };
+    enum { OPT_LIST_METHODS = 256, OPT_LIST_PARAMS, OPT_BOUNDARY_TARGETS, OPT_HANDLES, OPT_REPORT, OPT_NO_WELD };
     static const struct option longopts[] = {
         {"method", required_argument, NULL, 'm'}, {"steps", required_argument, NULL, 'n'},
         {"time-step", required_argument, NULL, 't'}, {"param", required_argument, NULL, 'p'},
@@ -352,7 +354,7 @@ int cli_flow(int argc, char **argv)
         {"boundary-targets", required_argument, NULL, OPT_BOUNDARY_TARGETS},
         {"handles", required_argument, NULL, OPT_HANDLES}, {"force", no_argument, NULL, 'f'},
         {"report", required_argument, NULL, OPT_REPORT}, {"start", required_argument, NULL, 's'},
-        {NULL, 0, NULL, 0}};
+        {"no-weld", no_argument, NULL, OPT_NO_WELD}, {NULL, 0, NULL, 0}};
     static cli_flow_job job; /* large: not on the stack */
     memset(&job, 0, sizeof job);
     job.command = "flow";
@@ -385,6 +387,7 @@ int cli_flow(int argc, char **argv)
         case OPT_HANDLES: alias_value[0] = optarg; break;
         case OPT_BOUNDARY_TARGETS: alias_value[1] = optarg; break;
         case OPT_REPORT: job.report_path = optarg; break;
+        case OPT_NO_WELD: cli_set_weld(false); break;
         case 'f': job.force = true; break;
         case 'h': usage(stdout); return CLI_EXIT_OK;
         default: return cli_option_error(job.command, c, argv);

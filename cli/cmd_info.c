@@ -21,7 +21,8 @@ static void usage(FILE *out)
             "Prints counts, connected components, boundary loops, genus, Euler characteristic,\n"
             "the validation report, corner angle statistics (min / median / fraction below 10 deg,\n"
             "and per face: median smallest angle, fraction of faces whose smallest angle is below 10 deg),\n"
-            "face area statistics and, for closed meshes, the Willmore energy W/4pi.\n\n"
+            "face area statistics and, for closed meshes, the Willmore energy W/4pi; of a file whose\n"
+            "boundary vertices lie on others (seams), what the other commands weld (docs/io.md).\n\n"
             "  --json       print one JSON object instead of text (for an unreadable file:\n"
             "               {\"file\", \"readable\": false, \"status\", \"error\"})\n"
             "  -h, --help   show this help\n\n"
@@ -117,6 +118,52 @@ static void print_names(const char *label, const json_t *names)
 }
 
 /* The text form of root (mesh NULL: the mesh is invalid, report says why). */
+/* What the other commands' weld makes of the file (cf_mesh_data_weld;
+ * docs/io.md, "Seams"): the file read again and welded, its topology. */
+static cf_status seams_json(cf_context *ctx, const char *path, json_t *root)
+{
+    cf_mesh_data *data = NULL;
+    cf_mesh *mesh = NULL;
+    cf_weld_report r;
+    cf_status st = cf_read_mesh_file(ctx, path, &data);
+    if (st == CF_OK) st = cf_mesh_data_weld(ctx, data, NULL, &r);
+    if (st == CF_OK && r.welded) {
+        cf_mesh_desc desc;
+        cf_mesh_data_desc(data, &desc);
+        st = cf_mesh_create(ctx, &desc, &mesh);
+    }
+    if (st == CF_OK) {
+        json_t *o = json_object();
+        json_object_set_new(o, "coincident_boundary_vertices", json_integer(r.candidates));
+        json_object_set_new(o, "positions", json_integer(r.groups));
+        json_object_set_new(o, "welded_vertices", mesh ? json_integer(r.vertices) : json_null());
+        json_object_set_new(o, "welded_boundary_loops", mesh ? json_integer(cf_mesh_boundary_loop_count(mesh)) : json_null());
+        json_object_set_new(o, "welded_genus", mesh ? json_integer(cf_mesh_genus(mesh)) : json_null());
+        json_object_set_new(o, "refused", r.refused[0] ? json_string(r.refused) : json_null());
+        json_object_set_new(root, "seams", o);
+    }
+    cf_mesh_destroy(&mesh);
+    cf_mesh_data_destroy(&data);
+    return st;
+}
+
+static void print_seams(json_t *root)
+{
+    json_t *o = json_object_get(root, "seams");
+    json_int_t n = json_integer_value(json_object_get(o, "coincident_boundary_vertices"));
+    if (n == 0) return;
+    printf("seams:         %lld boundary vertices lie on others (%lld positions); ", (long long)n,
+           (long long)json_integer_value(json_object_get(o, "positions")));
+    if (json_is_integer(json_object_get(o, "welded_vertices")))
+        printf("flow, spin, edit, compare and report weld them: %lld vertices, %lld boundary loops, genus %lld "
+               "(--no-weld keeps them apart)\n",
+               (long long)json_integer_value(json_object_get(o, "welded_vertices")),
+               (long long)json_integer_value(json_object_get(o, "welded_boundary_loops")),
+               (long long)json_integer_value(json_object_get(o, "welded_genus")));
+    else
+        printf("not welded: %s\n", json_string_value(json_object_get(o, "refused")));
+}
+
 static void print_text(const char *path, const cf_mesh_data *data, const cf_mesh *mesh, const cf_mesh_report *report,
                        json_t *root)
 {
@@ -229,6 +276,10 @@ int cli_info(int argc, char **argv)
     } else {
         code = CLI_EXIT_INPUT;
     }
+    if ((st = seams_json(ctx, path, root)) != CF_OK) {
+        code = cli_fail(ctx, path, st);
+        goto done;
+    }
 
     if (as_json) {
         char *text = json_dumps(root, JSON_INDENT(2) | JSON_REAL_PRECISION(10) | JSON_PRESERVE_ORDER);
@@ -236,6 +287,7 @@ int cli_info(int argc, char **argv)
         free(text);
     } else {
         print_text(path, data, mesh, &report, root);
+        print_seams(root);
     }
     if (!mesh) fprintf(stderr, "curvflow: %s: %s\n", path, report.first_message);
 

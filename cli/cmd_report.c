@@ -535,6 +535,8 @@ static void usage(FILE *out)
             "  -r, --run FILE     run description (JSON: method, parameters, timings)\n"
             "  -t, --title TEXT   page title\n"
             "  -o, --output FILE  the HTML file to write\n"
+            "  --no-weld          keep boundary vertices that share a position apart (by default each\n"
+            "                     file's seams are welded, as flow does: docs/io.md)\n"
             "  -h, --help         show this help\n\n"
             "Exit status: 0 ok, 1 usage, 2 unreadable / invalid input or unwritable output (also when\n"
             "this curvflow was built without the report viewer: docs/report.md).\n");
@@ -623,6 +625,7 @@ int cli_report(int argc, char **argv)
                                              {"title", required_argument, NULL, 't'},
                                              {"output", required_argument, NULL, 'o'},
                                              {"help", no_argument, NULL, 'h'},
+                                             {"no-weld", no_argument, NULL, 'w'},
                                              {NULL, 0, NULL, 0}};
     const char *cmd = "report";
     const char *log_path = NULL, *run_path = NULL, *title = NULL, *output = NULL;
@@ -635,6 +638,7 @@ int cli_report(int argc, char **argv)
         case 'r': run_path = optarg; break;
         case 't': title = optarg; break;
         case 'o': output = optarg; break;
+        case 'w': cli_set_weld(false); break;
         case 'h': usage(stdout); return CLI_EXIT_OK;
         default: return cli_option_error(cmd, c, argv);
         }

@@ -30,17 +30,20 @@ static void usage(FILE *out)
             "                   colours and OBJ materials are kept, as by flow; a PLY also gets rho as\n"
             "                   a vertex property); must not be IN or the rho file\n"
             "  -f, --force      replace a read-only OUT\n"
+            "  --no-weld        keep boundary vertices that share a position apart (by default a file's\n"
+            "                   seams are welded, and OUT and a --rho file have the welded vertices: docs/io.md)\n"
             "Exit status: 0 ok, 1 usage error, 2 invalid input or an output that cannot or must not\n"
             "be written, 3 numerical failure.\n");
 }
 
 int cli_spin(int argc, char **argv)
 {
-    enum { OPT_RHO = 256, OPT_SCALE };
+    enum { OPT_RHO = 256, OPT_SCALE, OPT_NO_WELD };
     static const struct option longopts[] = {
         {"rho", required_argument, NULL, OPT_RHO}, {"scale", required_argument, NULL, OPT_SCALE},
         {"output", required_argument, NULL, 'o'}, {"force", no_argument, NULL, 'f'},
-        {"help", no_argument, NULL, 'h'},         {NULL, 0, NULL, 0}};
+        {"help", no_argument, NULL, 'h'},         {"no-weld", no_argument, NULL, OPT_NO_WELD},
+        {NULL, 0, NULL, 0}};
     const char *cmd = "spin", *out = NULL, *rho_arg = NULL;
     double scale = 1.0;
     bool force = false;
@@ -54,6 +57,7 @@ int cli_spin(int argc, char **argv)
             if (!cli_parse_double(cmd, "--scale", optarg, &scale)) return CLI_EXIT_USAGE;
             break;
         case 'f': force = true; break;
+        case OPT_NO_WELD: cli_set_weld(false); break;
         case 'h': usage(stdout); return CLI_EXIT_OK;
         default: return cli_option_error(cmd, c, argv);
         }
@@ -97,6 +101,7 @@ int cli_spin(int argc, char **argv)
     if (prop) {
         memcpy(rho, prop->values, (size_t)nv * sizeof(double));
     } else {
+        if ((code = cli_check_vertex_file("--rho", rho_arg, in)) != CLI_EXIT_OK) goto done;
         /* the library's reader: lines of any length, '#' comments, BOM, file:line messages */
         st = cf_read_vertex_scalars_file(ctx, rho_arg, nv, rho);
         if (st != CF_OK) {

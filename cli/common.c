@@ -211,9 +211,74 @@ cf_context *cli_context(bool verbose)
     return ctx;
 }
 
+static bool weld_seams = true;
+/* vertices the last announced weld joined (the command's input) */
+static int32_t weld_removed;
+
+void cli_set_weld(bool weld) { weld_seams = weld; }
+
+int cli_check_vertex_file(const char *option, const char *path, const char *mesh_path)
+{
+    if (weld_removed == 0) return CLI_EXIT_OK;
+    fprintf(stderr,
+            "curvflow: %s %s: %s's seams were welded (%d vertices joined), which renumbers its vertices, but a "
+            "file numbers the file's: pass --no-weld, or give the values for the welded mesh\n",
+            option, path, mesh_path, (int)weld_removed);
+    return CLI_EXIT_INPUT;
+}
+
+/* Reads a mesh file and, unless --no-weld, joins its seams
+ * (cf_mesh_data_weld; docs/io.md, "Seams"); `announce`: says on stderr
+ * what it did (once per file: a property read again later is silent). The
+ * mesh every command then sees, and writes, is the welded one. */
+static cf_status read_mesh_data(cf_context *ctx, const char *path, cf_mesh_data **data, bool announce)
+{
+    cf_status st = cf_read_mesh_file(ctx, path, data);
+    if (st != CF_OK || !weld_seams) return st;
+    int32_t before = (*data)->vertex_count;
+    cf_weld_report r;
+    if ((st = cf_mesh_data_weld(ctx, *data, NULL, &r)) != CF_OK) {
+        cf_mesh_data_destroy(data);
+        return st;
+    }
+    if (!announce) return CF_OK;
+    if (r.welded) {
+        weld_removed = r.removed;
+        char differing[96] = "";
+        if (r.differing_properties > 0)
+            snprintf(differing, sizeof differing, "; %d of the joined copies had other property values, the first "
+                     "copy's are kept", (int)r.differing_properties);
+        fprintf(stderr,
+                "curvflow: %s: welded %d seam vertices onto others at the same position on the boundary (texture "
+                "or normal seams, or unshared triangles): %d vertices instead of %d, also in what is written from it%s "
+                "(--no-weld keeps the file's)\n",
+                path, (int)r.removed, (int)r.vertices, (int)before, differing);
+    } else if (r.candidates > 0) {
+        fprintf(stderr,
+                "curvflow: warning: %s: %d boundary vertices lie on others (seams?) but stay apart, since %s; "
+                "the flows move them as free boundaries\n",
+                path, (int)r.candidates, r.refused);
+    }
+    return CF_OK;
+}
+
+/* Reads and validates a mesh: the context's message names the file. */
+static cf_status load_mesh(cf_context *ctx, const char *path, cf_mesh **out, cf_mesh_data **data)
+{
+    *out = NULL;
+    cf_status st = read_mesh_data(ctx, path, data, true);
+    if (st != CF_OK) return st;
+    cf_mesh_desc desc;
+    cf_mesh_data_desc(*data, &desc);
+    if ((st = cf_mesh_create(ctx, &desc, out)) != CF_OK) cf_mesh_data_destroy(data);
+    return st;
+}
+
 int cli_load_mesh(cf_context *ctx, const char *path, cf_mesh **out)
 {
-    cf_status st = cf_load_mesh(ctx, path, out);
+    cf_mesh_data *data = NULL;
+    cf_status st = load_mesh(ctx, path, out, &data);
+    cf_mesh_data_destroy(&data);
     if (st != CF_OK) {
         int code = cli_fail(ctx, path, st);
         return code == CLI_EXIT_USAGE ? CLI_EXIT_INPUT : code;
@@ -224,16 +289,9 @@ int cli_load_mesh(cf_context *ctx, const char *path, cf_mesh **out)
 int cli_load_mesh_properties(cf_context *ctx, const char *path, cf_mesh **out, cli_properties *props)
 {
     memset(props, 0, sizeof *props);
-    *out = NULL;
     cf_mesh_data *data = NULL;
-    cf_status st = cf_read_mesh_file(ctx, path, &data);
-    if (st == CF_OK) {
-        cf_mesh_desc desc;
-        cf_mesh_data_desc(data, &desc);
-        st = cf_mesh_create(ctx, &desc, out);
-    }
+    cf_status st = load_mesh(ctx, path, out, &data);
     if (st != CF_OK) {
-        cf_mesh_data_destroy(&data);
         int code = cli_fail(ctx, path, st);
         return code == CLI_EXIT_USAGE ? CLI_EXIT_INPUT : code;
     }
@@ -863,7 +921,7 @@ static int load_property(cf_context *ctx, const char *mesh_path, const char *opt
                          const char *spec, int32_t count, double *out)
 {
     cf_mesh_data *data = NULL;
-    cf_status st = cf_read_mesh_file(ctx, mesh_path, &data);
+    cf_status st = read_mesh_data(ctx, mesh_path, &data, false); /* welded as the mesh was */
     if (st != CF_OK) return cli_fail(ctx, mesh_path, st) == CLI_EXIT_USAGE ? CLI_EXIT_INPUT : cli_exit_code(st);
     bool face = p->type == CF_PARAM_FACE_SCALARS;
     int components = p->type == CF_PARAM_VERTEX_VECTORS ? 3 : 1;
@@ -978,6 +1036,11 @@ int cli_flow_arrays_load(cf_context *ctx, cli_flow_arrays *arrays, cf_flow_optio
         const cf_param_desc *p = arrays->items[i].param;
         const char *option = arrays->items[i].option, *value = arrays->items[i].value;
         cf_status st = CF_OK;
+        /* a property of IN was welded with it; faces keep their order */
+        if (value[0] != '@' && p->type != CF_PARAM_FACE_SCALARS) {
+            int code = cli_check_vertex_file(option, value, mesh_path);
+            if (code != CLI_EXIT_OK) return code;
+        }
         if (p->type == CF_PARAM_POINT_SETS && value[0] == '@') {
             int code = load_point_sets_property(ctx, mesh_path, option, p, value, mesh,
                                                 start ? start : cf_mesh_positions(mesh), &arrays->items[i].set);

@@ -71,9 +71,17 @@ bool cli_threads_from_environment(int32_t *threads);
  * solver threads of CURVFLOW_THREADS. */
 cf_context *cli_context(bool verbose);
 
-/* Loads a validated mesh; on failure prints the message and returns the
- * exit code (2), else 0. */
+/* Loads a validated mesh, its seams welded (cli_set_weld); on failure
+ * prints the message and returns the exit code (2), else 0. */
 int cli_load_mesh(cf_context *ctx, const char *path, cf_mesh **out);
+
+/* Whether cli_load_mesh and cli_load_mesh_properties weld a file's seams
+ * (cf_mesh_data_weld; true unless a command's --no-weld). */
+void cli_set_weld(bool weld);
+/* A file of per-vertex values or vertex numbers (`option` PATH) for the
+ * mesh file mesh_path: exit 2 with a message if the weld renumbered that
+ * mesh's vertices, else 0. */
+int cli_check_vertex_file(const char *option, const char *path, const char *mesh_path);
 
 /* The scalar vertex and face properties of a mesh file (a PLY's colours,
  * quality, labels), kept to be written with a result of the same

@@ -58,6 +58,10 @@ int main(int argc, char **argv)
         "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nend_header\n0\n",
         "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
         "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 4\n",
+        /* a tetrahedron as unshared triangles (its seams weld), and a bow tie (they do not) */
+        "v 0 0 0\nv 0 1 0\nv 1 0 0\nv 0 0 0\nv 1 0 0\nv 0 0 1\nv 0 0 0\nv 0 0 1\nv 0 1 0\n"
+        "v 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 4 5 6\nf 7 8 9\nf 10 11 12\n",
+        "OFF\n6 2 0\n0 0 0\n1 0 0\n0 1 0\n0 0 0\n-1 0 0\n0 -1 0\n3 0 1 2\n3 3 4 5\n",
         "{\"handles\": [{\"vertices\": [0, 1], \"translation\": [0, 0, 1]}]}",
         "<svg><path d=\"M 0 0 L 1 0 L 1 1 Z\"/></svg>",
     };

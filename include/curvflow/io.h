@@ -98,6 +98,33 @@ CF_API cf_status cf_mesh_data_desc(const cf_mesh_data *data, cf_mesh_desc *desc)
 CF_API const cf_mesh_property *cf_mesh_data_vertex_property(const cf_mesh_data *data, const char *name);
 CF_API const cf_mesh_property *cf_mesh_data_face_property(const cf_mesh_data *data, const char *name);
 
+/* What cf_mesh_data_weld found and did. */
+typedef struct cf_weld_report {
+    int32_t candidates;     /* boundary vertices at exactly the position of another boundary vertex */
+    int32_t groups;         /* positions they share */
+    int32_t welded;         /* 1: the data was changed */
+    int32_t removed;        /* vertices joined onto an earlier one (0 unless welded) */
+    int32_t vertices;       /* vertex count of the data afterwards */
+    int32_t differing_properties; /* removed vertices whose vertex properties differed from the kept copy's */
+    char refused[256];      /* why candidates were left apart ("" if welded or none), e.g.
+                             * "after welding, vertex 4 is non-manifold (...)" */
+} cf_weld_report;
+
+/* Joins the seams of a file: every boundary vertex (on an edge of one face)
+ * that has exactly, bit for bit, the position of another boundary vertex is
+ * replaced by the one of lowest index, and the vertices are renumbered in
+ * their order (docs/io.md, "Seams"). Exporters split vertices where a
+ * per-vertex attribute changes (texture seams, hard normals, unshared
+ * triangles), and a flow would treat such cuts as free boundaries. Per-vertex
+ * texture coordinates become per-corner ones (each corner keeps its own);
+ * a vertex property keeps the value of the kept copy. Welds only if the
+ * result is a valid mesh (cf_mesh_validate): otherwise nothing changes and
+ * report->refused says why. new_index (may be NULL; vertex_count entries,
+ * the count before) receives the new index of every vertex. CF_OK whether
+ * or not it welded; CF_ERR_NOMEM leaves the data unchanged. */
+CF_API cf_status cf_mesh_data_weld(cf_context *ctx, cf_mesh_data *data, int32_t *new_index,
+                                   cf_weld_report *report);
+
 /* Reads a mesh file; the format comes from the extension. Statuses:
  * CF_ERR_IO (cannot open/read), CF_ERR_PARSE (malformed content),
  * CF_ERR_TRUNCATED (file ends early), CF_ERR_INDEX_RANGE (a face index

@@ -63,6 +63,11 @@ class MeshReport(Structure):
                 ("first_status", c_int), ("first_message", c_char * 256)]
 
 
+class WeldReport(Structure):
+    _fields_ = [("candidates", c_int32), ("groups", c_int32), ("welded", c_int32), ("removed", c_int32),
+                ("vertices", c_int32), ("differing_properties", c_int32), ("refused", c_char * 256)]
+
+
 class Field(Structure):
     _fields_ = [("name", c_char_p), ("location", c_int), ("values", c_void_p)]
 
@@ -266,6 +271,7 @@ def _declare(lib):
     # io.h
     f("cf_mesh_data_destroy", None, POINTER(POINTER(MeshData)))
     f("cf_mesh_data_desc", S, POINTER(MeshData), POINTER(MeshDesc))
+    f("cf_mesh_data_weld", S, c_void_p, POINTER(MeshData), c_void_p, POINTER(WeldReport))
     f("cf_read_mesh_file", S, P, c_char_p, POINTER(POINTER(MeshData)))
     f("cf_write_options_default", None, POINTER(WriteOptions))
     f("cf_write_mesh_file_ex", S, P, c_char_p, P, P, POINTER(Field), I32, POINTER(WriteOptions))

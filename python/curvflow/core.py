@@ -589,12 +589,24 @@ def compare(V0, V1, F):
 
 # ---- files -----------------------------------------------------------------------
 
-def _read(ctx, path):
+def _read(ctx, path, weld=False):
+    """The file's cf_mesh_data; with weld, its seams welded (cf_mesh_data_weld,
+    docs/io.md "Seams") and the weld's report as the second value."""
     data = POINTER(_lib.MeshData)()
     st = ctx.L.cf_read_mesh_file(ctx.ptr, os.fsencode(path), byref(data))
     ctx.check(st, os.fspath(path))
     ctx.defer(ctx.L.cf_mesh_data_destroy, data)
-    return data.contents
+    report = _lib.WeldReport()
+    if weld:
+        ctx.check(ctx.L.cf_mesh_data_weld(ctx.ptr, data, None, byref(report)), os.fspath(path))
+    return (data.contents, report) if weld else data.contents
+
+
+def _weld_dict(report):
+    return {"coincident_boundary_vertices": report.candidates, "positions": report.groups,
+            "welded": bool(report.welded), "removed": report.removed, "vertices": report.vertices,
+            "differing_properties": report.differing_properties,
+            "refused": report.refused.decode("utf-8", "replace") or None}
 
 
 def _names(d):
@@ -626,7 +638,7 @@ def _extras(d):
                                if d.face_materials else None)}
 
 
-def load(path, validate=True):
+def load(path, validate=True, weld=True):
     """Reads an OBJ, OFF or PLY file (format from the extension).
 
     Returns (V, F, extras): V (n, 3) float64, F (m, 3) int32 (polygons
@@ -643,9 +655,17 @@ def load(path, validate=True):
     it (InvalidMeshError naming the file and element, e.g. a non-manifold
     edge); validate=False returns what the file holds (syntax, index range
     and finite coordinates are always checked). Unreadable files raise
-    MeshIOError / MeshFormatError with the file and line."""
+    MeshIOError / MeshFormatError with the file and line.
+    With weld=True (default, as the command-line tool) boundary vertices at
+    exactly the position of another boundary vertex (texture or normal seams,
+    unshared triangles) are joined when the result is a valid mesh, and the
+    arrays are the welded mesh's (per-vertex uv become per-corner; docs/io.md,
+    "Seams"); extras["weld"] says what was found and done (keys
+    coincident_boundary_vertices, positions, welded, removed, vertices,
+    differing_properties, refused: why a weld was left undone, or None).
+    weld=False keeps the file's vertices."""
     with _Context() as ctx:
-        d = _read(ctx, path)
+        d, report = _read(ctx, path, weld=True) if weld else (_read(ctx, path), None)
         if validate:
             desc = _lib.MeshDesc()
             ctx.L.cf_mesh_data_desc(byref(d), byref(desc))
@@ -654,7 +674,9 @@ def load(path, validate=True):
             ctx.defer(ctx.L.cf_mesh_destroy, m)
         V = _copy_out(d.positions, (d.vertex_count, 3))
         F = _copy_out(d.triangles, (d.face_count, 3))
-        return V, F, _extras(d)
+        extras = _extras(d)
+        extras["weld"] = _weld_dict(report) if report is not None else None
+        return V, F, extras
 
 
 _PLY_ENCODINGS = {"binary": 0, "binary_little_endian": 0, "binary_big_endian": 1, "ascii": 2}
@@ -809,12 +831,32 @@ def loop_subdivide(V, F, levels=1):
         return _copy_out(ctx.L.cf_mesh_positions(out), (nv, 3)), _copy_out(ctx.L.cf_mesh_triangles(out), (nf, 3))
 
 
+def _seams(ctx, path):
+    """What load() and the commands weld in the file, as `curvflow info --json`
+    reports it ("seams")."""
+    d, report = _read(ctx, path, weld=True)
+    out = {"coincident_boundary_vertices": report.candidates, "positions": report.groups,
+           "welded_vertices": None, "welded_boundary_loops": None, "welded_genus": None,
+           "refused": report.refused.decode("utf-8", "replace") or None}
+    if report.welded:
+        desc = _lib.MeshDesc()
+        ctx.L.cf_mesh_data_desc(byref(d), byref(desc))
+        m = c_void_p()
+        ctx.check(ctx.L.cf_mesh_create(ctx.ptr, byref(desc), byref(m)), os.fspath(path))
+        ctx.defer(ctx.L.cf_mesh_destroy, m)
+        out.update(welded_vertices=report.vertices, welded_boundary_loops=ctx.L.cf_mesh_boundary_loop_count(m),
+                   welded_genus=ctx.L.cf_mesh_genus(m))
+    return out
+
+
 def info(V_or_path, F=None):
     """Mesh summary as `curvflow info --json`: counts, texture coordinates,
     (for a file) the names of its vertex and face properties and its OBJ
     material libraries and names, the validation report (every defect counted), and for a valid mesh
     edges, components, boundary loops, Euler characteristic, genus, corner
-    angle and face area statistics, W/4pi and volume (closed meshes).
+    angle and face area statistics, W/4pi and volume (closed meshes); for a
+    file also "seams": its boundary vertices that lie on others and what
+    load() and the commands weld of them (docs/io.md, "Seams").
     Accepts a file path (the file may hold an invalid mesh: the report says
     why) or arrays V, F. Never raises for an invalid mesh; raises for an
     unreadable file."""
@@ -832,6 +874,7 @@ def info(V_or_path, F=None):
             out["texture_coordinates"] = ("none" if d.uv_count == 0 else
                                           "per-corner" if d.uv_triangles else "per-vertex")
             out.update(_names(d))  # names only: no property values copied
+            out["seams"] = _seams(ctx, path)
         else:
             V, Fa = _vertices(V_or_path), _faces(F)
             desc = _desc(V, Fa)

@@ -1,0 +1,99 @@
+"""Seams (docs/io.md): a mesh file whose boundary vertices lie on others, as
+exporters write texture seams and unshared triangles, is welded by load()
+and by every command, and flows as the closed surface it describes;
+--no-weld / weld=False keep the file's vertices; files numbered for the
+file's vertices are refused once the weld renumbered them."""
+import json
+
+import numpy as np
+
+import curvflow
+from conftest import run_cli
+
+
+def _seam_copy(V, F):
+    """V, F cut along x = 0: the vertices used on both sides get copies,
+    appended after the originals and used by the faces with x > 0."""
+    right = V[F].mean(axis=1)[:, 0] > 0
+    both = np.zeros(len(V), dtype=int)
+    np.add.at(both, F[right].ravel(), 1)
+    left_used = np.zeros(len(V), dtype=bool)
+    left_used[F[~right].ravel()] = True
+    cut = np.flatnonzero((both > 0) & left_used)
+    index = np.arange(len(V))
+    index[cut] = len(V) + np.arange(len(cut))
+    F2 = F.copy()
+    F2[right] = index[F[right]]
+    return np.vstack([V, V[cut]]), F2, len(cut)
+
+
+def _write_obj(path, V, F):
+    with open(path, "w") as fp:
+        fp.writelines("v %.17g %.17g %.17g\n" % tuple(v) for v in V)
+        fp.writelines("f %d %d %d\n" % tuple(f + 1) for f in F)
+
+
+def test_seam_flows_as_the_closed_surface(cli, meshes, tmp_path):
+    V, F, _ = curvflow.load(meshes["bumpy"], weld=False)
+    V2, F2, copies = _seam_copy(V, F)
+    assert copies > 20
+    seam, plain = tmp_path / "seam.obj", tmp_path / "plain.obj"
+    _write_obj(seam, V2, F2)
+    _write_obj(plain, V, F)
+    # as the file says: two boundary loops; what the commands make of it: closed
+    js = json.loads(run_cli(cli, "info", seam, "--json").stdout)
+    assert js["boundary_loops"] == 2 and js["vertices"] == len(V2)
+    assert js["seams"] == {"coincident_boundary_vertices": 2 * copies, "positions": copies,
+                           "welded_vertices": len(V), "welded_boundary_loops": 0, "welded_genus": 0,
+                           "refused": None}
+    assert curvflow.info(seam)["seams"] == js["seams"]
+    # the copies come last, so the welded file is the plain one vertex for vertex
+    Vw, Fw, ex = curvflow.load(seam)
+    assert np.array_equal(Vw, V) and np.array_equal(Fw, F)
+    assert ex["weld"]["welded"] and ex["weld"]["removed"] == copies and ex["weld"]["refused"] is None
+    assert curvflow.load(seam, weld=False)[0].shape == V2.shape
+    proc = run_cli(cli, "flow", seam, "-o", tmp_path / "a.obj", "--method", "spin-willmore", "-n", "3", "-q")
+    assert "welded %d seam vertices" % copies in proc.stderr and "%d vertices instead of %d" % (len(V), len(V2)) \
+        in proc.stderr
+    run_cli(cli, "flow", plain, "-o", tmp_path / "b.obj", "--method", "spin-willmore", "-n", "3", "-q")
+    assert (tmp_path / "a.obj").read_bytes() == (tmp_path / "b.obj").read_bytes()
+    # --no-weld: the cut is a free boundary, and the flow opens it
+    run_cli(cli, "flow", seam, "-o", tmp_path / "c.obj", "--method", "spin-willmore", "-n", "3", "-q", "--no-weld")
+    Vc, Fc, _ = curvflow.load(tmp_path / "c.obj", weld=False)
+    assert len(Vc) == len(V2)
+    gap = np.linalg.norm(Vc[len(V):] - Vc[_originals(F, F2, len(V))], axis=1)
+    assert gap.max() > 1e-3
+
+
+def _originals(F, F2, nv):
+    """For each copy (index >= nv in F2), the vertex it copies (in F)."""
+    orig = np.empty(F2.max() + 1 - nv, dtype=int)
+    mask = F2 >= nv
+    orig[F2[mask] - nv] = F[mask]
+    return orig
+
+
+def test_soup_welds_and_files_for_the_file_are_refused(cli, meshes, tmp_path):
+    V, F, _ = curvflow.load(meshes["icosphere"], weld=False)
+    soup = tmp_path / "soup.obj"
+    _write_obj(soup, V[F.ravel()], np.arange(3 * len(F)).reshape(-1, 3))
+    info = curvflow.info(soup)
+    assert info["boundary_loops"] == len(F) and info["seams"]["welded_vertices"] == len(V)
+    assert info["seams"]["welded_boundary_loops"] == 0
+    run_cli(cli, "flow", soup, "-o", tmp_path / "s.obj", "--method", "conformal-mcf", "-n", "2", "-q")
+    run_cli(cli, "flow", meshes["icosphere"], "-o", tmp_path / "i.obj", "--method", "conformal-mcf", "-n", "2", "-q")
+    ws, wi = (curvflow.info(tmp_path / n)["willmore_over_4pi"] for n in ("s.obj", "i.obj"))
+    assert abs(ws - wi) < 1e-9 * wi
+    # a rho file of the soup's 3 x faces values numbers the file's vertices
+    rho = tmp_path / "rho.txt"
+    rho.write_text("0.1\n" * (3 * len(F)))
+    proc = run_cli(cli, "spin", soup, "--rho", rho, "-o", tmp_path / "r.obj", check=False)
+    assert proc.returncode == 2 and "seams were welded (%d vertices joined)" % (3 * len(F) - len(V)) in proc.stderr
+    assert not (tmp_path / "r.obj").exists()
+    run_cli(cli, "spin", soup, "--rho", rho, "-o", tmp_path / "r.obj", "--no-weld")
+    # so does a handle file
+    handles = tmp_path / "h.json"
+    handles.write_text(json.dumps({"sets": [{"name": "base", "vertices": [0, 1, 2], "fixed": True}]}))
+    proc = run_cli(cli, "edit", soup, "--handles", handles, "-o", tmp_path / "e.obj", "-n", "2", check=False)
+    assert proc.returncode == 2 and "--handles %s: " % handles in proc.stderr and "--no-weld" in proc.stderr
+    assert not (tmp_path / "e.obj").exists()

@@ -125,6 +125,16 @@ typedef struct cf_weld_report {
 CF_API cf_status cf_mesh_data_weld(cf_context *ctx, cf_mesh_data *data, int32_t *new_index,
                                    cf_weld_report *report);
 
+/* The same weld for arrays (a mesh not read from a file, e.g. the Python
+ * package's weld()): fills new_index (vertex_count entries) with the new
+ * index of every vertex, the identity when nothing is welded. A vertex v
+ * is kept when new_index[v] equals the number of vertices kept before it;
+ * the welded triangles are new_index[triangles]. The report as above
+ * (differing_properties 0: arrays carry no properties). CF_ERR_INDEX_RANGE
+ * for an index outside [0, vertex_count). */
+CF_API cf_status cf_weld_map(cf_context *ctx, int32_t vertex_count, const double *positions, int32_t face_count,
+                             const int32_t *triangles, int32_t *new_index, cf_weld_report *report);
+
 /* Reads a mesh file; the format comes from the extension. Statuses:
  * CF_ERR_IO (cannot open/read), CF_ERR_PARSE (malformed content),
  * CF_ERR_TRUNCATED (file ends early), CF_ERR_INDEX_RANGE (a face index

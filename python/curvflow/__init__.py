@@ -19,7 +19,7 @@ from . import _blas_kernels, _lib
 _blas_kernels.choose_before_loading(_lib.first_candidate())
 
 from .core import (check_params, compare, edit, flow, info, load, loop_subdivide, method_params, methods, read_log,
-                   save, spin, write_log, write_text_atomic)
+                   save, spin, weld, write_log, write_text_atomic)
 from .errors import (CancelledError, CurvflowError, CurvflowMemoryError, InvalidMeshError, LibraryNotFoundError,
                      MeshFormatError, MeshIOError, NumericalError, UnsupportedError, UsageError)
 from .report import report
@@ -39,7 +39,7 @@ def library_version():
     return _lib.lib().cf_version_string().decode()
 
 
-__all__ = ["flow", "edit", "spin", "compare", "load", "save", "info", "loop_subdivide", "methods", "method_params",
-           "check_params", "write_log", "read_log", "write_text_atomic", "report", "library_path", "library_version",
+__all__ = ["flow", "edit", "spin", "compare", "load", "save", "info", "weld", "loop_subdivide", "methods",
+           "method_params", "check_params", "write_log", "read_log", "write_text_atomic", "report", "library_path", "library_version",
            "CurvflowError", "UsageError", "InvalidMeshError", "MeshFormatError", "MeshIOError", "UnsupportedError",
            "NumericalError", "CurvflowMemoryError", "CancelledError", "LibraryNotFoundError"]

@@ -812,6 +812,29 @@ def read_log(path):
 
 # ---- info ------------------------------------------------------------------------
 
+def weld(V, F):
+    """Joins the seams of arrays as load() does those of a file (docs/io.md,
+    "Seams"): every boundary vertex at exactly the position of another
+    boundary vertex is replaced by the one of lowest index, if the result is
+    a valid mesh. Returns (V, F, index, report): the welded arrays, index
+    (n,) int32 the new index of every input vertex (per-vertex data d of the
+    input becomes d[kept] with kept = the first vertex of each new index, and
+    per-corner data keeps its corners), and report the dict of
+    load()'s extras["weld"]. Nothing to weld, or a weld refused (report
+    "refused"), returns copies of V and F with the identity index."""
+    V = _vertices(V)
+    F = _faces(F)
+    index = np.empty(V.shape[0], dtype=np.int32)
+    report = _lib.WeldReport()
+    with _Context() as ctx:
+        ctx.check(ctx.L.cf_weld_map(ctx.ptr, V.shape[0], V.ctypes.data, F.shape[0], F.ctypes.data,
+                                    index.ctypes.data, byref(report)), "weld")
+    # kept vertices take the next index in order; a joined one an earlier one
+    before = np.concatenate([[-1], np.maximum.accumulate(index)[:-1]]) if len(index) else index
+    kept = index == before + 1
+    return V[kept].copy(), index[F], index, _weld_dict(report)
+
+
 def loop_subdivide(V, F, levels=1):
     """Loop subdivision (Loop 1987; boundary rules of Hoppe et al. 1994),
     `levels` times (1 to 10; each multiplies the face count by 4): returns

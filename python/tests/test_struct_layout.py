@@ -27,3 +27,18 @@ def test_flow_options_default_fits():
     for kind in range(len(curvflow.methods())):
         tail = guarded(_lib.FlowOptions, lambda p: _lib.lib().cf_flow_options_default(kind, p))
         assert tail == b"\xab" * 256, kind
+
+
+def test_weld_report_fits():
+    """cf_weld_map clears the whole report (memset) before filling it."""
+    V = (ctypes.c_double * 9)(0, 0, 0, 1, 0, 0, 0, 1, 0)
+    F = (ctypes.c_int32 * 3)(0, 1, 2)
+    index = (ctypes.c_int32 * 3)()
+    ctx = ctypes.c_void_p()
+    L = _lib.lib()
+    assert L.cf_context_create(ctypes.byref(ctx)) == 0
+    try:
+        tail = guarded(_lib.WeldReport, lambda p: L.cf_weld_map(ctx, 3, V, 1, F, index, p))
+    finally:
+        L.cf_context_destroy(ctypes.byref(ctx))
+    assert tail == b"\xab" * 256

@@ -6,6 +6,7 @@ file's vertices are refused once the weld renumbered them."""
 import json
 
 import numpy as np
+import pytest
 
 import curvflow
 from conftest import run_cli
@@ -97,3 +98,21 @@ def test_soup_welds_and_files_for_the_file_are_refused(cli, meshes, tmp_path):
     proc = run_cli(cli, "edit", soup, "--handles", handles, "-o", tmp_path / "e.obj", "-n", "2", check=False)
     assert proc.returncode == 2 and "--handles %s: " % handles in proc.stderr and "--no-weld" in proc.stderr
     assert not (tmp_path / "e.obj").exists()
+
+
+def test_weld_arrays(meshes):
+    """weld() on arrays is load()'s weld: the soup's arrays give the welded
+    file's; a bow tie is refused with the reason; bad indices raise."""
+    V, F, _ = curvflow.load(meshes["icosphere"], weld=False)
+    Vs, Fs = V[F.ravel()], np.arange(3 * len(F)).reshape(-1, 3)
+    V2, F2, index, report = curvflow.weld(Vs, Fs)
+    assert report["welded"] and report["vertices"] == len(V) and report["removed"] == 3 * len(F) - len(V)
+    assert V2.shape == V.shape and F2.dtype == np.int32 and np.array_equal(F2, index[Fs])
+    assert np.array_equal(V2[F2], Vs[Fs])  # every corner where it was
+    assert curvflow.info(V2, F2)["boundary_loops"] == 0 and curvflow.info(V2, F2)["genus"] == 0
+    bowtie = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 0], [-1, 0, 0], [0, -1, 0]], dtype=float)
+    V3, F3, index3, report3 = curvflow.weld(bowtie, [[0, 1, 2], [3, 4, 5]])
+    assert not report3["welded"] and report3["coincident_boundary_vertices"] == 2
+    assert "separate fans" in report3["refused"] and np.array_equal(index3, np.arange(6)) and len(V3) == 6
+    with pytest.raises(curvflow.InvalidMeshError, match="face 1: vertex index 9 out of range"):
+        curvflow.weld(bowtie, [[0, 1, 2], [3, 4, 9]])

@@ -38,17 +38,18 @@ static int by_key(const void *pa, const void *pb)
 }
 
 /* Flags the vertices of edges used by exactly one face: the boundary of
- * the surface the file describes, before any check of its connectivity
- * (the readers checked the index range). */
-static cf_status mark_boundary(cf_context *ctx, const cf_mesh_data *d, uint8_t *on_boundary)
+ * the surface the triangles describe, before any check of their
+ * connectivity (the caller checked the index range). */
+static cf_status mark_boundary(cf_context *ctx, int32_t vertex_count, int32_t face_count, const int32_t *triangles,
+                               uint8_t *on_boundary)
 {
-    size_t nh = 3 * (size_t)d->face_count;
+    size_t nh = 3 * (size_t)face_count;
     if (nh == 0) return CF_OK;
     int64_t *keys = CFI_ALLOC(ctx, int64_t, nh);
     if (!keys) return cfi_error(ctx, CF_ERR_NOMEM, "weld: out of memory for %zu edges", nh);
-    int64_t nv = d->vertex_count;
+    int64_t nv = vertex_count;
     for (size_t h = 0; h < nh; ++h) {
-        int64_t a = d->triangles[h], b = d->triangles[h - h % 3 + (h % 3 + 1) % 3];
+        int64_t a = triangles[h], b = triangles[h - h % 3 + (h % 3 + 1) % 3];
         keys[h] = a < b ? a * nv + b : b * nv + a;
     }
     qsort(keys, nh, sizeof *keys, by_key);
@@ -60,6 +61,106 @@ static cf_status mark_boundary(cf_context *ctx, const cf_mesh_data *d, uint8_t *
     return CF_OK;
 }
 
+/* Groups the boundary vertices by exact position: keep[v] is the lowest
+ * index at v's position (v itself when v is alone there or not on the
+ * boundary). */
+static cf_status group_candidates(cf_context *ctx, int32_t nv, const double *positions, int32_t nf,
+                                  const int32_t *triangles, int32_t *keep, cf_weld_report *report)
+{
+    uint8_t *on_boundary = CFI_ALLOC(ctx, uint8_t, nv);
+    candidate *candidates = CFI_ALLOC(ctx, candidate, nv);
+    cf_status st = on_boundary && candidates ? mark_boundary(ctx, nv, nf, triangles, on_boundary)
+                                             : cfi_error(ctx, CF_ERR_NOMEM, "weld: out of memory for %d vertices", nv);
+    if (st == CF_OK) {
+        int32_t nc = 0;
+        for (int32_t v = 0; v < nv; ++v) {
+            keep[v] = v;
+            if (!on_boundary[v]) continue;
+            memcpy(candidates[nc].x, positions + 3 * (size_t)v, sizeof candidates[nc].x);
+            candidates[nc++].vertex = v;
+        }
+        qsort(candidates, (size_t)nc, sizeof *candidates, by_position_then_index);
+        /* each group of equal positions joins its lowest index (sorted first) */
+        for (int32_t i = 0, j; i < nc; i = j) {
+            const double *x = candidates[i].x;
+            for (j = i + 1; j < nc; ++j) {
+                const double *y = candidates[j].x;
+                if (x[0] != y[0] || x[1] != y[1] || x[2] != y[2]) break;
+                keep[candidates[j].vertex] = candidates[i].vertex;
+            }
+            if (j - i > 1) report->groups++, report->candidates += j - i;
+        }
+    }
+    CFI_FREE(ctx, on_boundary, nv);
+    CFI_FREE(ctx, candidates, nv);
+    return st;
+}
+
+/* The welded positions and triangles for the map: a vertex is kept when its
+ * new index is the next one (representatives come first and are numbered
+ * in order; a joined vertex maps to an earlier one). */
+static void apply_map(int32_t nv, const double *positions, int32_t nf, const int32_t *triangles,
+                      const int32_t *index, double *welded_positions, int32_t *welded_triangles)
+{
+    for (int32_t v = 0, n = 0; v < nv; ++v)
+        if (index[v] == n) memcpy(welded_positions + 3 * (size_t)n++, positions + 3 * (size_t)v, 3 * sizeof(double));
+    for (size_t c = 0; c < 3 * (size_t)nf; ++c) welded_triangles[c] = index[triangles[c]];
+}
+
+cf_status cf_weld_map(cf_context *ctx, int32_t vertex_count, const double *positions, int32_t face_count,
+                      const int32_t *triangles, int32_t *new_index, cf_weld_report *report)
+{
+    if (!ctx) return CF_ERR_INVALID_ARG;
+    if (!report || !new_index || vertex_count < 0 || face_count < 0 || (vertex_count > 0 && !positions) ||
+        (face_count > 0 && !triangles))
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "cf_weld_map: missing array or negative count");
+    memset(report, 0, sizeof *report);
+    int32_t nv = vertex_count, nf = face_count;
+    report->vertices = nv;
+    for (int32_t v = 0; v < nv; ++v) new_index[v] = v;
+    for (size_t c = 0; c < 3 * (size_t)nf; ++c)
+        if (triangles[c] < 0 || triangles[c] >= nv)
+            return cfi_error(ctx, CF_ERR_INDEX_RANGE, "face %d: vertex index %d out of range [0, %d)",
+                             (int)(c / 3), (int)triangles[c], (int)nv);
+    if (nv == 0) return CF_OK;
+    int32_t *keep = CFI_ALLOC(ctx, int32_t, nv), *index = CFI_ALLOC(ctx, int32_t, nv), n = 0;
+    double *welded_positions = NULL;
+    int32_t *welded_triangles = NULL;
+    cf_status st = keep && index ? group_candidates(ctx, nv, positions, nf, triangles, keep, report)
+                                 : cfi_error(ctx, CF_ERR_NOMEM, "weld: out of memory for %d vertices", nv);
+    if (st != CF_OK || report->groups == 0) goto done;
+    for (int32_t v = 0; v < nv; ++v) index[v] = keep[v] == v ? n++ : index[keep[v]]; /* keep[v] <= v */
+    /* the welded surface must be one a mesh can be built from; if not, the
+     * candidates stay apart and the report says why */
+    welded_positions = CFI_ALLOC(ctx, double, 3 * (size_t)n);
+    welded_triangles = CFI_ALLOC(ctx, int32_t, nf > 0 ? 3 * (size_t)nf : 1);
+    if (!welded_positions || !welded_triangles) {
+        st = cfi_error(ctx, CF_ERR_NOMEM, "weld: out of memory for %d vertices", n);
+        goto done;
+    }
+    apply_map(nv, positions, nf, triangles, index, welded_positions, welded_triangles);
+    cf_mesh_desc desc = {.vertex_count = n, .positions = welded_positions, .face_count = nf,
+                         .triangles = welded_triangles};
+    cf_mesh_report check;
+    if ((st = cf_mesh_validate(ctx, &desc, &check)) != CF_OK) goto done;
+    if (check.first_status != CF_OK) {
+        /* the validation message fits the report's with the prefix cut short */
+        snprintf(report->refused, sizeof report->refused, "after welding, %.*s",
+                 (int)(sizeof report->refused - sizeof "after welding, "), check.first_message);
+        goto done;
+    }
+    memcpy(new_index, index, (size_t)nv * sizeof(int32_t));
+    report->welded = 1;
+    report->removed = nv - n;
+    report->vertices = n;
+done:
+    CFI_FREE(ctx, keep, nv);
+    CFI_FREE(ctx, index, nv);
+    CFI_FREE(ctx, welded_positions, 3 * (size_t)n);
+    CFI_FREE(ctx, welded_triangles, nf > 0 ? 3 * (size_t)nf : 1);
+    return st;
+}
+
 /* The arrays a weld replaces, made in full before any is swapped in, so
  * that running out of memory leaves the data as it was. */
 typedef struct welded_arrays {
@@ -67,6 +168,7 @@ typedef struct welded_arrays {
     int32_t *triangles;
     int32_t *uv_triangles;   /* per-vertex uv become per-corner (NULL otherwise) */
     double **properties;     /* one array per vertex property */
+    int32_t *first;          /* the kept vertex of each new index */
 } welded_arrays;
 
 static void free_welded(cf_context *ctx, welded_arrays *w, int32_t n, const cf_mesh_data *d)
@@ -75,20 +177,22 @@ static void free_welded(cf_context *ctx, welded_arrays *w, int32_t n, const cf_m
     CFI_FREE(ctx, w->positions, 3 * (size_t)n);
     CFI_FREE(ctx, w->triangles, 3 * nf);
     CFI_FREE(ctx, w->uv_triangles, 3 * nf);
+    CFI_FREE(ctx, w->first, n);
     if (w->properties) {
         for (int32_t p = 0; p < d->vertex_property_count; ++p) CFI_FREE(ctx, w->properties[p], n);
         CFI_FREE(ctx, w->properties, d->vertex_property_count);
     }
 }
 
-static cf_status make_welded(cf_context *ctx, const cf_mesh_data *d, const int32_t *keep, const int32_t *index,
-                             int32_t n, welded_arrays *w, int32_t *differing)
+static cf_status make_welded(cf_context *ctx, const cf_mesh_data *d, const int32_t *index, int32_t n,
+                             welded_arrays *w, int32_t *differing)
 {
     int32_t nv = d->vertex_count;
     size_t nf = (size_t)d->face_count;
     memset(w, 0, sizeof *w);
     w->positions = CFI_ALLOC(ctx, double, 3 * (size_t)n);
     w->triangles = CFI_ALLOC(ctx, int32_t, 3 * nf);
+    w->first = CFI_ALLOC(ctx, int32_t, n);
     bool per_vertex_uv = d->uv_count > 0 && !d->uv_triangles;
     if (per_vertex_uv) w->uv_triangles = CFI_ALLOC(ctx, int32_t, 3 * nf);
     if (d->vertex_property_count > 0) {
@@ -96,25 +200,24 @@ static cf_status make_welded(cf_context *ctx, const cf_mesh_data *d, const int32
         for (int32_t p = 0; w->properties && p < d->vertex_property_count; ++p)
             if (!(w->properties[p] = CFI_ALLOC(ctx, double, n))) break;
     }
-    bool complete = w->positions && w->triangles && (!per_vertex_uv || w->uv_triangles) &&
+    bool complete = w->positions && w->triangles && w->first && (!per_vertex_uv || w->uv_triangles) &&
                     (d->vertex_property_count == 0 ||
                      (w->properties && w->properties[d->vertex_property_count - 1]));
     if (!complete) {
         free_welded(ctx, w, n, d);
         return cfi_error(ctx, CF_ERR_NOMEM, "weld: out of memory for %d vertices", n);
     }
-    for (int32_t v = 0; v < nv; ++v)
-        if (keep[v] == v) memcpy(w->positions + 3 * (size_t)index[v], d->positions + 3 * (size_t)v, 3 * sizeof(double));
-    for (size_t c = 0; c < 3 * nf; ++c) w->triangles[c] = index[d->triangles[c]];
+    apply_map(nv, d->positions, d->face_count, d->triangles, index, w->positions, w->triangles);
     /* the texture keeps each corner's own coordinates: on a seam they differ */
     if (per_vertex_uv) memcpy(w->uv_triangles, d->triangles, 3 * nf * sizeof(int32_t));
     *differing = 0;
-    for (int32_t v = 0; v < nv; ++v) {
-        bool differs = false;
+    for (int32_t v = 0, kept = 0; v < nv; ++v) {
+        bool first = index[v] == kept, differs = false;
+        if (first) w->first[kept++] = v;
         for (int32_t p = 0; p < d->vertex_property_count; ++p) {
             const double *old = d->vertex_properties[p].values;
-            if (keep[v] == v) w->properties[p][index[v]] = old[v];
-            else differs = differs || old[v] != old[keep[v]];
+            if (first) w->properties[p][index[v]] = old[v];
+            else differs = differs || old[v] != old[w->first[index[v]]];
         }
         *differing += differs;
     }
@@ -125,55 +228,20 @@ cf_status cf_mesh_data_weld(cf_context *ctx, cf_mesh_data *data, int32_t *new_in
 {
     if (!ctx) return CF_ERR_INVALID_ARG;
     if (!data || !report) return cfi_error(ctx, CF_ERR_INVALID_ARG, "cf_mesh_data_weld: data or report is NULL");
-    memset(report, 0, sizeof *report);
     int32_t nv = data->vertex_count;
-    report->vertices = nv;
-    if (new_index)
-        for (int32_t v = 0; v < nv; ++v) new_index[v] = v;
-    if (nv == 0) return CF_OK;
-    uint8_t *on_boundary = CFI_ALLOC(ctx, uint8_t, nv);
-    int32_t *keep = CFI_ALLOC(ctx, int32_t, nv), *index = CFI_ALLOC(ctx, int32_t, nv);
-    candidate *candidates = CFI_ALLOC(ctx, candidate, nv);
+    int32_t *index = CFI_ALLOC(ctx, int32_t, nv > 0 ? nv : 1);
+    if (!index) {
+        memset(report, 0, sizeof *report);
+        return cfi_error(ctx, CF_ERR_NOMEM, "weld: out of memory for %d vertices", nv);
+    }
     welded_arrays w = {0};
-    int32_t n = 0;
-    cf_status st = on_boundary && keep && index && candidates
-                       ? mark_boundary(ctx, data, on_boundary)
-                       : cfi_error(ctx, CF_ERR_NOMEM, "weld: out of memory for %d vertices", nv);
-    if (st != CF_OK) goto done;
-    int32_t nc = 0;
-    for (int32_t v = 0; v < nv; ++v) {
-        keep[v] = v;
-        if (!on_boundary[v]) continue;
-        memcpy(candidates[nc].x, data->positions + 3 * (size_t)v, sizeof candidates[nc].x);
-        candidates[nc++].vertex = v;
-    }
-    qsort(candidates, (size_t)nc, sizeof *candidates, by_position_then_index);
-    /* each group of equal positions joins its lowest index (sorted first) */
-    for (int32_t i = 0, j; i < nc; i = j) {
-        const double *x = candidates[i].x;
-        for (j = i + 1; j < nc; ++j) {
-            const double *y = candidates[j].x;
-            if (x[0] != y[0] || x[1] != y[1] || x[2] != y[2]) break;
-            keep[candidates[j].vertex] = candidates[i].vertex;
-        }
-        if (j - i > 1) report->groups++, report->candidates += j - i;
-    }
-    if (report->groups == 0) goto done;
-    for (int32_t v = 0; v < nv; ++v) index[v] = keep[v] == v ? n++ : index[keep[v]]; /* keep[v] <= v */
-    st = make_welded(ctx, data, keep, index, n, &w, &report->differing_properties);
-    if (st != CF_OK) goto done;
-    /* the welded surface must be one a mesh can be built from; if not, the
-     * candidates stay apart and the report says why */
-    cf_mesh_desc desc = {.vertex_count = n, .positions = w.positions, .face_count = data->face_count,
-                         .triangles = w.triangles};
-    cf_mesh_report check;
-    st = cf_mesh_validate(ctx, &desc, &check);
-    if (st != CF_OK) goto done;
-    if (check.first_status != CF_OK) {
-        /* the validation message fits the report's with the prefix cut short */
-        snprintf(report->refused, sizeof report->refused, "after welding, %.*s",
-                 (int)(sizeof report->refused - sizeof "after welding, "), check.first_message);
-        report->differing_properties = 0;
+    cf_status st = cf_weld_map(ctx, nv, data->positions, data->face_count, data->triangles, index, report);
+    int32_t n = report->vertices;
+    if (st == CF_OK && report->welded) st = make_welded(ctx, data, index, n, &w, &report->differing_properties);
+    if (st != CF_OK || !report->welded) {
+        if (st != CF_OK) report->welded = report->removed = 0, report->vertices = nv;
+        if (new_index)
+            for (int32_t v = 0; v < nv; ++v) new_index[v] = v;
         goto done;
     }
     size_t nf = (size_t)data->face_count;
@@ -186,17 +254,12 @@ cf_status cf_mesh_data_weld(cf_context *ctx, cf_mesh_data *data, int32_t *new_in
         data->vertex_properties[p].values = w.properties[p];
     }
     CFI_FREE(ctx, w.properties, data->vertex_property_count);
+    CFI_FREE(ctx, w.first, n);
     memset(&w, 0, sizeof w);
     data->vertex_count = n;
-    report->welded = 1;
-    report->removed = nv - n;
-    report->vertices = n;
     if (new_index) memcpy(new_index, index, (size_t)nv * sizeof(int32_t));
 done:
     free_welded(ctx, &w, n, data);
-    CFI_FREE(ctx, on_boundary, nv);
-    CFI_FREE(ctx, keep, nv);
-    CFI_FREE(ctx, index, nv);
-    CFI_FREE(ctx, candidates, nv);
+    CFI_FREE(ctx, index, nv > 0 ? nv : 1);
     return st;
 }

@@ -206,9 +206,26 @@ static void test_soup(void)
     char *obj = soup_obj(m, -1, &size);
     cf_mesh_data *d = NULL;
     CHECK_OK(ctx, cf_read_mesh_memory(ctx, obj, size, CF_FORMAT_OBJ, "soup.obj", &d));
-    cf_weld_report r;
+    cf_weld_report r, rm;
+    /* the map of the arrays first (the data is not changed by it) */
+    int32_t *map = malloc(3 * (size_t)nf * sizeof *map);
+    CHECK_OK(ctx, cf_weld_map(ctx, d->vertex_count, d->positions, d->face_count, d->triangles, map, &rm));
+    CHECK(rm.welded == 1 && rm.vertices == nv && rm.removed == 3 * nf - nv && d->vertex_count == 3 * nf);
+    int32_t kept = 0, *first = malloc((size_t)nv * sizeof *first);
+    for (int32_t v = 0; v < 3 * nf; ++v) {
+        CHECK(map[v] <= kept && map[v] >= 0 && map[v] < nv);
+        if (map[v] == kept && kept < nv) first[kept++] = v;
+        /* a joined vertex is at its kept vertex's position, and comes after it */
+        else CHECK(memcmp(d->positions + 3 * (size_t)v, d->positions + 3 * (size_t)first[map[v]], 3 * sizeof(double)) ==
+                       0 && first[map[v]] < v);
+    }
+    CHECK(kept == nv);
+    free(first);
     CHECK_OK(ctx, cf_mesh_data_weld(ctx, d, NULL, &r));
     CHECK(r.welded == 1 && r.candidates == 3 * nf && r.groups == nv && r.vertices == nv && r.removed == 3 * nf - nv);
+    CHECK(rm.candidates == r.candidates && rm.groups == r.groups);
+    for (int32_t c = 0; c < 3 * nf; ++c) CHECK(d->triangles[c] == map[c]); /* the soup's corner c is vertex c */
+    free(map);
     cf_mesh_desc desc;
     cf_mesh *welded = NULL;
     cf_mesh_data_desc(d, &desc);
@@ -267,6 +284,13 @@ static void test_not_seams(void)
     cf_mesh_data_destroy(&d);
     cf_context_set_log(ctx, NULL, NULL, CF_LOG_ERROR);
     CHECK_STATUS(cf_mesh_data_weld(ctx, NULL, NULL, &r), CF_ERR_INVALID_ARG);
+    /* the arrays' map checks what a reader would have */
+    static const double x[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    static const int32_t bad[6] = {0, 1, 2, 0, 2, 9};
+    int32_t map[3];
+    CHECK_STATUS(cf_weld_map(ctx, 3, x, 2, bad, map, &r), CF_ERR_INDEX_RANGE);
+    CHECK(strcmp(cf_context_message(ctx), "face 1: vertex index 9 out of range [0, 3)") == 0);
+    CHECK_STATUS(cf_weld_map(ctx, 3, x, 1, bad, NULL, &r), CF_ERR_INVALID_ARG);
     CHECK(cf_context_bytes_in_use(ctx) == 0);
     cf_context_destroy(&ctx);
 }

@@ -188,6 +188,15 @@ typedef struct cf_spin_willmore_options {
                                 * of 1.002). Default 1e-8 (only faces with an angle below about 2e-8
                                 * rad are touched; none on any shared mesh); 0: exact weights
                                 * (docs/spin.md, "Near-duplicate vertices") */
+    double max_period_error;   /* with adaptive, closed surfaces of genus > 0 with the period
+                                * corrections: redo a step (tau halved) whose periods the corrections
+                                * leave above this (the `periods` residual, relative as
+                                * period_tolerance): their Newton steps diverge when a step is too
+                                * large for their linearisation, and the step then leaves the
+                                * conformal class by that much (a real knot tube: 0.083 left after
+                                * step 1, its distortion mean Q 1.56 after 10 steps). Default 0.03
+                                * (10 period_tolerance); 0: no bound (docs/spin.md, "Periods the
+                                * corrections cannot cancel") */
 } cf_spin_willmore_options;
 
 CF_API void cf_spin_willmore_options_default(cf_spin_willmore_options *options);

@@ -726,6 +726,15 @@ cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, cf
     }
     if (st == CF_OK && measured) st = correct_periods(flow, s, t, err);
     if (st != CF_OK) return st;
+    /* periods the corrections could not cancel (their Newton step diverged:
+     * the step is too large for their linearisation) would take the step
+     * out of the conformal class by that much (docs/spin.md, "Periods the
+     * corrections cannot cancel") */
+    if (measured && cfi_flow_backtracks(flow) && s->opt.max_period_error > 0.0 &&
+        !(s->diag.period_error <= s->opt.max_period_error)) {
+        *too_large = CFI_SPIN_PERIODS_LEFT;
+        return CF_OK;
+    }
     s->diag.predicted_energy = predicted_energy(mesh, s);
 
     /* A lambda whose scale jumps along an edge gives transformed edges that

@@ -34,6 +34,7 @@ void cf_spin_willmore_options_default(cf_spin_willmore_options *o)
     o->exactness_linearized = 1;
     o->period_iterations = 3;
     o->period_tolerance = 3e-3;
+    o->max_period_error = 3e-2;
     o->max_integrability_error = 0.0;
     o->max_conformal_excess = -1.0; /* automatic: the bound on closed surfaces only */
     o->stall_fairing = 1;
@@ -96,6 +97,9 @@ static const cf_param_desc spin_params[] = {
     {"period_tolerance", CF_PARAM_DOUBLE, OPT(period_tolerance), 0.0, 1.0, NULL,
      "stop the period corrections below this harmonic part of the transformed edges (relative; 1e-3 lowers W "
      "further on knotted and long-handled tubes at 1.0-1.4x the time per step, docs/spin.md)"},
+    {"max_period_error", CF_PARAM_DOUBLE, OPT(max_period_error), 0.0, 1.0, NULL,
+     "adaptive, closed genus > 0: redo a step with half tau whose periods the corrections leave above this "
+     "(relative, as period_tolerance: their Newton steps diverged; 0: no bound)"},
     {"max_integrability_error", CF_PARAM_DOUBLE, OPT(max_integrability_error), 0.0, 1.0, NULL,
      "adaptive: redo a step with half tau while its transformed edges are non-integrable by more than this "
      "(relative; 0: no bound; e.g. 0.04 keeps triangles better at some cost in W)"},

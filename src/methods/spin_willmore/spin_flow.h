@@ -179,8 +179,10 @@ typedef enum cfi_spin_too_large {
     CFI_SPIN_SCALE_CHANGE = 1,   /* before the positions: lambda's scale jumps more than max_scale_change */
     CFI_SPIN_NOT_INTEGRABLE = 2, /* the recovered positions not applied: the edges are less integrable
                                   * than max_integrability_error allows */
-    CFI_SPIN_NOT_CONFORMAL = 3   /* the new positions' map from the step's start makes more distortion
+    CFI_SPIN_NOT_CONFORMAL = 3,  /* the new positions' map from the step's start makes more distortion
                                   * than its vertex scales explain by more than max_conformal_excess */
+    CFI_SPIN_PERIODS_LEFT = 4    /* before the positions: the corrections left periods above
+                                  * max_period_error */
 } cfi_spin_too_large;
 cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, cfi_spin_too_large *too_large,
                                 cfi_spin_timers *t);

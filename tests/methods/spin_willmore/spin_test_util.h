@@ -117,6 +117,84 @@ static inline double smallest_angle(const cf_mesh *mesh, const double *x)
     return smallest;
 }
 
+/* The trefoil tube of `along` rings of `around` vertices, radius
+ * mean_radius + amplitude sin(5 t) (five fat sections), as
+ * bench/bench_unseen_kinds.py makes it: parallel-transport frame along the
+ * centre line, its holonomy spread over the rings so that the tube closes
+ * up. NULL if memory runs out. */
+static inline cf_mesh *spin_knotted_tube(cf_context *ctx, int along, int around, double mean_radius, double amplitude)
+{
+    const double pi = 3.14159265358979323846;
+    /* per ring: centre, tangent, normal, binormal */
+    double(*frame)[4][3] = malloc((size_t)along * sizeof *frame);
+    double *x = malloc(3 * (size_t)along * (size_t)around * sizeof(double));
+    int32_t *tri = malloc(6 * (size_t)along * (size_t)around * sizeof(int32_t));
+    if (!frame || !x || !tri) {
+        free(frame);
+        free(x);
+        free(tri);
+        return NULL;
+    }
+    for (int i = 0; i < along; ++i) {
+        double t = 2.0 * pi * i / along;
+        frame[i][0][0] = sin(t) + 2.0 * sin(2.0 * t);
+        frame[i][0][1] = cos(t) - 2.0 * cos(2.0 * t);
+        frame[i][0][2] = -sin(3.0 * t);
+    }
+    for (int i = 0; i < along; ++i) {
+        const double *a = frame[(i + along - 1) % along][0], *b = frame[(i + 1) % along][0];
+        double len = 0.0;
+        for (int c = 0; c < 3; ++c) len += (b[c] - a[c]) * (b[c] - a[c]);
+        for (int c = 0; c < 3; ++c) frame[i][1][c] = (b[c] - a[c]) / sqrt(len);
+    }
+    for (int i = 0; i < along; ++i) {
+        const double seed[3] = {0.3, 0.5, 0.8};
+        const double *prev = i == 0 ? seed : frame[i - 1][2], *t = frame[i][1];
+        double *n = frame[i][2], *b = frame[i][3];
+        double d = prev[0] * t[0] + prev[1] * t[1] + prev[2] * t[2], len = 0.0;
+        for (int c = 0; c < 3; ++c) {
+            n[c] = prev[c] - d * t[c];
+            len += n[c] * n[c];
+        }
+        for (int c = 0; c < 3; ++c) n[c] /= sqrt(len);
+        b[0] = t[1] * n[2] - t[2] * n[1];
+        b[1] = t[2] * n[0] - t[0] * n[2];
+        b[2] = t[0] * n[1] - t[1] * n[0];
+    }
+    const double *last = frame[along - 1][2], *t0 = frame[0][1], *n0 = frame[0][2], *b0 = frame[0][3];
+    double d = last[0] * t0[0] + last[1] * t0[1] + last[2] * t0[2], l[3];
+    for (int c = 0; c < 3; ++c) l[c] = last[c] - d * t0[c];
+    double holonomy = atan2(l[0] * b0[0] + l[1] * b0[1] + l[2] * b0[2], l[0] * n0[0] + l[1] * n0[1] + l[2] * n0[2]);
+    for (int i = 0; i < along; ++i) {
+        double radius = mean_radius + amplitude * sin(5.0 * 2.0 * pi * i / along);
+        for (int j = 0; j < around; ++j) {
+            double angle = 2.0 * pi * j / around - holonomy * i / along;
+            for (int c = 0; c < 3; ++c)
+                x[3 * (i * around + j) + c] =
+                    frame[i][0][c] + radius * (cos(angle) * frame[i][2][c] + sin(angle) * frame[i][3][c]);
+        }
+    }
+    int32_t *f = tri;
+    for (int i = 0; i < along; ++i)
+        for (int j = 0; j < around; ++j) {
+            int32_t i2 = (i + 1) % along, j2 = (j + 1) % around;
+            int32_t a = i * around + j, b = i * around + j2, c = i2 * around + j, e = i2 * around + j2;
+            *f++ = a, *f++ = b, *f++ = c;
+            *f++ = b, *f++ = e, *f++ = c;
+        }
+    cf_mesh_desc desc = {0};
+    desc.vertex_count = along * around;
+    desc.positions = x;
+    desc.face_count = 2 * along * around;
+    desc.triangles = tri;
+    cf_mesh *mesh = NULL;
+    CHECK_OK(ctx, cf_mesh_create(ctx, &desc, &mesh));
+    free(frame);
+    free(x);
+    free(tri);
+    return mesh;
+}
+
 /* What spin_run_steps measured: W/4pi before and after, the largest rise of
  * W/4pi over one step (<= 0 when monotone), the smallest time step taken,
  * the steps taken, the area-weighted mean quasi-conformal error against the

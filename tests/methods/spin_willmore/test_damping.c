@@ -32,81 +32,7 @@
 #include <string.h>
 
 #define PI 3.14159265358979323846
-#define ALONG 240
-#define AROUND 14
 
-/* The trefoil tube of radius mean_radius + amplitude sin(5 t) (five fat
- * sections): parallel-transport frame along the centre line, its holonomy
- * spread over the rings so that the tube closes up. */
-static cf_mesh *knotted_tube(cf_context *ctx, double mean_radius, double amplitude)
-{
-    double centre[ALONG][3], tangent[ALONG][3], normal[ALONG][3], binormal[ALONG][3];
-    for (int i = 0; i < ALONG; ++i) {
-        double t = 2.0 * PI * i / ALONG;
-        centre[i][0] = sin(t) + 2.0 * sin(2.0 * t);
-        centre[i][1] = cos(t) - 2.0 * cos(2.0 * t);
-        centre[i][2] = -sin(3.0 * t);
-    }
-    for (int i = 0; i < ALONG; ++i) {
-        const double *a = centre[(i + ALONG - 1) % ALONG], *b = centre[(i + 1) % ALONG];
-        double len = 0.0;
-        for (int c = 0; c < 3; ++c) len += (b[c] - a[c]) * (b[c] - a[c]);
-        for (int c = 0; c < 3; ++c) tangent[i][c] = (b[c] - a[c]) / sqrt(len);
-    }
-    for (int i = 0; i < ALONG; ++i) {
-        const double seed[3] = {0.3, 0.5, 0.8};
-        const double *prev = i == 0 ? seed : normal[i - 1];
-        double d = prev[0] * tangent[i][0] + prev[1] * tangent[i][1] + prev[2] * tangent[i][2], len = 0.0;
-        for (int c = 0; c < 3; ++c) {
-            normal[i][c] = prev[c] - d * tangent[i][c];
-            len += normal[i][c] * normal[i][c];
-        }
-        for (int c = 0; c < 3; ++c) normal[i][c] /= sqrt(len);
-        const double *t = tangent[i], *n = normal[i];
-        binormal[i][0] = t[1] * n[2] - t[2] * n[1];
-        binormal[i][1] = t[2] * n[0] - t[0] * n[2];
-        binormal[i][2] = t[0] * n[1] - t[1] * n[0];
-    }
-    const double *last = normal[ALONG - 1], *t0 = tangent[0];
-    double d = last[0] * t0[0] + last[1] * t0[1] + last[2] * t0[2], l[3];
-    for (int c = 0; c < 3; ++c) l[c] = last[c] - d * t0[c];
-    double holonomy = atan2(l[0] * binormal[0][0] + l[1] * binormal[0][1] + l[2] * binormal[0][2],
-                            l[0] * normal[0][0] + l[1] * normal[0][1] + l[2] * normal[0][2]);
-    double *x = malloc(3 * ALONG * AROUND * sizeof(double));
-    int32_t *tri = malloc(6 * ALONG * AROUND * sizeof(int32_t));
-    if (!x || !tri) {
-        free(x);
-        free(tri);
-        return NULL;
-    }
-    for (int i = 0; i < ALONG; ++i) {
-        double radius = mean_radius + amplitude * sin(5.0 * 2.0 * PI * i / ALONG);
-        for (int j = 0; j < AROUND; ++j) {
-            double angle = 2.0 * PI * j / AROUND - holonomy * i / ALONG;
-            for (int c = 0; c < 3; ++c)
-                x[3 * (i * AROUND + j) + c] =
-                    centre[i][c] + radius * (cos(angle) * normal[i][c] + sin(angle) * binormal[i][c]);
-        }
-    }
-    int32_t *f = tri;
-    for (int i = 0; i < ALONG; ++i)
-        for (int j = 0; j < AROUND; ++j) {
-            int32_t i2 = (i + 1) % ALONG, j2 = (j + 1) % AROUND;
-            int32_t a = i * AROUND + j, b = i * AROUND + j2, c = i2 * AROUND + j, e = i2 * AROUND + j2;
-            *f++ = a, *f++ = b, *f++ = c;
-            *f++ = b, *f++ = e, *f++ = c;
-        }
-    cf_mesh_desc desc = {0};
-    desc.vertex_count = ALONG * AROUND;
-    desc.positions = x;
-    desc.face_count = 2 * ALONG * AROUND;
-    desc.triangles = tri;
-    cf_mesh *mesh = NULL;
-    CHECK_OK(ctx, cf_mesh_create(ctx, &desc, &mesh));
-    free(x);
-    free(tri);
-    return mesh;
-}
 
 /* The first step at which the damping was triggered (0: never) and the
  * realised decrease that triggered it (a spin_step_hook). */
@@ -143,7 +69,7 @@ static void test_knot_reaches_target(void)
 {
     cf_context *ctx = NULL;
     CHECK_OK(NULL, cf_context_create(&ctx));
-    cf_mesh *knot = knotted_tube(ctx, 0.35, 0.1);
+    cf_mesh *knot = spin_knotted_tube(ctx, 240, 14, 0.35, 0.1);
     if (!knot) {
         cf_context_destroy(&ctx);
         return;
@@ -302,7 +228,7 @@ static void test_tube_bubbles(void)
 {
     cf_context *ctx = NULL;
     CHECK_OK(NULL, cf_context_create(&ctx));
-    cf_mesh *tube = knotted_tube(ctx, 0.40, 0.1);
+    cf_mesh *tube = spin_knotted_tube(ctx, 240, 14, 0.40, 0.1);
     if (!tube) {
         cf_context_destroy(&ctx);
         return;

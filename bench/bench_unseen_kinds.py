@@ -213,13 +213,17 @@ def run(cli, mesh, method, steps, out_dir, params=()):
     # info (closed meshes only)
     logged = [entry["terms"]["W/4pi"] for entry in curvflow.read_log(log)
               if "W/4pi" in (entry.get("terms") or {})] if os.path.exists(log) else []
-    w0 = logged[0] if logged else curvflow.info(mesh)["willmore_over_4pi"]
+    # (an invalid or open mesh has no W in info)
+    w0 = logged[0] if logged else curvflow.info(mesh).get("willmore_over_4pi")
+    if proc.returncode != 0:
+        print("%s %s: exit %d: %s" % (base, method, proc.returncode, (proc.stderr.strip().splitlines() or [""])[0]),
+              file=sys.stderr)
     row = [base, method, str(proc.returncode), "%.3f" % w0 if w0 is not None else "-"]
     # issue 13 asks W non-increasing at every step (rounding allowed)
     rises = sum(1 for a, b in zip(logged, logged[1:]) if b > a * (1.0 + 1e-9))
     if os.path.exists(out):
         after = curvflow.info(out)
-        w1 = logged[-1] if logged else after["willmore_over_4pi"]
+        w1 = logged[-1] if logged else after.get("willmore_over_4pi")
         v0, faces, _ = curvflow.load(mesh)
         v1, _, _ = curvflow.load(out, validate=False)
         q = curvflow.compare(v0, v1, faces)["quasi_conformal_error"]

@@ -589,17 +589,21 @@ def compare(V0, V1, F):
 
 # ---- files -----------------------------------------------------------------------
 
-def _read(ctx, path, weld=False):
-    """The file's cf_mesh_data; with weld, its seams welded (cf_mesh_data_weld,
-    docs/io.md "Seams") and the weld's report as the second value."""
+def _read(ctx, path):
     data = POINTER(_lib.MeshData)()
     st = ctx.L.cf_read_mesh_file(ctx.ptr, os.fsencode(path), byref(data))
     ctx.check(st, os.fspath(path))
     ctx.defer(ctx.L.cf_mesh_data_destroy, data)
+    return data.contents
+
+
+def _read_welded(ctx, path):
+    """The file's data with its seams welded (cf_mesh_data_weld, docs/io.md
+    "Seams"), and the weld's report."""
+    d = _read(ctx, path)
     report = _lib.WeldReport()
-    if weld:
-        ctx.check(ctx.L.cf_mesh_data_weld(ctx.ptr, data, None, byref(report)), os.fspath(path))
-    return (data.contents, report) if weld else data.contents
+    ctx.check(ctx.L.cf_mesh_data_weld(ctx.ptr, byref(d), None, byref(report)), os.fspath(path))
+    return d, report
 
 
 def _weld_dict(report):
@@ -665,7 +669,7 @@ def load(path, validate=True, weld=True):
     differing_properties, refused: why a weld was left undone, or None).
     weld=False keeps the file's vertices."""
     with _Context() as ctx:
-        d, report = _read(ctx, path, weld=True) if weld else (_read(ctx, path), None)
+        d, report = _read_welded(ctx, path) if weld else (_read(ctx, path), None)
         if validate:
             desc = _lib.MeshDesc()
             ctx.L.cf_mesh_data_desc(byref(d), byref(desc))
@@ -857,7 +861,7 @@ def loop_subdivide(V, F, levels=1):
 def _seams(ctx, path):
     """What load() and the commands weld in the file, as `curvflow info --json`
     reports it ("seams")."""
-    d, report = _read(ctx, path, weld=True)
+    d, report = _read_welded(ctx, path)
     out = {"coincident_boundary_vertices": report.candidates, "positions": report.groups,
            "welded_vertices": None, "welded_boundary_loops": None, "welded_genus": None,
            "refused": report.refused.decode("utf-8", "replace") or None}

@@ -107,13 +107,13 @@ static void apply_map(int32_t nv, const double *positions, int32_t nf, const int
     for (size_t c = 0; c < 3 * (size_t)nf; ++c) welded_triangles[c] = index[triangles[c]];
 }
 
-cf_status cf_weld_map(cf_context *ctx, int32_t vertex_count, const double *positions, int32_t face_count,
-                      const int32_t *triangles, int32_t *new_index, cf_weld_report *report)
+/* cf_weld_map; when it welds and welded_out is not NULL, the welded
+ * positions (3 vertices) and triangles it validated are handed over
+ * (welded_out[0], [1]; the caller frees them) instead of being freed. */
+static cf_status weld_map(cf_context *ctx, int32_t vertex_count, const double *positions, int32_t face_count,
+                          const int32_t *triangles, int32_t *new_index, cf_weld_report *report,
+                          double **welded_positions_out, int32_t **welded_triangles_out)
 {
-    if (!ctx) return CF_ERR_INVALID_ARG;
-    if (!report || !new_index || vertex_count < 0 || face_count < 0 || (vertex_count > 0 && !positions) ||
-        (face_count > 0 && !triangles))
-        return cfi_error(ctx, CF_ERR_INVALID_ARG, "cf_weld_map: missing array or negative count");
     memset(report, 0, sizeof *report);
     int32_t nv = vertex_count, nf = face_count;
     report->vertices = nv;
@@ -153,6 +153,10 @@ cf_status cf_weld_map(cf_context *ctx, int32_t vertex_count, const double *posit
     report->welded = 1;
     report->removed = nv - n;
     report->vertices = n;
+    if (welded_positions_out && welded_triangles_out) {
+        *welded_positions_out = welded_positions, *welded_triangles_out = welded_triangles;
+        welded_positions = NULL, welded_triangles = NULL;
+    }
 done:
     CFI_FREE(ctx, keep, nv);
     CFI_FREE(ctx, index, nv);
@@ -161,8 +165,19 @@ done:
     return st;
 }
 
+cf_status cf_weld_map(cf_context *ctx, int32_t vertex_count, const double *positions, int32_t face_count,
+                      const int32_t *triangles, int32_t *new_index, cf_weld_report *report)
+{
+    if (!ctx) return CF_ERR_INVALID_ARG;
+    if (!report || !new_index || vertex_count < 0 || face_count < 0 || (vertex_count > 0 && !positions) ||
+        (face_count > 0 && !triangles))
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "cf_weld_map: missing array or negative count");
+    return weld_map(ctx, vertex_count, positions, face_count, triangles, new_index, report, NULL, NULL);
+}
+
 /* The arrays a weld replaces, made in full before any is swapped in, so
- * that running out of memory leaves the data as it was. */
+ * that running out of memory leaves the data as it was; positions and
+ * triangles are the ones weld_map validated. */
 typedef struct welded_arrays {
     double *positions;
     int32_t *triangles;
@@ -175,7 +190,7 @@ static void free_welded(cf_context *ctx, welded_arrays *w, int32_t n, const cf_m
 {
     size_t nf = (size_t)d->face_count;
     CFI_FREE(ctx, w->positions, 3 * (size_t)n);
-    CFI_FREE(ctx, w->triangles, 3 * nf);
+    CFI_FREE(ctx, w->triangles, nf > 0 ? 3 * nf : 1); /* as weld_map made it */
     CFI_FREE(ctx, w->uv_triangles, 3 * nf);
     CFI_FREE(ctx, w->first, n);
     if (w->properties) {
@@ -184,14 +199,13 @@ static void free_welded(cf_context *ctx, welded_arrays *w, int32_t n, const cf_m
     }
 }
 
+/* The texture's corners and the vertex properties of the welded data (w's
+ * positions and triangles already made). */
 static cf_status make_welded(cf_context *ctx, const cf_mesh_data *d, const int32_t *index, int32_t n,
                              welded_arrays *w, int32_t *differing)
 {
     int32_t nv = d->vertex_count;
     size_t nf = (size_t)d->face_count;
-    memset(w, 0, sizeof *w);
-    w->positions = CFI_ALLOC(ctx, double, 3 * (size_t)n);
-    w->triangles = CFI_ALLOC(ctx, int32_t, 3 * nf);
     w->first = CFI_ALLOC(ctx, int32_t, n);
     bool per_vertex_uv = d->uv_count > 0 && !d->uv_triangles;
     if (per_vertex_uv) w->uv_triangles = CFI_ALLOC(ctx, int32_t, 3 * nf);
@@ -200,14 +214,10 @@ static cf_status make_welded(cf_context *ctx, const cf_mesh_data *d, const int32
         for (int32_t p = 0; w->properties && p < d->vertex_property_count; ++p)
             if (!(w->properties[p] = CFI_ALLOC(ctx, double, n))) break;
     }
-    bool complete = w->positions && w->triangles && w->first && (!per_vertex_uv || w->uv_triangles) &&
+    bool complete = w->first && (!per_vertex_uv || w->uv_triangles) &&
                     (d->vertex_property_count == 0 ||
                      (w->properties && w->properties[d->vertex_property_count - 1]));
-    if (!complete) {
-        free_welded(ctx, w, n, d);
-        return cfi_error(ctx, CF_ERR_NOMEM, "weld: out of memory for %d vertices", n);
-    }
-    apply_map(nv, d->positions, d->face_count, d->triangles, index, w->positions, w->triangles);
+    if (!complete) return cfi_error(ctx, CF_ERR_NOMEM, "weld: out of memory for %d vertices", n);
     /* the texture keeps each corner's own coordinates: on a seam they differ */
     if (per_vertex_uv) memcpy(w->uv_triangles, d->triangles, 3 * nf * sizeof(int32_t));
     *differing = 0;
@@ -235,7 +245,8 @@ cf_status cf_mesh_data_weld(cf_context *ctx, cf_mesh_data *data, int32_t *new_in
         return cfi_error(ctx, CF_ERR_NOMEM, "weld: out of memory for %d vertices", nv);
     }
     welded_arrays w = {0};
-    cf_status st = cf_weld_map(ctx, nv, data->positions, data->face_count, data->triangles, index, report);
+    cf_status st = weld_map(ctx, nv, data->positions, data->face_count, data->triangles, index, report, &w.positions,
+                            &w.triangles);
     int32_t n = report->vertices;
     if (st == CF_OK && report->welded) st = make_welded(ctx, data, index, n, &w, &report->differing_properties);
     if (st != CF_OK || !report->welded) {

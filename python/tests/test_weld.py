@@ -13,8 +13,9 @@ from conftest import run_cli
 
 
 def _seam_copy(V, F):
-    """V, F cut along x = 0: the vertices used on both sides get copies,
-    appended after the originals and used by the faces with x > 0."""
+    """V, F cut along x = 0: the vertices used on both sides (cut) get
+    copies, appended after the originals and used by the faces with x > 0.
+    Returns the cut's V, F and the vertices copied, in the copies' order."""
     right = V[F].mean(axis=1)[:, 0] > 0
     both = np.zeros(len(V), dtype=int)
     np.add.at(both, F[right].ravel(), 1)
@@ -25,7 +26,7 @@ def _seam_copy(V, F):
     index[cut] = len(V) + np.arange(len(cut))
     F2 = F.copy()
     F2[right] = index[F[right]]
-    return np.vstack([V, V[cut]]), F2, len(cut)
+    return np.vstack([V, V[cut]]), F2, cut
 
 
 def _write_obj(path, V, F):
@@ -36,7 +37,8 @@ def _write_obj(path, V, F):
 
 def test_seam_flows_as_the_closed_surface(cli, meshes, tmp_path):
     V, F, _ = curvflow.load(meshes["bumpy"], weld=False)
-    V2, F2, copies = _seam_copy(V, F)
+    V2, F2, cut = _seam_copy(V, F)
+    copies = len(cut)
     assert copies > 20
     seam, plain = tmp_path / "seam.obj", tmp_path / "plain.obj"
     _write_obj(seam, V2, F2)
@@ -62,16 +64,8 @@ def test_seam_flows_as_the_closed_surface(cli, meshes, tmp_path):
     run_cli(cli, "flow", seam, "-o", tmp_path / "c.obj", "--method", "spin-willmore", "-n", "3", "-q", "--no-weld")
     Vc, Fc, _ = curvflow.load(tmp_path / "c.obj", weld=False)
     assert len(Vc) == len(V2)
-    gap = np.linalg.norm(Vc[len(V):] - Vc[_originals(F, F2, len(V))], axis=1)
+    gap = np.linalg.norm(Vc[len(V):] - Vc[cut], axis=1)
     assert gap.max() > 1e-3
-
-
-def _originals(F, F2, nv):
-    """For each copy (index >= nv in F2), the vertex it copies (in F)."""
-    orig = np.empty(F2.max() + 1 - nv, dtype=int)
-    mask = F2 >= nv
-    orig[F2[mask] - nv] = F[mask]
-    return orig
 
 
 def test_soup_welds_and_files_for_the_file_are_refused(cli, meshes, tmp_path):

@@ -242,6 +242,48 @@ CF_API cf_status cf_vertex_fairing_apply(cf_vertex_fairing *f, double kappa, con
 CF_API int32_t cf_vertex_fairing_iterations(const cf_vertex_fairing *f);
 CF_API void cf_vertex_fairing_destroy(cf_vertex_fairing **f);
 
+/* ---- Tangential relaxation (src/ops/tangential_relaxation.c) -------------
+ * Moves the vertices of a surface within it so that its map from reference
+ * triangles is more conformal face by face: descends the MIPS energy
+ *   E(x) = sum_f A0_f (Q_f + 1 / Q_f) / 2 = sum_f A0_f |J_f|^2 / (2 det J_f)
+ * (A0_f the reference area, J_f the face's linear map from its reference
+ * triangle, Q_f the ratio of J_f's singular values; E = sum A0 exactly at a
+ * similarity) with every vertex kept on the surface given to apply: after
+ * each step a vertex goes to the nearest point of its own star there, so no
+ * vertex leaves its star in one call and the shape is the given one's,
+ * resampled. No face is inverted (against the surface given). A conformal
+ * map sampled at the vertices is not conformal per face where its scale
+ * varies across a face (crowded limbs); this spreads the crowding. Used by
+ * spin-willmore (option relaxation; docs/spin.md, "Tangential relaxation"). */
+typedef struct cf_tangential_relaxation cf_tangential_relaxation;
+typedef struct cf_tangential_relaxation_report {
+    int32_t iterations;      /* sweeps over the vertices that moved one (fewer than asked at a minimum
+                              * within the stars) */
+    int32_t trials;          /* vertex moves tried (each a projection and the star's energy) */
+    double energy_before;    /* E of the positions given */
+    double energy_after;     /* E of the positions returned (<= energy_before) */
+} cf_tangential_relaxation_report;
+/* E(positions) against the reference triangles (NULL: rest positions) and,
+ * if gradient is not NULL, dE/dx (3 nv). CF_ERR_DEGENERATE_FACE names a
+ * reference face without area, or says that a face of positions has none. */
+CF_API cf_status cf_mips_energy(cf_context *ctx, const cf_mesh *mesh, const double *reference,
+                                const double *positions, double *energy, double *gradient);
+/* reference: 3 nv (NULL: rest positions); hold_boundary: nonzero keeps the
+ * boundary vertices where apply finds them. CF_ERR_DEGENERATE_FACE names a
+ * reference face without area; CF_ERR_NOMEM. */
+CF_API cf_status cf_tangential_relaxation_create(cf_context *ctx, const cf_mesh *mesh, const double *reference,
+                                                 int32_t hold_boundary, cf_tangential_relaxation **out);
+/* out = in relaxed by up to `iterations` sweeps (every vertex's move at once) on the surface of in
+ * (out may equal in); none while the area-weighted mean of (Q + 1 / Q) / 2
+ * against the reference is at most that of min_mean_q (>= 1; 1: always
+ * relax). report may be NULL. CF_ERR_INVALID_ARG,
+ * CF_ERR_NUMERICAL (a position of in not finite, named),
+ * CF_ERR_DEGENERATE_FACE (a face of in has no area; out = in). */
+CF_API cf_status cf_tangential_relaxation_apply(cf_tangential_relaxation *r, const double *in, int32_t iterations,
+                                                double min_mean_q, double *out,
+                                                cf_tangential_relaxation_report *report);
+CF_API void cf_tangential_relaxation_destroy(cf_tangential_relaxation **r);
+
 typedef enum cf_mass_kind {
     CF_MASS_LUMPED_BARYCENTRIC = 0,
     CF_MASS_LUMPED_VORONOI = 1,

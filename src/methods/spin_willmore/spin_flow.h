@@ -29,6 +29,9 @@
 /* max_conformal_excess's automatic value on closed surfaces (docs/spin.md,
  * "The step's non-conformal excess") */
 #define CFI_SPIN_CLOSED_EXCESS_BOUND 0.12
+/* the mean Q of the map from the input below which no step is relaxed
+ * (option relaxation; docs/spin.md, "Tangential relaxation") */
+#define CFI_SPIN_RELAXATION_MEAN_Q 1.3
 
 typedef struct cfi_spin_state {
     cf_spin_willmore_options opt;
@@ -53,6 +56,10 @@ typedef struct cfi_spin_state {
     cf_vertex_fairing *fairing; /* fairing > 0 (not prescribed / cmc): the vertex-scale fairing (curvflow/ops.h) */
     double *faired;          /* 3 nv: the faired candidate of an attempt (fairing only) */
     int32_t faired_won;      /* the faired candidate had the lower W in the last attempt */
+    cf_tangential_relaxation *relaxation; /* relaxation resolved > 0: its descent (curvflow/ops.h) */
+    int32_t relax_iterations;  /* option relaxation (0 with prescribed / cmc boundaries) */
+    double *relaxed;         /* 3 nv: the relaxed candidate of a step (relaxation only) */
+    double *relaxed_area;    /* nv: its vertex areas (its centroid's weights) */
     int32_t harmonic_dim;    /* dim H^1 (2g + b - 1 with boundary) if the exactness constraint is active */
     int32_t linearized;      /* exactness by the discrete linearisation instead of App. C's Z_i */
     int32_t period_newton;   /* closed, genus > 0, linearised, period_iterations > 0: the Newton

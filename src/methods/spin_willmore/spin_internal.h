@@ -170,6 +170,9 @@ typedef struct cfi_spin_diagnostics {
     double fairing_kappa;           /* kappa = fairing tau of the vertex-scale fairing in the accepted attempt (0: none) */
     int32_t fairing_kept;           /* 1: the faired positions had the lower W and were kept */
     double fairing_energy;          /* W of the faired candidate (NaN when it could not be evaluated; 0 without) */
+    int32_t relaxation_kept;        /* 1: the tangentially relaxed positions were kept */
+    int32_t relaxation_iterations;  /* descent steps the relaxation took (0 without) */
+    double relaxation_energy;       /* W of the relaxed candidate (0 without) */
     double plain_energy;            /* W of the recovered positions without the fairing */
     int32_t current_metric;         /* 1: the accepted attempt recovered positions in the current metric (the
                                        layer's fallback at a stall of the input metric's); at a stall, the

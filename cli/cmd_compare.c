@@ -34,8 +34,8 @@ static void usage(FILE *out)
             "               field log_scale, the fitted log conformal factor (OUT.ply: PLY properties;\n"
             "               OUT.obj: side CSVs <stem>.face.csv, <stem>.vertex.csv; OFF cannot hold them)\n"
             "  -f, --force  replace read-only output files\n"
-            "  --no-weld    keep boundary vertices that share a position apart (by default each file's\n"
-            "               seams are welded, as flow does: docs/io.md)\n"
+            "  --no-weld    keep boundary vertices that share a position apart and vertices no face uses\n"
+            "               (by default each file's are welded and dropped, as flow does: docs/io.md)\n"
             "  -h, --help   show this help\n\n"
             "Exit status: 0 ok, 1 usage, 2 unreadable / invalid mesh, different connectivity, or an\n"
             "output that cannot or must not be written (checked before reading).\n");

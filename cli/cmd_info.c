@@ -118,14 +118,18 @@ static void print_names(const char *label, const json_t *names)
 }
 
 /* The text form of root (mesh NULL: the mesh is invalid, report says why). */
-/* What the other commands' weld makes of the file (cf_mesh_data_weld;
- * docs/io.md, "Seams"): the file read again and welded, its topology. */
+/* What the other commands make of the file's vertices (docs/io.md,
+ * "Unused vertices" and "Seams"): the file read again, its unused vertices
+ * dropped (cf_mesh_data_drop_unreferenced) and its seams welded
+ * (cf_mesh_data_weld), its topology. */
 static cf_status seams_json(cf_context *ctx, const char *path, json_t *root)
 {
     cf_mesh_data *data = NULL;
     cf_mesh *mesh = NULL;
     cf_weld_report r;
+    int32_t dropped = 0;
     cf_status st = cf_read_mesh_file(ctx, path, &data);
+    if (st == CF_OK) st = cf_mesh_data_drop_unreferenced(ctx, data, NULL, &dropped);
     if (st == CF_OK) st = cf_mesh_data_weld(ctx, data, NULL, &r);
     if (st == CF_OK && r.welded) {
         cf_mesh_desc desc;
@@ -134,6 +138,7 @@ static cf_status seams_json(cf_context *ctx, const char *path, json_t *root)
     }
     if (st == CF_OK) {
         json_t *o = json_object();
+        json_object_set_new(o, "unused_vertices", json_integer(dropped));
         json_object_set_new(o, "coincident_boundary_vertices", json_integer(r.candidates));
         json_object_set_new(o, "positions", json_integer(r.groups));
         json_object_set_new(o, "welded_vertices", mesh ? json_integer(r.vertices) : json_null());
@@ -150,6 +155,11 @@ static cf_status seams_json(cf_context *ctx, const char *path, json_t *root)
 static void print_seams(json_t *root)
 {
     json_t *o = json_object_get(root, "seams");
+    json_int_t unused = json_integer_value(json_object_get(o, "unused_vertices"));
+    if (unused > 0)
+        printf("unused:        %lld vertices that no face uses; flow, spin, edit, compare and report drop them "
+               "(--no-weld keeps them, and the mesh is refused)\n",
+               (long long)unused);
     json_int_t n = json_integer_value(json_object_get(o, "coincident_boundary_vertices"));
     if (n == 0) return;
     printf("seams:         %lld boundary vertices lie on others (%lld positions); ", (long long)n,

@@ -535,8 +535,8 @@ static void usage(FILE *out)
             "  -r, --run FILE     run description (JSON: method, parameters, timings)\n"
             "  -t, --title TEXT   page title\n"
             "  -o, --output FILE  the HTML file to write\n"
-            "  --no-weld          keep boundary vertices that share a position apart (by default each\n"
-            "                     file's seams are welded, as flow does: docs/io.md)\n"
+            "  --no-weld          keep boundary vertices that share a position apart and vertices no face\n"
+            "                     uses (by default each file's are welded and dropped, as flow does: docs/io.md)\n"
             "  -h, --help         show this help\n\n"
             "Exit status: 0 ok, 1 usage, 2 unreadable / invalid input or unwritable output (also when\n"
             "this curvflow was built without the report viewer: docs/report.md).\n");

@@ -30,8 +30,9 @@ static void usage(FILE *out)
             "                   colours and OBJ materials are kept, as by flow; a PLY also gets rho as\n"
             "                   a vertex property); must not be IN or the rho file\n"
             "  -f, --force      replace a read-only OUT\n"
-            "  --no-weld        keep boundary vertices that share a position apart (by default a file's\n"
-            "                   seams are welded, and OUT and a --rho file have the welded vertices: docs/io.md)\n"
+            "  --no-weld        keep boundary vertices that share a position apart and vertices no face uses\n"
+            "                   (by default a file's seams are welded and its unused vertices dropped, and OUT\n"
+            "                   and a --rho file have the vertices left: docs/io.md)\n"
             "Exit status: 0 ok, 1 usage error, 2 invalid input or an output that cannot or must not\n"
             "be written, 3 numerical failure.\n");
 }

@@ -212,29 +212,51 @@ cf_context *cli_context(bool verbose)
 }
 
 static bool weld_seams = true;
-/* vertices the last announced weld joined (the command's input) */
-static int32_t weld_removed;
+/* vertices the last announced weld joined and unused vertices it dropped
+ * (the command's input) */
+static int32_t weld_removed, unused_dropped;
 
 void cli_set_weld(bool weld) { weld_seams = weld; }
 
 int cli_check_vertex_file(const char *option, const char *path, const char *mesh_path)
 {
-    if (weld_removed == 0) return CLI_EXIT_OK;
+    if (weld_removed == 0 && unused_dropped == 0) return CLI_EXIT_OK;
+    char what[96];
+    if (weld_removed > 0 && unused_dropped > 0)
+        snprintf(what, sizeof what, "seams were welded (%d vertices joined) and %d unused vertices dropped",
+                 (int)weld_removed, (int)unused_dropped);
+    else if (weld_removed > 0)
+        snprintf(what, sizeof what, "seams were welded (%d vertices joined)", (int)weld_removed);
+    else
+        snprintf(what, sizeof what, "unused vertices were dropped (%d)", (int)unused_dropped);
     fprintf(stderr,
-            "curvflow: %s %s: %s's seams were welded (%d vertices joined), which renumbers its vertices, but a "
-            "file numbers the file's: pass --no-weld, or give the values for the welded mesh\n",
-            option, path, mesh_path, (int)weld_removed);
+            "curvflow: %s %s: %s's %s, which renumbers its vertices, but a file numbers the file's: pass "
+            "--no-weld, or give the values for the mesh read\n",
+            option, path, mesh_path, what);
     return CLI_EXIT_INPUT;
 }
 
-/* Reads a mesh file and, unless --no-weld, joins its seams
- * (cf_mesh_data_weld; docs/io.md, "Seams"); `announce`: says on stderr
- * what it did (once per file: a property read again later is silent). The
- * mesh every command then sees, and writes, is the welded one. */
+/* Reads a mesh file and, unless --no-weld, drops the vertices no face uses
+ * (cf_mesh_data_drop_unreferenced; docs/io.md, "Unused vertices") and joins
+ * its seams (cf_mesh_data_weld; "Seams"); `announce`: says on stderr what
+ * it did (once per file: a property read again later is silent). The mesh
+ * every command then sees, and writes, is that one. */
 static cf_status read_mesh_data(cf_context *ctx, const char *path, cf_mesh_data **data, bool announce)
 {
     cf_status st = cf_read_mesh_file(ctx, path, data);
     if (st != CF_OK || !weld_seams) return st;
+    int32_t in_file = (*data)->vertex_count, dropped = 0;
+    if ((st = cf_mesh_data_drop_unreferenced(ctx, *data, NULL, &dropped)) != CF_OK) {
+        cf_mesh_data_destroy(data);
+        return st;
+    }
+    if (announce && dropped > 0) {
+        unused_dropped = dropped;
+        fprintf(stderr,
+                "curvflow: %s: dropped %d vertices that no face uses: %d vertices instead of %d, also in what is "
+                "written from it (--no-weld keeps the file's)\n",
+                path, (int)dropped, (int)(*data)->vertex_count, (int)in_file);
+    }
     int32_t before = (*data)->vertex_count;
     cf_weld_report r;
     if ((st = cf_mesh_data_weld(ctx, *data, NULL, &r)) != CF_OK) {

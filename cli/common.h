@@ -75,8 +75,9 @@ cf_context *cli_context(bool verbose);
  * prints the message and returns the exit code (2), else 0. */
 int cli_load_mesh(cf_context *ctx, const char *path, cf_mesh **out);
 
-/* Whether cli_load_mesh and cli_load_mesh_properties weld a file's seams
- * (cf_mesh_data_weld; true unless a command's --no-weld). */
+/* Whether cli_load_mesh and cli_load_mesh_properties drop a file's unused
+ * vertices and weld its seams (cf_mesh_data_drop_unreferenced,
+ * cf_mesh_data_weld; true unless a command's --no-weld). */
 void cli_set_weld(bool weld);
 /* A file of per-vertex values or vertex numbers (`option` PATH) for the
  * mesh file mesh_path: exit 2 with a message if the weld renumbered that

@@ -135,6 +135,17 @@ CF_API cf_status cf_mesh_data_weld(cf_context *ctx, cf_mesh_data *data, int32_t 
 CF_API cf_status cf_weld_map(cf_context *ctx, int32_t vertex_count, const double *positions, int32_t face_count,
                              const int32_t *triangles, int32_t *new_index, cf_weld_report *report);
 
+/* Drops the vertices that no face uses (left by scanners and editors: a
+ * mesh with one is refused) and renumbers the others in their order
+ * (docs/io.md, "Unused vertices"); per-vertex texture coordinates and vertex
+ * properties follow. *dropped: how many (0: nothing changed; also for data
+ * without faces, which the mesh check refuses as empty). new_index (may be
+ * NULL; vertex_count entries, the count before) receives the new index of
+ * every vertex, -1 for a dropped one. CF_ERR_INDEX_RANGE for a face index
+ * outside [0, vertex_count); CF_ERR_NOMEM leaves the data unchanged. */
+CF_API cf_status cf_mesh_data_drop_unreferenced(cf_context *ctx, cf_mesh_data *data, int32_t *new_index,
+                                                int32_t *dropped);
+
 /* Reads a mesh file; the format comes from the extension. Statuses:
  * CF_ERR_IO (cannot open/read), CF_ERR_PARSE (malformed content),
  * CF_ERR_TRUNCATED (file ends early), CF_ERR_INDEX_RANGE (a face index

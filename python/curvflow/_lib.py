@@ -275,6 +275,7 @@ def _declare(lib):
     f("cf_mesh_data_desc", S, POINTER(MeshData), POINTER(MeshDesc))
     f("cf_mesh_data_weld", S, c_void_p, POINTER(MeshData), c_void_p, POINTER(WeldReport))
     f("cf_weld_map", S, c_void_p, c_int32, c_void_p, c_int32, c_void_p, c_void_p, POINTER(WeldReport))
+    f("cf_mesh_data_drop_unreferenced", S, c_void_p, POINTER(MeshData), c_void_p, POINTER(c_int32))
     f("cf_read_mesh_file", S, P, c_char_p, POINTER(POINTER(MeshData)))
     f("cf_write_options_default", None, POINTER(WriteOptions))
     f("cf_write_mesh_file_ex", S, P, c_char_p, P, P, POINTER(Field), I32, POINTER(WriteOptions))

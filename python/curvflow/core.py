@@ -598,12 +598,16 @@ def _read(ctx, path):
 
 
 def _read_welded(ctx, path):
-    """The file's data with its seams welded (cf_mesh_data_weld, docs/io.md
-    "Seams"), and the weld's report."""
+    """The file's data without the vertices no face uses
+    (cf_mesh_data_drop_unreferenced, docs/io.md "Unused vertices") and with its
+    seams welded (cf_mesh_data_weld, "Seams"), as the commands read it: the
+    data, the weld's report and the number of unused vertices dropped."""
     d = _read(ctx, path)
+    dropped = c_int32(0)
+    ctx.check(ctx.L.cf_mesh_data_drop_unreferenced(ctx.ptr, byref(d), None, byref(dropped)), os.fspath(path))
     report = _lib.WeldReport()
     ctx.check(ctx.L.cf_mesh_data_weld(ctx.ptr, byref(d), None, byref(report)), os.fspath(path))
-    return d, report
+    return d, report, dropped.value
 
 
 def _weld_dict(report):
@@ -667,9 +671,12 @@ def load(path, validate=True, weld=True):
     "Seams"); extras["weld"] says what was found and done (keys
     coincident_boundary_vertices, positions, welded, removed, vertices,
     differing_properties, refused: why a weld was left undone, or None).
+    It also drops the vertices that no face uses, as the commands do (a mesh
+    with one is refused; docs/io.md, "Unused vertices"):
+    extras["unused_vertices_dropped"] is how many (None with weld=False).
     weld=False keeps the file's vertices."""
     with _Context() as ctx:
-        d, report = _read_welded(ctx, path) if weld else (_read(ctx, path), None)
+        d, report, dropped = _read_welded(ctx, path) if weld else (_read(ctx, path), None, None)
         if validate:
             desc = _lib.MeshDesc()
             ctx.L.cf_mesh_data_desc(byref(d), byref(desc))
@@ -680,6 +687,7 @@ def load(path, validate=True, weld=True):
         F = _copy_out(d.triangles, (d.face_count, 3))
         extras = _extras(d)
         extras["weld"] = _weld_dict(report) if report is not None else None
+        extras["unused_vertices_dropped"] = dropped
         return V, F, extras
 
 
@@ -861,8 +869,8 @@ def loop_subdivide(V, F, levels=1):
 def _seams(ctx, path):
     """What load() and the commands weld in the file, as `curvflow info --json`
     reports it ("seams")."""
-    d, report = _read_welded(ctx, path)
-    out = {"coincident_boundary_vertices": report.candidates, "positions": report.groups,
+    d, report, dropped = _read_welded(ctx, path)
+    out = {"unused_vertices": dropped, "coincident_boundary_vertices": report.candidates, "positions": report.groups,
            "welded_vertices": None, "welded_boundary_loops": None, "welded_genus": None,
            "refused": report.refused.decode("utf-8", "replace") or None}
     if report.welded:

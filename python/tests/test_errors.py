@@ -187,10 +187,18 @@ def test_unreadable_and_unknown_files(tmp_path):
     with pytest.raises(curvflow.MeshFormatError, match=r"bad\.obj: line 4"):
         curvflow.load(tmp_path / "bad.obj")
     # validate=False returns what a syntactically fine file holds
+    (tmp_path / "flat.obj").write_text("v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n")
+    with pytest.raises(curvflow.InvalidMeshError, match=r"flat\.obj: face 0"):
+        curvflow.load(tmp_path / "flat.obj")
+    V, F, _ = curvflow.load(tmp_path / "flat.obj", validate=False)
+    assert V.shape == (3, 3) and F.tolist() == [[0, 1, 2]]
+    # a vertex no face uses is dropped as the commands drop it; weld=False keeps it, and the mesh is refused
     (tmp_path / "dup.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 5 5 5\nf 1 2 3\n")
+    V, F, extras = curvflow.load(tmp_path / "dup.obj")
+    assert V.shape == (3, 3) and extras["unused_vertices_dropped"] == 1
     with pytest.raises(curvflow.InvalidMeshError, match=r"dup\.obj: vertex 3"):
-        curvflow.load(tmp_path / "dup.obj")
-    V, F, _ = curvflow.load(tmp_path / "dup.obj", validate=False)
+        curvflow.load(tmp_path / "dup.obj", weld=False)
+    V, F, _ = curvflow.load(tmp_path / "dup.obj", validate=False, weld=False)
     assert V.shape == (4, 3) and F.tolist() == [[0, 1, 2]]
 
 

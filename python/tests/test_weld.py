@@ -1,6 +1,7 @@
 """Seams (docs/io.md): a mesh file whose boundary vertices lie on others, as
 exporters write texture seams and unshared triangles, is welded by load()
-and by every command, and flows as the closed surface it describes;
+and by every command, and flows as the closed surface it describes; the
+vertices no face uses are dropped the same way ("Unused vertices");
 --no-weld / weld=False keep the file's vertices; files numbered for the
 file's vertices are refused once the weld renumbered them."""
 import json
@@ -46,7 +47,7 @@ def test_seam_flows_as_the_closed_surface(cli, meshes, tmp_path):
     # as the file says: two boundary loops; what the commands make of it: closed
     js = json.loads(run_cli(cli, "info", seam, "--json").stdout)
     assert js["boundary_loops"] == 2 and js["vertices"] == len(V2)
-    assert js["seams"] == {"coincident_boundary_vertices": 2 * copies, "positions": copies,
+    assert js["seams"] == {"unused_vertices": 0, "coincident_boundary_vertices": 2 * copies, "positions": copies,
                            "welded_vertices": len(V), "welded_boundary_loops": 0, "welded_genus": 0,
                            "refused": None}
     assert curvflow.info(seam)["seams"] == js["seams"]
@@ -110,3 +111,39 @@ def test_weld_arrays(meshes):
     assert "separate fans" in report3["refused"] and np.array_equal(index3, np.arange(6)) and len(V3) == 6
     with pytest.raises(curvflow.InvalidMeshError, match="face 1: vertex index 9 out of range"):
         curvflow.weld(bowtie, [[0, 1, 2], [3, 4, 9]])
+
+
+def test_unused_vertices_are_dropped(cli, meshes, tmp_path):
+    """A file with vertices no face uses (a scan's stray points, an editor's
+    deleted faces): dropped by load() and the commands, which then run; kept,
+    and refused, with --no-weld / weld=False; files numbering the file's
+    vertices are refused after the drop."""
+    V, F, _ = curvflow.load(meshes["icosphere"], weld=False)
+    stray = np.array([[5.0, 5.0, 5.0], [-5.0, 0.0, 0.0]])
+    # one stray vertex after the first, one at the end: the faces renumbered
+    V2 = np.vstack([V[:1], stray[:1], V[1:], stray[1:]])
+    F2 = np.where(F >= 1, F + 1, F)
+    path = tmp_path / "stray.obj"
+    _write_obj(path, V2, F2)
+    proc = run_cli(cli, "info", path, "--json", check=False)  # the file as it is: an invalid mesh (exit 2)
+    js = json.loads(proc.stdout)
+    assert proc.returncode == 2 and js["vertices"] == len(V2) and not js["validation"]["valid"]
+    assert js["validation"]["unreferenced_vertices"] == 2 and js["seams"]["unused_vertices"] == 2
+    assert curvflow.info(path)["seams"] == js["seams"]
+    Vd, Fd, ex = curvflow.load(path)
+    assert np.array_equal(Vd, V) and np.array_equal(Fd, F) and ex["unused_vertices_dropped"] == 2
+    with pytest.raises(curvflow.InvalidMeshError, match="vertex 1 is not used by any face"):
+        curvflow.load(path, weld=False)
+    assert curvflow.load(path, weld=False, validate=False)[0].shape == V2.shape
+    proc = run_cli(cli, "flow", path, "-o", tmp_path / "a.obj", "--method", "implicit-mcf", "-n", "2", "-q")
+    assert "dropped 2 vertices that no face uses: %d vertices instead of %d" % (len(V), len(V2)) in proc.stderr
+    run_cli(cli, "flow", meshes["icosphere"], "-o", tmp_path / "b.obj", "--method", "implicit-mcf", "-n", "2", "-q")
+    assert (tmp_path / "a.obj").read_bytes() == (tmp_path / "b.obj").read_bytes()
+    proc = run_cli(cli, "flow", path, "-o", tmp_path / "c.obj", "--method", "implicit-mcf", "-n", "2", "--no-weld",
+                   check=False)
+    assert proc.returncode == 2 and "vertex 1 is not used by any face" in proc.stderr
+    rho = tmp_path / "rho.txt"
+    rho.write_text("0.1\n" * len(V2))
+    proc = run_cli(cli, "spin", path, "--rho", rho, "-o", tmp_path / "r.obj", check=False)
+    assert proc.returncode == 2 and "unused vertices were dropped (2)" in proc.stderr and "--no-weld" in proc.stderr
+    assert not (tmp_path / "r.obj").exists()

@@ -1007,6 +1007,9 @@ static cf_status relax_positions(cf_flow *flow, cfi_spin_state *s)
     if (w <= w_step) {
         memcpy(x, s->relaxed, 3 * (size_t)s->nv * sizeof(double));
         s->diag.relaxation_kept = 1;
+        /* genus > 0: the reuse of X(0) is bounded by the steps' change of
+         * scale, which says nothing of this move */
+        s->x0_factored = 0;
         /* the relaxed map from the input is no longer conformal, so the
          * input's metric no longer recovers the next steps' positions
          * conformally: that of the relaxed state does (measured:

@@ -568,14 +568,23 @@ typedef struct placement {
     double total;       /* sum of s->area */
 } placement;
 
+/* sum_i w_i x_i into sum (3) and sum_i w_i returned */
+static double weighted_sum(int32_t nv, const double *w, const double *x, double sum[3])
+{
+    double total = 0.0;
+    sum[0] = sum[1] = sum[2] = 0.0;
+    for (int32_t i = 0; i < nv; ++i) {
+        total += w[i];
+        for (int c = 0; c < 3; ++c) sum[c] += w[i] * x[3 * i + c];
+    }
+    return total;
+}
+
 static void start_placement(const cf_flow *flow, const cfi_spin_state *s, const double *x, placement *pl)
 {
     memset(pl, 0, sizeof *pl);
     if (s->fixed_boundary) return;
-    for (int32_t i = 0; i < flow->mesh->nv; ++i) {
-        pl->total += s->area[i];
-        for (int c = 0; c < 3; ++c) pl->centroid[c] += s->area[i] * x[3 * i + c];
-    }
+    pl->total = weighted_sum(flow->mesh->nv, s->area, x, pl->centroid);
     for (int c = 0; c < 3; ++c) pl->centroid[c] /= pl->total;
 }
 
@@ -588,9 +597,8 @@ static cf_status place(cf_flow *flow, const cfi_spin_state *s, const placement *
         if (dst != src) memcpy(dst, src, 3 * (size_t)nv * sizeof(double));
         return CF_OK;
     }
-    double c_new[3] = {0, 0, 0};
-    for (int32_t i = 0; i < nv; ++i)
-        for (int c = 0; c < 3; ++c) c_new[c] += s->area[i] * src[3 * i + c];
+    double c_new[3];
+    weighted_sum(nv, s->area, src, c_new);
     for (int c = 0; c < 3; ++c) c_new[c] /= pl->total;
     double scale = 1.0;
     if (s->opt.normalize) {
@@ -991,11 +999,7 @@ static cf_status relax_positions(cf_flow *flow, cfi_spin_state *s)
         st = cf_vertex_areas(flow->ctx, flow->mesh, s->relaxed, CF_DUAL_AREA_BARYCENTRIC, s->relaxed_area);
     if (st != CF_OK) return st;
     if (!s->fixed_boundary) {
-        double total = 0.0, c_new[3] = {0.0, 0.0, 0.0};
-        for (int32_t i = 0; i < s->nv; ++i) {
-            total += s->relaxed_area[i];
-            for (int c = 0; c < 3; ++c) c_new[c] += s->relaxed_area[i] * s->relaxed[3 * i + c];
-        }
+        double c_new[3], total = weighted_sum(s->nv, s->relaxed_area, s->relaxed, c_new);
         for (int32_t i = 0; i < s->nv; ++i)
             for (int c = 0; c < 3; ++c) s->relaxed[3 * i + c] += pl.centroid[c] - c_new[c] / total;
     }

@@ -189,7 +189,7 @@ CF_API cf_status cf_flow_params(cf_flow_kind kind, const cf_param_desc **params,
 /* What one step reports. Energy terms and residuals are named by the method
  * (term_names, residual_names); unused slots have NULL names. */
 #define CF_FLOW_MAX_TERMS 4
-#define CF_FLOW_MAX_RESIDUALS 8
+#define CF_FLOW_MAX_RESIDUALS 10
 typedef struct cf_flow_info {
     int64_t iteration;       /* steps taken so far, this one included */
     double time;             /* accumulated flow time (sum of time steps) */

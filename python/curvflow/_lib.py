@@ -90,7 +90,7 @@ class VertexScaleFit(Structure):
 
 
 MAX_TERMS = 4
-MAX_RESIDUALS = 8
+MAX_RESIDUALS = 10
 
 
 class FlowInfo(Structure):

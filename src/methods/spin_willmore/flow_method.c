@@ -1061,6 +1061,12 @@ cf_status cfi_spin_end_step(cf_flow *flow, cf_flow_info *info)
     s->diag.realised_decrease = isnan(realised) ? 0.0 : realised;
     info->residuals[7] = s->diag.realised_decrease;
     info->residual_names[7] = "realised_decrease";
+    if (s->relaxation) {
+        /* the sweeps of the tangential relaxation this step kept (0: none
+         * kept, or below its threshold) */
+        info->residuals[8] = s->diag.relaxation_kept ? s->diag.relaxation_iterations : 0.0;
+        info->residual_names[8] = "relaxation_sweeps";
+    }
     flow->converged = cfi_spin_converged(s, s->energy_before);
     /* what the next step's reuse of X(0) is judged by (exactness.c); at a
      * stall the last rejected attempt's figures, an overestimate */

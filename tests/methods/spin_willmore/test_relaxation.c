@@ -29,6 +29,7 @@
 
 /* What the hook sees of the relaxation, step by step. */
 typedef struct relaxation_log {
+    int relaxation; /* the option's value in the run */
     int acted, kept, first_acting_step;
     double mean_q_before_first; /* mean Q of the map at the step before the first relaxation */
 } relaxation_log;
@@ -44,6 +45,10 @@ static void record(cf_context *ctx, const cf_flow *flow, int step, void *user)
     }
     log->kept += d.relaxation_kept;
     CHECK(!d.relaxation_kept || d.relaxation_iterations > 0);
+    /* the log's residual: the sweeps kept, only with the option */
+    double sweeps = cft_flow_residual(cf_flow_last_info(flow), "relaxation_sweeps");
+    if (log->relaxation) CHECK(sweeps == (d.relaxation_kept ? d.relaxation_iterations : 0));
+    else CHECK(isnan(sweeps));
 }
 
 /* 10 steps with `relaxation` sweeps (0: off) on mesh; the final positions
@@ -56,6 +61,7 @@ static int run(cf_context *ctx, const cf_mesh *mesh, int relaxation, spin_run *r
     snprintf(value, sizeof value, "%d", relaxation);
     CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "relaxation", value));
     memset(log, 0, sizeof *log);
+    log->relaxation = relaxation;
     cf_flow *flow = NULL;
     CHECK_OK(ctx, cf_flow_create(ctx, mesh, NULL, &o, &flow));
     if (!flow) return 0;

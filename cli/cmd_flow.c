@@ -12,6 +12,8 @@
 #include "common.h"
 #include "report.h"
 #include "curvflow/io.h"
+#include "curvflow/metrics.h"
+#include "curvflow/spin_willmore.h"
 
 #include <errno.h>
 #include <getopt.h>
@@ -252,6 +254,32 @@ static int apply_params(cf_context *ctx, const cli_flow_job *job, cf_flow_option
     return CLI_EXIT_OK;
 }
 
+/* Above this mean Q of the map from the input, a spin-willmore run without
+ * the tangential relaxation says it exists (issue 13's bound on mean Q) */
+#define CLI_RELAXATION_HINT_MEAN_Q 1.5
+
+/* spin-willmore without `relaxation`: when the result's area-weighted mean
+ * Q against the input exceeds the bound, a note names the option (docs/spin.md,
+ * "Tangential relaxation"): the crowding of thin parts is what a user of a
+ * coarse model with limbs sees, and the option is off by default. */
+static void relaxation_hint(cf_context *ctx, const cf_flow_options *options, const cf_mesh *mesh,
+                            const cf_flow *flow)
+{
+    const cf_spin_willmore_options *spin = cf_flow_options_method_as_const(options, CF_FLOW_SPIN_WILLMORE);
+    if (!spin || spin->relaxation > 0) return;
+    cf_stats q;
+    if (cf_quasi_conformal_error(ctx, mesh, cf_mesh_positions(mesh), cf_flow_positions(flow), NULL, &q) != CF_OK) {
+        cf_context_clear_error(ctx);
+        return;
+    }
+    if (!(q.weighted_mean > CLI_RELAXATION_HINT_MEAN_Q)) return;
+    fprintf(stderr,
+            "curvflow: note: the result's mean Q against the input is %.3f: thin parts crowded by the conformal map; "
+            "-p relaxation=10 moves the vertices within the surface toward a more conformal map (genus 0; on genus "
+            "> 0 it moves the conformal class), a finer input helps too (docs/spin.md, \"Tangential relaxation\")\n",
+            q.weighted_mean);
+}
+
 static int run_loaded(cf_context *ctx, const cli_flow_job *job, cf_flow_options *options, cli_flow_arrays *arrays)
 {
     cf_mesh *mesh = NULL, *start_mesh = NULL;
@@ -303,6 +331,7 @@ static int run_loaded(cf_context *ctx, const cli_flow_job *job, cf_flow_options 
                     job->label, (long long)last->iteration, cf_flow_converged(flow) ? " (converged)" : "",
                     last->energy, last->area_drift, last->volume_drift, job->output);
         }
+        relaxation_hint(ctx, options, mesh, flow);
     }
 done:
     cli_progress_finish(&progress);

@@ -71,6 +71,8 @@ def meshes(cli, tmp_path_factory):
         "grid": ["grid", "--nx", "8", "--ny", "8"],
         "cylinder": ["cylinder", "--n-around", "16", "--n-along", "8"],
         "bar": ["bar", "--nx", "10", "--ny", "2", "--nz", "2"],
+        # thin limbs that the conformal map crowds (mean Q 2.36 after 10 default steps)
+        "limbs": ["limb-sphere", "--subdivisions", "3", "--length", "1.8", "--width", "0.18"],
     }.items():
         path = d / (name + ".obj")
         run_cli(cli, "generate", *args, "-o", path)

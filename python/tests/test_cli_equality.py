@@ -29,6 +29,7 @@ CASES = [
      dict(steps=3, sigma=0.25, filter_k=1, mobius=True)),
     ("spin-willmore", "torus", ["--steps", "3", "--time-step", "0.3"], dict(steps=3, time_step=0.3)),
     ("spin-willmore", "cylinder", ["--steps", "3", "-p", "boundary=fixed"], dict(steps=3, boundary="fixed")),
+    ("spin-willmore", "limbs", ["--steps", "4", "-p", "relaxation=10"], dict(steps=4, relaxation=10)),
 ]
 
 

@@ -53,6 +53,49 @@ static inline int32_t cfi_he_prev(int32_t h) { return h - h % 3 + (h % 3 + 2) % 
  * all oriented like f. */
 void cfi_mesh_split4_triangles(const cf_mesh *mesh, int32_t *out);
 
+/* The point q of triangle (a, b, c) nearest to p: p located in the
+ * triangle's Voronoi regions (vertex, edge, interior) from barycentric dot
+ * products (Ericson, Real-Time Collision Detection, 5.1.5). Shared by the
+ * surface distance (metrics) and the tangential relaxation's projection
+ * (ops). */
+static inline void cfi_nearest_point_on_triangle(const double p[3], const double a[3], const double b[3],
+                                                 const double c[3], double q[3])
+{
+    double ab[3], ac[3], ap[3], bp[3], cp[3];
+    for (int k = 0; k < 3; ++k) {
+        ab[k] = b[k] - a[k];
+        ac[k] = c[k] - a[k];
+        ap[k] = p[k] - a[k];
+        bp[k] = p[k] - b[k];
+        cp[k] = p[k] - c[k];
+    }
+#define CFI_DOT3(u, v) ((u)[0] * (v)[0] + (u)[1] * (v)[1] + (u)[2] * (v)[2])
+    double d1 = CFI_DOT3(ab, ap), d2 = CFI_DOT3(ac, ap), d3 = CFI_DOT3(ab, bp), d4 = CFI_DOT3(ac, bp),
+           d5 = CFI_DOT3(ab, cp), d6 = CFI_DOT3(ac, cp);
+#undef CFI_DOT3
+    double vc = d1 * d4 - d3 * d2, vb = d5 * d2 - d1 * d6, va = d3 * d6 - d5 * d4;
+    if (d1 <= 0.0 && d2 <= 0.0) { /* vertex a */
+        for (int k = 0; k < 3; ++k) q[k] = a[k];
+    } else if (d3 >= 0.0 && d4 <= d3) { /* vertex b */
+        for (int k = 0; k < 3; ++k) q[k] = b[k];
+    } else if (d6 >= 0.0 && d5 <= d6) { /* vertex c */
+        for (int k = 0; k < 3; ++k) q[k] = c[k];
+    } else if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) { /* edge ab */
+        double t = d1 / (d1 - d3);
+        for (int k = 0; k < 3; ++k) q[k] = a[k] + t * ab[k];
+    } else if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) { /* edge ac */
+        double t = d2 / (d2 - d6);
+        for (int k = 0; k < 3; ++k) q[k] = a[k] + t * ac[k];
+    } else if (va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0) { /* edge bc */
+        double t = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        for (int k = 0; k < 3; ++k) q[k] = b[k] + t * (c[k] - b[k]);
+    } else { /* interior: barycentric (va, vb, vc) / sum */
+        double sum = va + vb + vc;
+        double v = vb / sum, w = vc / sum;
+        for (int k = 0; k < 3; ++k) q[k] = a[k] + v * ab[k] + w * ac[k];
+    }
+}
+
 /* A triangle has zero area for the mesh check when its area is at most this
  * times the square of its longest edge (scale-free). */
 #define CFI_ZERO_AREA_RATIO 1e-14

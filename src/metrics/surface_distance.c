@@ -139,37 +139,8 @@ static double dot3(const double *a, const double *b) { return a[0] * b[0] + a[1]
 /* Squared distance from p to triangle (a, b, c). */
 static double point_triangle_dist2(const double p[3], const double a[3], const double b[3], const double c[3])
 {
-    double ab[3], ac[3], ap[3], bp[3], cp[3], q[3];
-    for (int k = 0; k < 3; ++k) {
-        ab[k] = b[k] - a[k];
-        ac[k] = c[k] - a[k];
-        ap[k] = p[k] - a[k];
-        bp[k] = p[k] - b[k];
-        cp[k] = p[k] - c[k];
-    }
-    double d1 = dot3(ab, ap), d2 = dot3(ac, ap), d3 = dot3(ab, bp), d4 = dot3(ac, bp), d5 = dot3(ab, cp),
-           d6 = dot3(ac, cp);
-    double vc = d1 * d4 - d3 * d2, vb = d5 * d2 - d1 * d6, va = d3 * d6 - d5 * d4;
-    if (d1 <= 0.0 && d2 <= 0.0) { /* vertex a */
-        for (int k = 0; k < 3; ++k) q[k] = a[k];
-    } else if (d3 >= 0.0 && d4 <= d3) { /* vertex b */
-        for (int k = 0; k < 3; ++k) q[k] = b[k];
-    } else if (d6 >= 0.0 && d5 <= d6) { /* vertex c */
-        for (int k = 0; k < 3; ++k) q[k] = c[k];
-    } else if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) { /* edge ab */
-        double t = d1 / (d1 - d3);
-        for (int k = 0; k < 3; ++k) q[k] = a[k] + t * ab[k];
-    } else if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) { /* edge ac */
-        double t = d2 / (d2 - d6);
-        for (int k = 0; k < 3; ++k) q[k] = a[k] + t * ac[k];
-    } else if (va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0) { /* edge bc */
-        double t = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        for (int k = 0; k < 3; ++k) q[k] = b[k] + t * (c[k] - b[k]);
-    } else { /* interior: barycentric (va, vb, vc) / sum */
-        double s = va + vb + vc;
-        double v = vb / s, w = vc / s;
-        for (int k = 0; k < 3; ++k) q[k] = a[k] + v * ab[k] + w * ac[k];
-    }
+    double q[3];
+    cfi_nearest_point_on_triangle(p, a, b, c, q);
     double d[3] = {p[0] - q[0], p[1] - q[1], p[2] - q[2]};
     return dot3(d, d);
 }

@@ -37,7 +37,7 @@
  * of its plane, if inside the face), then the whole star.
  */
 #include "curvflow/ops.h"
-#include "mesh/mesh_internal.h"
+#include "ops/ops_internal.h"
 
 #include <math.h>
 #include <string.h>
@@ -67,16 +67,6 @@ struct cf_tangential_relaxation {
     double *vertex_step;  /* nv: each vertex's last kept step, the next sweep's first */
 };
 
-static void sub3(const double *a, const double *b, double *o)
-{
-    o[0] = a[0] - b[0], o[1] = a[1] - b[1], o[2] = a[2] - b[2];
-}
-static double dot3(const double *a, const double *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-static void cross3(const double *a, const double *b, double *o)
-{
-    o[0] = a[1] * b[2] - a[2] * b[1], o[1] = a[2] * b[0] - a[0] * b[2], o[2] = a[0] * b[1] - a[1] * b[0];
-}
-
 /* A0 D / (2 A) of one face with corners q (its MIPS energy times A0), and
  * its gradient with respect to each corner into g (may be NULL); *area (may
  * be NULL) its area. +inf when it has no area, or when `orientation` (may
@@ -87,13 +77,13 @@ static double face_mips(const double *const q[3], double a0, const double *c, co
                         double g[3][3])
 {
     double e[3][3], normal[3];
-    for (int m = 0; m < 3; ++m) sub3(q[(m + 2) % 3], q[(m + 1) % 3], e[m]); /* opposite corner m */
-    cross3(e[2], e[0], normal); /* (q1 - q0) x (q2 - q1) = 2 A n */
-    if (orientation && !(dot3(normal, orientation) > 0.0)) return INFINITY;
-    double twice_area = sqrt(dot3(normal, normal));
+    for (int m = 0; m < 3; ++m) cfi_v3_sub(q[(m + 2) % 3], q[(m + 1) % 3], e[m]); /* opposite corner m */
+    cfi_v3_cross(e[2], e[0], normal); /* (q1 - q0) x (q2 - q1) = 2 A n */
+    if (orientation && !(cfi_v3_dot(normal, orientation) > 0.0)) return INFINITY;
+    double twice_area = sqrt(cfi_v3_dot(normal, normal));
     if (area) *area = 0.5 * twice_area;
     if (!(twice_area > 0.0)) return INFINITY;
-    double dirichlet = 0.5 * (c[0] * dot3(e[0], e[0]) + c[1] * dot3(e[1], e[1]) + c[2] * dot3(e[2], e[2]));
+    double dirichlet = 0.5 * (c[0] * cfi_v3_dot(e[0], e[0]) + c[1] * cfi_v3_dot(e[1], e[1]) + c[2] * cfi_v3_dot(e[2], e[2]));
     double a = 0.5 * twice_area, energy = a0 * dirichlet / (2.0 * a);
     if (!g) return energy;
     /* dD/dq: e_m = q_(m+2) - q_(m+1) adds c_m e_m to q_(m+2), -c_m e_m to q_(m+1);
@@ -102,7 +92,7 @@ static double face_mips(const double *const q[3], double a0, const double *c, co
     double gd = a0 / (2.0 * a), ga = -energy / a;
     for (int m = 0; m < 3; ++m) {
         double ne[3];
-        cross3(n, e[m], ne);
+        cfi_v3_cross(n, e[m], ne);
         for (int j = 0; j < 3; ++j) g[m][j] = ga * 0.5 * ne[j];
     }
     for (int m = 0; m < 3; ++m)
@@ -135,58 +125,13 @@ static double mips_energy(const cf_mesh *mesh, const double *area0, const double
     return energy;
 }
 
-/* The point of triangle (a, b, c) nearest to p (Ericson, Real-Time Collision
- * Detection, 5.1.5: the Voronoi regions of the vertices, edges and face). */
-static void nearest_on_triangle(const double *p, const double *a, const double *b, const double *c, double *out)
-{
-    double ab[3], ac[3], ap[3], bp[3], cp[3];
-    sub3(b, a, ab), sub3(c, a, ac), sub3(p, a, ap);
-    double d1 = dot3(ab, ap), d2 = dot3(ac, ap);
-    if (d1 <= 0.0 && d2 <= 0.0) {
-        memcpy(out, a, 3 * sizeof(double));
-        return;
-    }
-    sub3(p, b, bp);
-    double d3 = dot3(ab, bp), d4 = dot3(ac, bp);
-    if (d3 >= 0.0 && d4 <= d3) {
-        memcpy(out, b, 3 * sizeof(double));
-        return;
-    }
-    double vc = d1 * d4 - d3 * d2;
-    if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
-        double v = d1 / (d1 - d3);
-        for (int k = 0; k < 3; ++k) out[k] = a[k] + v * ab[k];
-        return;
-    }
-    sub3(p, c, cp);
-    double d5 = dot3(ab, cp), d6 = dot3(ac, cp);
-    if (d6 >= 0.0 && d5 <= d6) {
-        memcpy(out, c, 3 * sizeof(double));
-        return;
-    }
-    double vb = d5 * d2 - d1 * d6;
-    if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
-        double w = d2 / (d2 - d6);
-        for (int k = 0; k < 3; ++k) out[k] = a[k] + w * ac[k];
-        return;
-    }
-    double va = d3 * d6 - d5 * d4;
-    if (va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0) {
-        double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        for (int k = 0; k < 3; ++k) out[k] = b[k] + w * (c[k] - b[k]);
-        return;
-    }
-    double denom = 1.0 / (va + vb + vc), v = vb * denom, w = vc * denom;
-    for (int k = 0; k < 3; ++k) out[k] = a[k] + v * ab[k] + w * ac[k];
-}
-
 /* The nearest point of the plane of triangle (a, b, c) to p into out, if
  * it lies in the triangle; 0 otherwise. */
 static int inside_projection(const double *p, const double *a, const double *b, const double *c, double *out)
 {
     double ab[3], ac[3], ap[3];
-    sub3(b, a, ab), sub3(c, a, ac), sub3(p, a, ap);
-    double d00 = dot3(ab, ab), d01 = dot3(ab, ac), d11 = dot3(ac, ac), d20 = dot3(ap, ab), d21 = dot3(ap, ac);
+    cfi_v3_sub(b, a, ab), cfi_v3_sub(c, a, ac), cfi_v3_sub(p, a, ap);
+    double d00 = cfi_v3_dot(ab, ab), d01 = cfi_v3_dot(ab, ac), d11 = cfi_v3_dot(ac, ac), d20 = cfi_v3_dot(ap, ab), d21 = cfi_v3_dot(ap, ac);
     double det = d00 * d11 - d01 * d01;
     if (!(det > 0.0)) return 0;
     double v = (d11 * d20 - d01 * d21) / det, w = (d00 * d21 - d01 * d20) / det;
@@ -215,9 +160,9 @@ static void project_to_star(cf_tangential_relaxation *r, int32_t v, double *p)
     for (int32_t k = offsets[v]; k < offsets[v + 1]; ++k) {
         const int32_t *t = mesh->triangles + 3 * faces[k];
         double d[3];
-        nearest_on_triangle(p, s + 3 * t[0], s + 3 * t[1], s + 3 * t[2], q);
-        sub3(q, p, d);
-        double d2 = dot3(d, d);
+        cfi_nearest_point_on_triangle(p, s + 3 * t[0], s + 3 * t[1], s + 3 * t[2], q);
+        cfi_v3_sub(q, p, d);
+        double d2 = cfi_v3_dot(d, d);
         if (d2 < best_d2) best_d2 = d2, memcpy(best, q, sizeof best), r->home[v] = faces[k];
     }
     memcpy(p, best, sizeof best);
@@ -269,9 +214,9 @@ static int propose_move(cf_tangential_relaxation *r, int32_t v, int32_t *trials)
         const double *fn = r->surface_normal + 3 * faces[k];
         n[0] += fn[0], n[1] += fn[1], n[2] += fn[2];
     }
-    double nn = dot3(n, n), gn = nn > 0.0 ? dot3(g, n) / nn : 0.0, scale = star_area / r->star_area0[v];
+    double nn = cfi_v3_dot(n, n), gn = nn > 0.0 ? cfi_v3_dot(g, n) / nn : 0.0, scale = star_area / r->star_area0[v];
     double d[3] = {-scale * (g[0] - gn * n[0]), -scale * (g[1] - gn * n[1]), -scale * (g[2] - gn * n[2])};
-    if (!(dot3(d, d) > 0.0)) return 0;
+    if (!(cfi_v3_dot(d, d) > 0.0)) return 0;
     double step = r->vertex_step[v];
     for (int h = 0; h <= CFI_RELAX_HALVINGS; ++h, step *= 0.5) {
         double y[3] = {x[0] + step * d[0], x[1] + step * d[1], x[2] + step * d[2]};
@@ -287,26 +232,19 @@ static int propose_move(cf_tangential_relaxation *r, int32_t v, int32_t *trials)
     return 0;
 }
 
-/* Reference areas and corner cotangents (nf and 3 nf); a degenerate
- * reference face is an error naming it. */
+/* Reference areas and corner cotangents (nf and 3 nf), with the operators'
+ * own per-face routine: a reference face without area is an error naming
+ * it. */
 static cf_status reference_triangles(cf_context *ctx, const cf_mesh *mesh, const double *reference, double *area0,
                                      double *cot0)
 {
     for (int32_t f = 0; f < mesh->nf; ++f) {
-        const int32_t *t = mesh->triangles + 3 * f;
-        double normal[3], e1[3], e2[3];
-        sub3(reference + 3 * t[1], reference + 3 * t[0], e1), sub3(reference + 3 * t[2], reference + 3 * t[0], e2);
-        cross3(e1, e2, normal);
-        double twice_area = sqrt(dot3(normal, normal));
-        if (!(twice_area > 0.0) || !isfinite(twice_area))
-            return cfi_error(ctx, CF_ERR_DEGENERATE_FACE, "face %d: degenerate reference triangle", f);
+        double twice_area = 0.0;
+        cf_status st = cfi_face_cotangents(ctx, mesh, reference, f, 0.0, cot0 + 3 * f, &twice_area);
+        if (st != CF_OK) return st;
+        if (!isfinite(twice_area))
+            return cfi_error(ctx, CF_ERR_DEGENERATE_FACE, "face %d: reference triangle of infinite area", f);
         area0[f] = 0.5 * twice_area;
-        for (int m = 0; m < 3; ++m) {
-            double u[3], w[3];
-            const double *p = reference + 3 * t[m];
-            sub3(reference + 3 * t[(m + 1) % 3], p, u), sub3(reference + 3 * t[(m + 2) % 3], p, w);
-            cot0[3 * f + m] = dot3(u, w) / twice_area;
-        }
     }
     return CF_OK;
 }
@@ -423,12 +361,7 @@ cf_status cf_tangential_relaxation_apply(cf_tangential_relaxation *r, const doub
         return cfi_error(ctx, CF_ERR_DEGENERATE_FACE, "tangential_relaxation: a face of the surface has no area");
     if (iterations == 0 || energy <= 0.5 * (min_mean_q + 1.0 / min_mean_q) * r->area0_total) return CF_OK;
     memcpy(r->surface, in, n3 * sizeof(double));
-    for (int32_t f = 0; f < r->nf; ++f) {
-        const int32_t *t = mesh->triangles + 3 * f;
-        double e1[3], e2[3];
-        sub3(in + 3 * t[1], in + 3 * t[0], e1), sub3(in + 3 * t[2], in + 3 * t[0], e2);
-        cross3(e1, e2, r->surface_normal + 3 * f);
-    }
+    for (int32_t f = 0; f < r->nf; ++f) cfi_face_area_vector(mesh, in, f, r->surface_normal + 3 * f);
     for (int32_t v = 0; v < r->nv; ++v) r->home[v] = -1;
     memcpy(r->x, r->surface, n3 * sizeof(double));
     for (int32_t sweep = 0; sweep < iterations; ++sweep) {

@@ -129,8 +129,7 @@ static cf_status seams_json(cf_context *ctx, const char *path, json_t *root)
     cf_weld_report r;
     int32_t dropped = 0;
     cf_status st = cf_read_mesh_file(ctx, path, &data);
-    if (st == CF_OK) st = cf_mesh_data_drop_unreferenced(ctx, data, NULL, &dropped);
-    if (st == CF_OK) st = cf_mesh_data_weld(ctx, data, NULL, &r);
+    if (st == CF_OK) st = cli_tidy_vertices(ctx, data, &dropped, &r);
     if (st == CF_OK && r.welded) {
         cf_mesh_desc desc;
         cf_mesh_data_desc(data, &desc);

@@ -236,6 +236,12 @@ int cli_check_vertex_file(const char *option, const char *path, const char *mesh
     return CLI_EXIT_INPUT;
 }
 
+cf_status cli_tidy_vertices(cf_context *ctx, cf_mesh_data *data, int32_t *dropped, cf_weld_report *weld)
+{
+    cf_status st = cf_mesh_data_drop_unreferenced(ctx, data, NULL, dropped);
+    return st == CF_OK ? cf_mesh_data_weld(ctx, data, NULL, weld) : st;
+}
+
 /* Reads a mesh file and, unless --no-weld, drops the vertices no face uses
  * (cf_mesh_data_drop_unreferenced; docs/io.md, "Unused vertices") and joins
  * its seams (cf_mesh_data_weld; "Seams"); `announce`: says on stderr what
@@ -246,24 +252,20 @@ static cf_status read_mesh_data(cf_context *ctx, const char *path, cf_mesh_data 
     cf_status st = cf_read_mesh_file(ctx, path, data);
     if (st != CF_OK || !weld_seams) return st;
     int32_t in_file = (*data)->vertex_count, dropped = 0;
-    if ((st = cf_mesh_data_drop_unreferenced(ctx, *data, NULL, &dropped)) != CF_OK) {
-        cf_mesh_data_destroy(data);
-        return st;
-    }
-    if (announce && dropped > 0) {
-        unused_dropped = dropped;
-        fprintf(stderr,
-                "curvflow: %s: dropped %d vertices that no face uses: %d vertices instead of %d, also in what is "
-                "written from it (--no-weld keeps the file's)\n",
-                path, (int)dropped, (int)(*data)->vertex_count, (int)in_file);
-    }
-    int32_t before = (*data)->vertex_count;
     cf_weld_report r;
-    if ((st = cf_mesh_data_weld(ctx, *data, NULL, &r)) != CF_OK) {
+    if ((st = cli_tidy_vertices(ctx, *data, &dropped, &r)) != CF_OK) {
         cf_mesh_data_destroy(data);
         return st;
     }
     if (!announce) return CF_OK;
+    int32_t before = in_file - dropped; /* the weld's count before */
+    if (dropped > 0) {
+        unused_dropped = dropped;
+        fprintf(stderr,
+                "curvflow: %s: dropped %d vertices that no face uses: %d vertices instead of %d, also in what is "
+                "written from it (--no-weld keeps the file's)\n",
+                path, (int)dropped, (int)before, (int)in_file);
+    }
     if (r.welded) {
         weld_removed = r.removed;
         char differing[96] = "";

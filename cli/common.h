@@ -79,6 +79,11 @@ int cli_load_mesh(cf_context *ctx, const char *path, cf_mesh **out);
  * vertices and weld its seams (cf_mesh_data_drop_unreferenced,
  * cf_mesh_data_weld; true unless a command's --no-weld). */
 void cli_set_weld(bool weld);
+/* What the commands make of a file's vertices (docs/io.md, "Unused vertices"
+ * and "Seams"): the unused ones dropped (cf_mesh_data_drop_unreferenced),
+ * then the seams welded (cf_mesh_data_weld); *dropped and *weld say what was
+ * done. Shared by the reading of every command and by info's report. */
+cf_status cli_tidy_vertices(cf_context *ctx, cf_mesh_data *data, int32_t *dropped, cf_weld_report *weld);
 /* A file of per-vertex values or vertex numbers (`option` PATH) for the
  * mesh file mesh_path: exit 2 with a message if the weld renumbered that
  * mesh's vertices, else 0. */

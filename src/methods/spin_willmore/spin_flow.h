@@ -59,7 +59,6 @@ typedef struct cfi_spin_state {
     cf_tangential_relaxation *relaxation; /* relaxation resolved > 0: its descent (curvflow/ops.h) */
     int32_t relax_iterations;  /* option relaxation (0 with prescribed / cmc boundaries) */
     double *relaxed;         /* 3 nv: the relaxed candidate of a step (relaxation only) */
-    double *relaxed_area;    /* nv: its vertex areas (its centroid's weights) */
     int32_t harmonic_dim;    /* dim H^1 (2g + b - 1 with boundary) if the exactness constraint is active */
     int32_t linearized;      /* exactness by the discrete linearisation instead of App. C's Z_i */
     int32_t period_newton;   /* closed, genus > 0, linearised, period_iterations > 0: the Newton
@@ -103,6 +102,7 @@ typedef struct cfi_spin_state {
     double *basis;           /* nv x max_cols */
     int32_t max_cols;
     double *edges;           /* 3 ne */
+    double *placed_area;     /* nv: vertex areas of the positions being placed (their centroid's weights) */
     double *newpos;          /* 3 nv */
     double *vtmp;            /* nv, Moebius balancing only */
     double energy;

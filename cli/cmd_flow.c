@@ -254,30 +254,44 @@ static int apply_params(cf_context *ctx, const cli_flow_job *job, cf_flow_option
     return CLI_EXIT_OK;
 }
 
-/* Above this mean Q of the map from the input, a spin-willmore run without
- * the tangential relaxation says it exists (issue 13's bound on mean Q) */
+/* Above this mean Q of the map from the input, a spin-willmore run says why
+ * and what helps (issue 13's bound on mean Q) */
 #define CLI_RELAXATION_HINT_MEAN_Q 1.5
 
-/* spin-willmore without `relaxation`: when the result's area-weighted mean
- * Q against the input exceeds the bound, a note names the option (docs/spin.md,
- * "Tangential relaxation"): the crowding of thin parts is what a user of a
- * coarse model with limbs sees, and the option is off by default. */
+/* spin-willmore: when the result's area-weighted mean Q against the input
+ * exceeds the bound, a note (docs/spin.md, "Tangential relaxation"): the
+ * crowding of thin parts is what a user of a coarse model with limbs sees.
+ * Where the tangential relaxation did not run (set to 0, or its default on a
+ * surface with a boundary or of genus > 0) the note names it; where it ran
+ * (its default on closed genus-0 surfaces: every component's Euler
+ * characteristic 2) it says what is left. */
 static void relaxation_hint(cf_context *ctx, const cf_flow_options *options, const cf_mesh *mesh,
                             const cf_flow *flow)
 {
     const cf_spin_willmore_options *spin = cf_flow_options_method_as_const(options, CF_FLOW_SPIN_WILLMORE);
-    if (!spin || spin->relaxation > 0) return;
+    if (!spin) return;
     cf_stats q;
     if (cf_quasi_conformal_error(ctx, mesh, cf_mesh_positions(mesh), cf_flow_positions(flow), NULL, &q) != CF_OK) {
         cf_context_clear_error(ctx);
         return;
     }
     if (!(q.weighted_mean > CLI_RELAXATION_HINT_MEAN_Q)) return;
-    fprintf(stderr,
-            "curvflow: note: the result's mean Q against the input is %.3f: thin parts crowded by the conformal map; "
-            "-p relaxation=10 moves the vertices within the surface toward a more conformal map (genus 0; on genus "
-            "> 0 it moves the conformal class), a finer input helps too (docs/spin.md, \"Tangential relaxation\")\n",
-            q.weighted_mean);
+    int closed_genus_0 = cf_mesh_boundary_loop_count(mesh) == 0 &&
+                         cf_mesh_euler_characteristic(mesh) == 2 * cf_mesh_component_count(mesh);
+    int relaxed = spin->relaxation > 0 || (spin->relaxation < 0 && closed_genus_0);
+    if (relaxed)
+        fprintf(stderr,
+                "curvflow: note: the result's mean Q against the input is %.3f: thin parts crowded by the conformal map, "
+                "more than the tangential relaxation undoes; a finer input helps (docs/spin.md, \"Tangential "
+                "relaxation\")\n",
+                q.weighted_mean);
+    else
+        fprintf(stderr,
+                "curvflow: note: the result's mean Q against the input is %.3f: thin parts crowded by the conformal map; "
+                "-p relaxation=10 moves the vertices within the surface toward a more conformal map (the default on "
+                "closed surfaces of genus 0 only: on genus > 0 it moves the conformal class, with a boundary it can slow "
+                "the flow), a finer input helps too (docs/spin.md, \"Tangential relaxation\")\n",
+                q.weighted_mean);
 }
 
 static int run_loaded(cf_context *ctx, const cli_flow_job *job, cf_flow_options *options, cli_flow_arrays *arrays)

@@ -197,15 +197,17 @@ typedef struct cf_spin_willmore_options {
                                 * step 1, its distortion mean Q 1.56 after 10 steps). Default 0.03
                                 * (10 period_tolerance); 0: no bound (docs/spin.md, "Periods the
                                 * corrections cannot cancel") */
-    int32_t relaxation;        /* tangential relaxation (the paper is silent; not a default): after
-                                * a step that lowered W, once the map from the input has a mean Q
-                                * above 1.3, this many sweeps of the MIPS energy against the input's
+    int32_t relaxation;        /* tangential relaxation (the paper is silent): after a step that
+                                * lowered W, once the map from the input has a mean Q above 1.3,
+                                * this many sweeps of the MIPS energy against the input's
                                 * triangles, every vertex moved within its star on the step's surface
                                 * (curvflow/ops.h, cf_tangential_relaxation, boundary held); kept if
                                 * its W is not above the step's, the position recovery then taking
-                                * the relaxed state's metric. 0 (default): off. On genus > 0 the
-                                * resampling moves the conformal class the flow keeps (docs/spin.md,
-                                * "Tangential relaxation") */
+                                * the relaxed state's metric. -1 (default): 10 on a closed surface
+                                * of genus 0 (each component judged alone), 0 otherwise: on genus > 0
+                                * the resampling moves the conformal class the flow keeps, and with a
+                                * boundary (held) it slowed bunny_scan_35k's flow (W/4pi 5.10 -> 8.83
+                                * after 10 steps). 0: off (docs/spin.md, "Tangential relaxation") */
 } cf_spin_willmore_options;
 
 CF_API void cf_spin_willmore_options_default(cf_spin_willmore_options *options);

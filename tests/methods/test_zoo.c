@@ -18,7 +18,7 @@
  * Printed per mesh: issue 13's further targets (W after 10 steps <= W0 / 2
  * where W0/4pi >= 2, mean Q <= 1.5), which the defaults meet on part of the
  * meshes only (docs/spin.md, "Robustness"; the column `targets`); asserted
- * as counts that may not fall (17 and 17 with all 20 meshes).
+ * as counts that may not fall (17 and 18 with all 20 meshes).
  * Printed too: the mean Q of the vertex-scale model (cf_vertex_scale_fit_compute:
  * the Q that the variation of the conformal scale across the faces causes
  * by itself). Asserted for spin-willmore where mean Q > 1.5: the model's Q
@@ -222,11 +222,14 @@ static void test_zoo(void)
     /* no regression on the issue-13 targets met so far (all 20 shared
      * meshes, i.e. not in sanitizer builds): W on 17 of 19 and mean Q on 17
      * of 20 since the vertex-scale fairing (15 and 15 before; the W misses
-     * are bob and the double torus, bounded by their conformal classes, the
-     * Q misses cactus, elk and the double torus; docs/spin.md) */
+     * are bob and the double torus, bounded by their conformal classes),
+     * mean Q on 18 since the tangential relaxation became a default on closed
+     * genus-0 surfaces (session 36: cactus 1.580 -> 1.496; 1.4959-1.4982 with
+     * its coordinates perturbed by up to 1e-4 of themselves; the misses elk
+     * and the double torus, of genus 1 and 2; docs/spin.md) */
     if (totals.spin_runs == 20) {
         CHECK(totals.spin_w_target_met >= 17);
-        CHECK(totals.spin_q_met >= 17);
+        CHECK(totals.spin_q_met >= 18);
     }
     CHECK(cf_context_bytes_in_use(ctx) == 0);
     cf_context_destroy(&ctx);

@@ -35,7 +35,7 @@ void cf_spin_willmore_options_default(cf_spin_willmore_options *o)
     o->period_iterations = 3;
     o->period_tolerance = 3e-3;
     o->max_period_error = 3e-2;
-    o->relaxation = 0;
+    o->relaxation = -1;
     o->max_integrability_error = 0.0;
     o->max_conformal_excess = -1.0; /* automatic: the bound on closed surfaces only */
     o->stall_fairing = 1;
@@ -101,11 +101,11 @@ static const cf_param_desc spin_params[] = {
     {"max_period_error", CF_PARAM_DOUBLE, OPT(max_period_error), 0.0, 1.0, NULL,
      "adaptive, closed genus > 0: redo a step with half tau whose periods the corrections leave above this "
      "(relative, as period_tolerance: their Newton steps diverged; 0: no bound)"},
-    {"relaxation", CF_PARAM_INT, OPT(relaxation), 0, 1000, NULL,
+    {"relaxation", CF_PARAM_INT, OPT(relaxation), -1, 1000, NULL,
      "tangential relaxation: after a step that lowered W, once the map from the input has mean Q above 1.3, this "
      "many sweeps moving every vertex within its star on the surface to lower the MIPS energy against the input's "
-     "triangles, kept if W does not rise (0: off; e.g. 10 on a genus-0 mesh whose limbs crowd; on genus > 0 it "
-     "moves the conformal class)"},
+     "triangles, kept if W does not rise (-1, default: 10 on a closed surface of genus 0, 0 otherwise, since on "
+     "genus > 0 it moves the conformal class and with a boundary it can slow the flow; 0: off)"},
     {"max_integrability_error", CF_PARAM_DOUBLE, OPT(max_integrability_error), 0.0, 1.0, NULL,
      "adaptive: redo a step with half tau while its transformed edges are non-integrable by more than this "
      "(relative; 0: no bound; e.g. 0.04 keeps triangles better at some cost in W)"},

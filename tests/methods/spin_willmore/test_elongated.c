@@ -8,11 +8,14 @@
  * reaches a round sphere in 10 steps (measured W/4pi 2.698 -> 1.024 at mean
  * Q 1.259; 3.457 -> 1.087 at 1.498). What does stop it are thin parts that
  * a conformal map has to absorb: spot_3k stretched 5x along y (horns, ears
- * and legs become spikes) ends at W/4pi 13.89 of 25.90 (issue 13's target is
- * half: 12.95) and stays there (13.86 after 40 steps), with its extremities
- * crowded to e^-12 .. e^-23 of their area. Checked there: what the defaults
- * still guarantee (every step lowers W, a valid mesh, no failure) and the
- * figures measured, so that a change in either direction is seen.
+ * and legs become spikes) ended at W/4pi 13.89 of 25.90 (issue 13's target is
+ * half: 12.95) and stayed there (13.86 after 40 steps), with its extremities
+ * crowded to e^-12 .. e^-23 of their area. Since the tangential relaxation is
+ * a default on closed genus-0 surfaces (session 36) it ends at 10.84, under
+ * the target, with mean Q 1.697 (1.666 without: `relaxation=0`, 13.89).
+ * Checked there: what the defaults guarantee (every step lowers W, a valid
+ * mesh, no failure) and the figures measured, so that a change in either
+ * direction is seen.
  */
 #include "test.h"
 
@@ -97,9 +100,11 @@ static void test_stretched_spot(void)
         /* what the defaults guarantee on it */
         CHECK(r.worst_rise <= 0.0);
         CHECK(r.defects == 0);
-        /* measured: 25.896 -> 13.890 (mean Q 1.666), above half of W0 */
-        CHECK_LE(r.w, 0.55 * r.w0);
-        CHECK(r.w > 0.5 * r.w0); /* the open gap: when this fails, update docs/spin.md */
+        /* measured: 25.896 -> 10.838 (mean Q 1.697); 13.890 without the
+         * relaxation, above half of W0 */
+        CHECK_LE(r.w, 0.45 * r.w0); /* issue 13's target, met with a margin */
+        CHECK_LE(r.mean_q, 1.75);
+        CHECK(r.mean_q > 1.5); /* the open gap: when this fails, update docs/spin.md */
     }
     cft_shared_case_close(&shared);
 }

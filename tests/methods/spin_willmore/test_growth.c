@@ -51,8 +51,11 @@ static int run_growth(cf_context *ctx, const cf_mesh *mesh, double g, growth_log
     if (!isnan(g)) spin->growth_ratio = g;
     /* the trajectories the growth rule was measured on: the step without
      * the vertex-scale fairing, which reaches bull's and cow's targets on
-     * its own (test `zoo`) */
+     * its own (test `zoo`), nor the tangential relaxation (a default on
+     * closed genus-0 surfaces since session 36; with it the rule before also
+     * meets bull's target) */
     spin->fairing = 0.0;
+    spin->relaxation = 0;
     cf_flow *flow = NULL;
     CHECK_OK(ctx, cf_flow_create(ctx, mesh, NULL, &o, &flow));
     if (!flow) return 0;

@@ -12,8 +12,11 @@
  * retry is tested here under that rule (growth_ratio=0): with the default
  * the trajectories differ (triceratops 5.47 with mean Q 1.531, cow 24.49
  * without a stall; docs/spin.md, "Growing tau back"). bull_6k, with the
- * defaults, checks where the retry restarts when the step before it needed
- * the current metric too. Skips without ../shared.
+ * defaults but the tangential relaxation, checks where the retry restarts
+ * when the step before it needed the current metric too. Every run here is
+ * without the relaxation (a default on closed genus-0 surfaces since
+ * session 36), whose resampled states take other trajectories: it is not
+ * what these tests are about. Skips without ../shared.
  */
 #include "test.h"
 
@@ -41,6 +44,7 @@ static int run_default(const char *name, int steps, int no_tolerance, spin_run *
     cf_spin_willmore_options *spin = cf_flow_options_method_as(&o, CF_FLOW_SPIN_WILLMORE);
     if (spin) spin->growth_ratio = 0.0; /* the rule the stalls were measured with */
     if (spin) spin->fairing = 0.0;      /* and the step without the vertex-scale fairing */
+    if (spin) spin->relaxation = 0;     /* nor the tangential relaxation */
     if (spin && no_tolerance) spin->tolerance = 0.0;
     int ran = shared.mesh && spin_run_steps(ctx, shared.mesh, &o, steps, r, NULL);
     if (ran)
@@ -88,6 +92,9 @@ static void test_bull_retry_restarts_near_last_step(void)
     cf_context *ctx = shared.ctx;
     cf_flow_options o;
     CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o));
+    /* the trajectory measured: with the relaxation bull converges at step 7
+     * (W/4pi 46.07) after one current-metric step */
+    CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "relaxation", "0"));
     cf_flow *flow = NULL;
     if (shared.mesh) CHECK_OK(ctx, cf_flow_create(ctx, shared.mesh, NULL, &o, &flow));
     if (flow) {
@@ -155,11 +162,13 @@ static int64_t halving_run(const cft_shared_case *shared, int search, const char
  * descent at a small step (step 4: rises at 0.0125 and 0.00625 that halved
  * by 2.5 and 1.8, accepted at 0.000195): the bisection finds the step plain
  * halving takes, so W/4pi stays 8.442 (a rule that ended the round there
- * instead reached 6.05 at mean Q 1.516). */
+ * instead reached 6.05 at mean Q 1.516). Without the tangential relaxation,
+ * whose resampled states stall less often (bull 41 against 48 attempts with
+ * it, spool 50 against 56). */
 static void test_halving_search(void)
 {
-    static const char *const none[] = {NULL};
-    static const char *const triceratops[] = {"growth_ratio", "0", "fairing", "0", NULL};
+    static const char *const none[] = {"relaxation", "0", NULL};
+    static const char *const triceratops[] = {"growth_ratio", "0", "fairing", "0", "relaxation", "0", NULL};
     const struct {
         const char *mesh;
         const char *const *settings;
@@ -196,7 +205,9 @@ static void test_halving_search(void)
  * (W/4pi 109.59 of 235.0). The fairing alone lowers W where the spin step
  * cannot (the vertex-scale part of the cotan curvature the transformation
  * does not see), under the same excess bound as every closed-surface step:
- * measured 81.998 after 10 steps, mean Q 1.312 (1.207 stopped). */
+ * measured 81.998 after 10 steps, mean Q 1.312 (1.207 stopped); with the
+ * tangential relaxation (the default since session 36) 70.23 in 9 steps,
+ * mean Q 1.231. */
 static void test_stall_fairing(void)
 {
     cft_shared_case shared;
@@ -240,8 +251,8 @@ static void test_stall_fairing(void)
         fprintf(stderr, "   default: %d steps, W/4pi %.4f -> %.4f, mean Q %.4f, %d defects\n", on.steps, on.w0, on.w,
                 on.mean_q, on.defects);
         CHECK_LE(on.worst_rise, 0.0);
-        CHECK_LE(on.w, 0.85 * off.w); /* measured 82.0 against 109.6 */
-        CHECK_LE(on.mean_q, 1.5);     /* measured 1.312 */
+        CHECK_LE(on.w, 0.70 * off.w); /* measured 70.2 against 109.6 (82.0 without the relaxation) */
+        CHECK_LE(on.mean_q, 1.3);     /* measured 1.231 (1.312 without) */
         CHECK(on.defects == 0);
     }
     cft_shared_case_close(&shared);

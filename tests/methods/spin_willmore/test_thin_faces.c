@@ -10,7 +10,11 @@
  * true W (exact cotan weights, cf_willmore_energy) after 10 steps against
  * the unperturbed run, with and without the floor (without: worse, and the
  * warning naming the thinnest face), none on the unperturbed mesh, and
- * that every run keeps W non-increasing and its faces valid.
+ * that every run keeps W non-increasing and its faces valid. The runs are
+ * without the tangential relaxation (a default on closed genus-0 surfaces
+ * since session 36): it moves the near-duplicate vertex away from its
+ * neighbour, which hides what the floor does (weight_floor=0 then ends at
+ * 1.0209 against the clean 1.0035).
  */
 #include "test.h"
 
@@ -86,6 +90,7 @@ static void test_near_duplicate(void)
         if (!m) continue;
         cf_flow_options o;
         CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o));
+        CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "relaxation", "0"));
         if (c == 2) CHECK_OK(ctx, cf_flow_options_set(ctx, &o, "weight_floor", "0"));
         memset(&msg, 0, sizeof msg);
         double *x = malloc(3 * (size_t)cf_mesh_vertex_count(m) * sizeof *x);

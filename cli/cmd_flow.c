@@ -263,8 +263,8 @@ static int apply_params(cf_context *ctx, const cli_flow_job *job, cf_flow_option
  * crowding of thin parts is what a user of a coarse model with limbs sees.
  * Where the tangential relaxation did not run (set to 0, or its default on a
  * surface with a boundary or of genus > 0) the note names it; where it ran
- * (its default on closed genus-0 surfaces: every component's Euler
- * characteristic 2) it says what is left. */
+ * (the flow's last step reports its `relaxation_sweeps`, which the method
+ * names whenever the relaxation is on) it says what is left. */
 static void relaxation_hint(cf_context *ctx, const cf_flow_options *options, const cf_mesh *mesh,
                             const cf_flow *flow)
 {
@@ -276,9 +276,10 @@ static void relaxation_hint(cf_context *ctx, const cf_flow_options *options, con
         return;
     }
     if (!(q.weighted_mean > CLI_RELAXATION_HINT_MEAN_Q)) return;
-    int closed_genus_0 = cf_mesh_boundary_loop_count(mesh) == 0 &&
-                         cf_mesh_euler_characteristic(mesh) == 2 * cf_mesh_component_count(mesh);
-    int relaxed = spin->relaxation > 0 || (spin->relaxation < 0 && closed_genus_0);
+    const cf_flow_info *last = cf_flow_last_info(flow);
+    int relaxed = 0;
+    for (int k = 0; last && k < CF_FLOW_MAX_RESIDUALS; ++k)
+        relaxed |= last->residual_names[k] && strcmp(last->residual_names[k], "relaxation_sweeps") == 0;
     if (relaxed)
         fprintf(stderr,
                 "curvflow: note: the result's mean Q against the input is %.3f: thin parts crowded by the conformal map, "

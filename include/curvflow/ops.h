@@ -145,10 +145,12 @@ CF_API cf_status cf_edge_poisson_create_floored(cf_context *ctx, const cf_mesh *
 /* Refills L for the metric of `positions` (3 nv, values only); the next
  * solve refactorises. CF_ERR_DEGENERATE_FACE on a zero-area face. */
 CF_API cf_status cf_edge_poisson_set_metric(cf_edge_poisson *p, const double *positions);
-/* Frees what cf_edge_poisson_set_metric needs (the Laplacian's slot map: 8
- * bytes per face corner pair; 90 MB at 655k vertices) for a solver whose
- * metric never changes (spin-willmore's input-metric position solve);
- * set_metric then fails with CF_ERR_INVALID_ARG. Solves are unaffected. */
+/* Frees what cf_edge_poisson_set_metric needs (the Laplacian's slot map:
+ * 8 bytes per vertex and two per edge; 37 MB at 655k vertices) for a solver
+ * whose metric seldom or never changes (spin-willmore's input-metric
+ * position solve); a later set_metric rebuilds it from the slots the
+ * solver keeps (an allocation: CF_ERR_NOMEM, the solver then still frozen
+ * and usable), and refills as without the freeze. Solves are unaffected. */
 CF_API void cf_edge_poisson_freeze_metric(cf_edge_poisson *p);
 /* f from edges (3 ne); fixed: 3 nv interleaved, read at the known vertices
  * only (NULL without known vertices); out: 3 nv interleaved (the known

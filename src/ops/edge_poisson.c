@@ -153,11 +153,31 @@ void cf_edge_poisson_freeze_metric(cf_edge_poisson *p)
     p->slot_map = NULL;
 }
 
+/* The slot map of a frozen solver again, from the slots it kept: each
+ * triplet of the pattern (cfi_cotan_laplacian_triplet_count's layout) has
+ * one entry of L, the slot cf_sparse_from_triplets gave it. */
+static cf_status rebuild_slot_map(cf_edge_poisson *p)
+{
+    const cf_mesh *mesh = p->mesh;
+    p->slot_map = CFI_ALLOC(p->ctx, int64_t, p->slot_count);
+    if (!p->slot_map)
+        return cfi_error(p->ctx, CF_ERR_NOMEM, "edge poisson: out of memory for the refill map of %d vertices", p->nv);
+    for (int32_t v = 0; v < p->nv; ++v) p->slot_map[v] = p->diag_slot[v];
+    for (int32_t e = 0; e < p->ne; ++e) {
+        int64_t b = p->nv + 2 * (int64_t)e;
+        p->slot_map[b] = p->edge_slot[e];
+        p->slot_map[b + 1] = cf_sparse_find(p->l, mesh->edge_vertices[2 * e + 1], mesh->edge_vertices[2 * e]);
+    }
+    return CF_OK;
+}
+
 cf_status cf_edge_poisson_set_metric(cf_edge_poisson *p, const double *positions)
 {
     if (!p || !positions) return CF_ERR_INVALID_ARG;
-    if (!p->slot_map)
-        return cfi_error(p->ctx, CF_ERR_INVALID_ARG, "edge poisson: the metric was frozen (cf_edge_poisson_freeze_metric)");
+    if (!p->slot_map) {
+        cf_status st = rebuild_slot_map(p);
+        if (st != CF_OK) return st;
+    }
     p->factored = 0;
     return cfi_cotan_laplacian_refill(p->l, p->mesh, positions, p->weight_floor, p->slot_map);
 }

@@ -266,8 +266,9 @@ typedef struct cf_tangential_relaxation_report {
     double energy_after;     /* E of the positions returned (<= energy_before) */
 } cf_tangential_relaxation_report;
 /* E(positions) against the reference triangles (NULL: rest positions) and,
- * if gradient is not NULL, dE/dx (3 nv). CF_ERR_DEGENERATE_FACE names a
- * reference face without area, or says that a face of positions has none. */
+ * if gradient is not NULL, dE/dx (3 nv). One pass over the faces, no
+ * allocation. CF_ERR_DEGENERATE_FACE names a reference face without area,
+ * or says that a face of positions has none. */
 CF_API cf_status cf_mips_energy(cf_context *ctx, const cf_mesh *mesh, const double *reference,
                                 const double *positions, double *energy, double *gradient);
 /* reference: 3 nv (NULL: rest positions); hold_boundary: nonzero keeps the

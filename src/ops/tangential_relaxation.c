@@ -232,19 +232,20 @@ static int propose_move(cf_tangential_relaxation *r, int32_t v, int32_t *trials)
     return 0;
 }
 
-/* Reference areas and corner cotangents (nf and 3 nf), with the operators'
- * own per-face routine: a reference face without area is an error naming
- * it. */
-static cf_status reference_triangles(cf_context *ctx, const cf_mesh *mesh, const double *reference, double *area0,
-                                     double *cot0)
+/* Reference areas and corner cotangents of faces first .. last - 1 into
+ * area0 and cot0 (from their starts: last - first and 3 (last - first)),
+ * with the operators' own per-face routine: a reference face without area
+ * is an error naming it. */
+static cf_status reference_triangles(cf_context *ctx, const cf_mesh *mesh, const double *reference, int32_t first,
+                                     int32_t last, double *area0, double *cot0)
 {
-    for (int32_t f = 0; f < mesh->nf; ++f) {
+    for (int32_t f = first; f < last; ++f) {
         double twice_area = 0.0;
-        cf_status st = cfi_face_cotangents(ctx, mesh, reference, f, 0.0, cot0 + 3 * f, &twice_area);
+        cf_status st = cfi_face_cotangents(ctx, mesh, reference, f, 0.0, cot0 + 3 * (f - first), &twice_area);
         if (st != CF_OK) return st;
         if (!isfinite(twice_area))
             return cfi_error(ctx, CF_ERR_DEGENERATE_FACE, "face %d: reference triangle of infinite area", f);
-        area0[f] = 0.5 * twice_area;
+        area0[f - first] = 0.5 * twice_area;
     }
     return CF_OK;
 }
@@ -255,18 +256,26 @@ cf_status cf_mips_energy(cf_context *ctx, const cf_mesh *mesh, const double *ref
     if (!ctx) return CF_ERR_INVALID_ARG;
     if (!mesh || !positions || !energy) return cfi_error(ctx, CF_ERR_INVALID_ARG, "mips_energy: NULL argument");
     if (!reference) reference = mesh->positions;
-    int32_t nf = mesh->nf;
-    double *area0 = CFI_ALLOC(ctx, double, nf > 0 ? nf : 1), *cot0 = CFI_ALLOC(ctx, double, nf > 0 ? 3 * nf : 1);
-    cf_status st = area0 && cot0 ? CF_OK : CF_ERR_NOMEM;
-    if (st == CF_OK) st = reference_triangles(ctx, mesh, reference, area0, cot0);
-    if (st == CF_OK) {
-        *energy = mips_energy(mesh, area0, cot0, positions, NULL, gradient, NULL);
-        if (!isfinite(*energy))
-            st = cfi_error(ctx, CF_ERR_DEGENERATE_FACE, "mips_energy: a face of the positions has no area");
+    /* each reference triangle as reference_triangles makes it, face by face
+     * (no allocation: spin-willmore tests the relaxation's threshold with
+     * this after its steps, before it has made a relaxation) */
+    if (gradient) memset(gradient, 0, 3 * (size_t)mesh->nv * sizeof(double));
+    double sum = 0.0, g[3][3];
+    for (int32_t f = 0; f < mesh->nf; ++f) {
+        double area0 = 0.0, cot0[3];
+        cf_status st = reference_triangles(ctx, mesh, reference, f, f + 1, &area0, cot0);
+        if (st != CF_OK) return st;
+        const int32_t *t = mesh->triangles + 3 * f;
+        const double *const q[3] = {positions + 3 * t[0], positions + 3 * t[1], positions + 3 * t[2]};
+        double e = face_mips(q, area0, cot0, NULL, NULL, gradient ? g : NULL);
+        if (!isfinite(e)) return cfi_error(ctx, CF_ERR_DEGENERATE_FACE, "mips_energy: a face of the positions has no area");
+        sum += e;
+        if (gradient)
+            for (int m = 0; m < 3; ++m)
+                for (int j = 0; j < 3; ++j) gradient[3 * t[m] + j] += g[m][j];
     }
-    CFI_FREE(ctx, area0, nf > 0 ? nf : 1);
-    CFI_FREE(ctx, cot0, nf > 0 ? 3 * nf : 1);
-    return st;
+    *energy = sum;
+    return CF_OK;
 }
 
 void cf_tangential_relaxation_destroy(cf_tangential_relaxation **r)
@@ -318,7 +327,7 @@ cf_status cf_tangential_relaxation_create(cf_context *ctx, const cf_mesh *mesh, 
         cf_tangential_relaxation_destroy(&r);
         return cfi_error(ctx, CF_ERR_NOMEM, "tangential_relaxation: out of memory for %d vertices", (int)nv);
     }
-    cf_status st = reference_triangles(ctx, mesh, reference, r->area0, r->cot0);
+    cf_status st = reference_triangles(ctx, mesh, reference, 0, mesh->nf, r->area0, r->cot0);
     if (st != CF_OK) {
         cf_tangential_relaxation_destroy(&r);
         return st;

@@ -321,6 +321,55 @@ static void test_one_limb(void)
     cf_context_destroy(&ctx);
 }
 
+/* The relaxation is made when a step's map first passes its threshold, and
+ * the recovery's refill data again when the first relaxed state is kept:
+ * allocations in a step. On the star (both in step 1), create + two steps
+ * + destroy with each allocation failing in turn: CF_ERR_NOMEM (or a
+ * recovery inside CHOLMOD), nothing left behind; and the flow has a
+ * relaxation only from that step on (the bumpy sphere, whose map stays
+ * below the threshold, never makes one: test_workspace's sweeps). */
+static cf_status star_two_steps(cf_context *ctx, void *user)
+{
+    const cf_mesh *mesh = user;
+    cf_flow_options o;
+    cf_status st = cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o);
+    cf_flow *flow = NULL;
+    if (st == CF_OK) st = cf_flow_create(ctx, mesh, NULL, &o, &flow);
+    if (st == CF_OK && !flow) st = CF_ERR_NUMERICAL;
+    if (st == CF_OK) st = cf_flow_run(flow, 2, NULL);
+    cf_flow_destroy(&flow);
+    return st;
+}
+
+static void test_allocations_in_steps(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *star = NULL;
+    CHECK_OK(ctx, cf_generate_limb_sphere(ctx, 2, 8, 1.4, 0.22, &star));
+    if (star) {
+        CHECK_OK(ctx, star_two_steps(ctx, star)); /* the context's CHOLMOD state first */
+        int64_t before = cf_context_allocation_count(ctx);
+        cf_flow_options o;
+        CHECK_OK(ctx, cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o));
+        cf_flow *flow = NULL;
+        CHECK_OK(ctx, cf_flow_create(ctx, star, NULL, &o, &flow));
+        int64_t created = cf_context_allocation_count(ctx);
+        cf_flow_info info;
+        if (flow) CHECK_OK(ctx, cf_flow_step(flow, &info));
+        int64_t stepped = cf_context_allocation_count(ctx);
+        fprintf(stderr, "   star: %lld allocations at create, %lld in step 1 (relaxation sweeps kept: %g)\n",
+                (long long)(created - before), (long long)(stepped - created),
+                flow ? cft_flow_residual(&info, "relaxation_sweeps") : -1.0);
+        CHECK(stepped > created); /* the relaxation and the refill data, made in step 1 */
+        CHECK(flow && cft_flow_residual(&info, "relaxation_sweeps") > 0.0);
+        cf_flow_destroy(&flow);
+        CHECK(cft_allocation_sweep(ctx, "star, two steps", star_two_steps, star, 1) > 0);
+    }
+    cf_mesh_destroy(&star);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 /* Values outside -1 .. 1000 are refused, set as a parameter or in the
  * options struct (the parameter table's range, checked at creation too). */
 static void test_bad_values(void)
@@ -356,6 +405,7 @@ int main(void)
     CFT_RUN(test_cactus);
     CFT_RUN(test_default_per_surface);
     CFT_RUN(test_one_limb);
+    CFT_RUN(test_allocations_in_steps);
     CFT_RUN(test_bad_values);
     return cft_finish();
 }

@@ -271,9 +271,10 @@ typedef struct cf_tangential_relaxation_report {
  * or says that a face of positions has none. */
 CF_API cf_status cf_mips_energy(cf_context *ctx, const cf_mesh *mesh, const double *reference,
                                 const double *positions, double *energy, double *gradient);
-/* reference: 3 nv (NULL: rest positions); hold_boundary: nonzero keeps the
- * boundary vertices where apply finds them. CF_ERR_DEGENERATE_FACE names a
- * reference face without area; CF_ERR_NOMEM. */
+/* reference: 3 nv (NULL: rest positions; another is copied); hold_boundary:
+ * nonzero keeps the boundary vertices where apply finds them. The arrays of
+ * the descent are made by the first apply above its threshold (none below).
+ * CF_ERR_DEGENERATE_FACE names a reference face without area; CF_ERR_NOMEM. */
 CF_API cf_status cf_tangential_relaxation_create(cf_context *ctx, const cf_mesh *mesh, const double *reference,
                                                  int32_t hold_boundary, cf_tangential_relaxation **out);
 /* out = in relaxed by up to `iterations` sweeps (every vertex's move at once) on the surface of in
@@ -281,7 +282,8 @@ CF_API cf_status cf_tangential_relaxation_create(cf_context *ctx, const cf_mesh 
  * against the reference is at most that of min_mean_q (>= 1; 1: always
  * relax). report may be NULL. CF_ERR_INVALID_ARG,
  * CF_ERR_NUMERICAL (a position of in not finite, named),
- * CF_ERR_DEGENERATE_FACE (a face of in has no area; out = in). */
+ * CF_ERR_DEGENERATE_FACE (a face of in has no area; out = in),
+ * CF_ERR_NOMEM (the first call above the threshold makes the arrays; out = in). */
 CF_API cf_status cf_tangential_relaxation_apply(cf_tangential_relaxation *r, const double *in, int32_t iterations,
                                                 double min_mean_q, double *out,
                                                 cf_tangential_relaxation_report *report);

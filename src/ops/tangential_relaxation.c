@@ -53,7 +53,12 @@ struct cf_tangential_relaxation {
     cf_context *ctx;
     const cf_mesh *mesh;
     int32_t nv, nf;
+    const double *reference; /* 3 nv: the mesh's rest positions, or reference_copy */
+    double *reference_copy;  /* 3 nv: a reference given that is not the rest positions (else NULL) */
     double area0_total;   /* sum of the reference areas */
+    /* the rest is made by the first apply above the threshold (make_arrays):
+     * most of spin-willmore's flows never get there, and it would be held
+     * from creation on (47 MB of reference triangles at 655k vertices) */
     double *area0;        /* nf: reference areas */
     double *cot0;         /* 3 nf: reference cotangents at the corners */
     double *star_area0;   /* nv: reference area of each vertex's star */
@@ -250,15 +255,13 @@ static cf_status reference_triangles(cf_context *ctx, const cf_mesh *mesh, const
     return CF_OK;
 }
 
-cf_status cf_mips_energy(cf_context *ctx, const cf_mesh *mesh, const double *reference, const double *positions,
-                         double *energy, double *gradient)
+/* E(positions) against the triangles of `reference`, each made as
+ * reference_triangles makes it, face by face (one pass, no allocation), and
+ * the gradient (3 nv, may be NULL). An error names a reference face without
+ * area; a face of positions without area gives *energy = +inf. */
+static cf_status reference_energy(cf_context *ctx, const cf_mesh *mesh, const double *reference,
+                                  const double *positions, double *energy, double *gradient)
 {
-    if (!ctx) return CF_ERR_INVALID_ARG;
-    if (!mesh || !positions || !energy) return cfi_error(ctx, CF_ERR_INVALID_ARG, "mips_energy: NULL argument");
-    if (!reference) reference = mesh->positions;
-    /* each reference triangle as reference_triangles makes it, face by face
-     * (no allocation: spin-willmore tests the relaxation's threshold with
-     * this after its steps, before it has made a relaxation) */
     if (gradient) memset(gradient, 0, 3 * (size_t)mesh->nv * sizeof(double));
     double sum = 0.0, g[3][3];
     for (int32_t f = 0; f < mesh->nf; ++f) {
@@ -268,7 +271,10 @@ cf_status cf_mips_energy(cf_context *ctx, const cf_mesh *mesh, const double *ref
         const int32_t *t = mesh->triangles + 3 * f;
         const double *const q[3] = {positions + 3 * t[0], positions + 3 * t[1], positions + 3 * t[2]};
         double e = face_mips(q, area0, cot0, NULL, NULL, gradient ? g : NULL);
-        if (!isfinite(e)) return cfi_error(ctx, CF_ERR_DEGENERATE_FACE, "mips_energy: a face of the positions has no area");
+        if (!isfinite(e)) {
+            *energy = INFINITY;
+            return CF_OK;
+        }
         sum += e;
         if (gradient)
             for (int m = 0; m < 3; ++m)
@@ -278,12 +284,24 @@ cf_status cf_mips_energy(cf_context *ctx, const cf_mesh *mesh, const double *ref
     return CF_OK;
 }
 
+cf_status cf_mips_energy(cf_context *ctx, const cf_mesh *mesh, const double *reference, const double *positions,
+                         double *energy, double *gradient)
+{
+    if (!ctx) return CF_ERR_INVALID_ARG;
+    if (!mesh || !positions || !energy) return cfi_error(ctx, CF_ERR_INVALID_ARG, "mips_energy: NULL argument");
+    cf_status st = reference_energy(ctx, mesh, reference ? reference : mesh->positions, positions, energy, gradient);
+    if (st == CF_OK && !isfinite(*energy))
+        return cfi_error(ctx, CF_ERR_DEGENERATE_FACE, "mips_energy: a face of the positions has no area");
+    return st;
+}
+
 void cf_tangential_relaxation_destroy(cf_tangential_relaxation **r)
 {
     if (!r || !*r) return;
     cf_tangential_relaxation *t = *r;
     cf_context *ctx = t->ctx;
     size_t nv = (size_t)t->nv, nf = (size_t)t->nf;
+    CFI_FREE(ctx, t->reference_copy, 3 * nv);
     CFI_FREE(ctx, t->area0, nf);
     CFI_FREE(ctx, t->cot0, 3 * nf);
     CFI_FREE(ctx, t->star_area0, nv);
@@ -305,16 +323,44 @@ cf_status cf_tangential_relaxation_create(cf_context *ctx, const cf_mesh *mesh, 
     if (!ctx) return CF_ERR_INVALID_ARG;
     if (!out || !mesh) return cfi_error(ctx, CF_ERR_INVALID_ARG, "tangential_relaxation: mesh or out is NULL");
     *out = NULL;
-    if (!reference) reference = mesh->positions;
     cf_tangential_relaxation *r = CFI_ALLOC(ctx, cf_tangential_relaxation, 1);
     if (!r) return CF_ERR_NOMEM;
     memset(r, 0, sizeof *r);
     r->ctx = ctx, r->mesh = mesh, r->nv = mesh->nv, r->nf = mesh->nf;
+    size_t nv = (size_t)r->nv;
+    r->held = CFI_ALLOC(ctx, uint8_t, nv);
+    if (reference && reference != mesh->positions) r->reference_copy = CFI_ALLOC(ctx, double, 3 * nv);
+    if (!r->held || (reference && reference != mesh->positions && !r->reference_copy)) {
+        cf_tangential_relaxation_destroy(&r);
+        return cfi_error(ctx, CF_ERR_NOMEM, "tangential_relaxation: out of memory for %d vertices", (int)nv);
+    }
+    if (r->reference_copy) memcpy(r->reference_copy, reference, 3 * nv * sizeof(double));
+    r->reference = r->reference_copy ? r->reference_copy : mesh->positions;
+    /* every reference triangle checked now, and their total area */
+    for (int32_t f = 0; f < r->nf; ++f) {
+        double area0 = 0.0, cot0[3];
+        cf_status st = reference_triangles(ctx, mesh, r->reference, f, f + 1, &area0, cot0);
+        if (st != CF_OK) {
+            cf_tangential_relaxation_destroy(&r);
+            return st;
+        }
+        r->area0_total += area0;
+    }
+    for (int32_t v = 0; v < r->nv; ++v) r->held[v] = hold_boundary && mesh->vertex_on_boundary[v];
+    *out = r;
+    return CF_OK;
+}
+
+/* The arrays of the descent, at the first apply above the threshold:
+ * reference triangles, stars' reference areas, work arrays. */
+static cf_status make_arrays(cf_tangential_relaxation *r)
+{
+    cf_context *ctx = r->ctx;
+    const cf_mesh *mesh = r->mesh;
     size_t nv = (size_t)r->nv, nf = (size_t)r->nf;
     r->area0 = CFI_ALLOC(ctx, double, nf);
     r->cot0 = CFI_ALLOC(ctx, double, 3 * nf);
     r->star_area0 = CFI_ALLOC(ctx, double, nv);
-    r->held = CFI_ALLOC(ctx, uint8_t, nv);
     r->home = CFI_ALLOC(ctx, int32_t, nv);
     r->surface = CFI_ALLOC(ctx, double, 3 * nv);
     r->surface_normal = CFI_ALLOC(ctx, double, 3 * nf);
@@ -322,26 +368,27 @@ cf_status cf_tangential_relaxation_create(cf_context *ctx, const cf_mesh *mesh, 
     r->proposal = CFI_ALLOC(ctx, double, 3 * nv);
     r->proposed = CFI_ALLOC(ctx, uint8_t, nv);
     r->vertex_step = CFI_ALLOC(ctx, double, nv);
-    if (!r->area0 || !r->cot0 || !r->star_area0 || !r->held || !r->surface || !r->surface_normal || !r->x ||
-        !r->vertex_step || !r->home || !r->proposal || !r->proposed) {
-        cf_tangential_relaxation_destroy(&r);
+    if (!r->area0 || !r->cot0 || !r->star_area0 || !r->surface || !r->surface_normal || !r->x || !r->vertex_step ||
+        !r->home || !r->proposal || !r->proposed) {
+        CFI_FREE(ctx, r->area0, nf);
+        CFI_FREE(ctx, r->cot0, 3 * nf);
+        CFI_FREE(ctx, r->star_area0, nv);
+        CFI_FREE(ctx, r->home, nv);
+        CFI_FREE(ctx, r->surface, 3 * nv);
+        CFI_FREE(ctx, r->surface_normal, 3 * nf);
+        CFI_FREE(ctx, r->x, 3 * nv);
+        CFI_FREE(ctx, r->proposal, 3 * nv);
+        CFI_FREE(ctx, r->proposed, nv);
+        CFI_FREE(ctx, r->vertex_step, nv);
         return cfi_error(ctx, CF_ERR_NOMEM, "tangential_relaxation: out of memory for %d vertices", (int)nv);
     }
-    cf_status st = reference_triangles(ctx, mesh, reference, 0, mesh->nf, r->area0, r->cot0);
-    if (st != CF_OK) {
-        cf_tangential_relaxation_destroy(&r);
-        return st;
-    }
+    /* checked at create: no error here */
+    cf_status st = reference_triangles(ctx, mesh, r->reference, 0, r->nf, r->area0, r->cot0);
+    if (st != CF_OK) return st;
     memset(r->star_area0, 0, nv * sizeof(double));
-    for (int32_t f = 0; f < r->nf; ++f) {
-        r->area0_total += r->area0[f];
+    for (int32_t f = 0; f < r->nf; ++f)
         for (int m = 0; m < 3; ++m) r->star_area0[mesh->triangles[3 * f + m]] += r->area0[f];
-    }
-    for (int32_t v = 0; v < r->nv; ++v) {
-        r->held[v] = hold_boundary && mesh->vertex_on_boundary[v];
-        r->vertex_step[v] = CFI_RELAX_FIRST_STEP;
-    }
-    *out = r;
+    for (size_t v = 0; v < nv; ++v) r->vertex_step[v] = CFI_RELAX_FIRST_STEP;
     return CF_OK;
 }
 
@@ -361,14 +408,18 @@ cf_status cf_tangential_relaxation_apply(cf_tangential_relaxation *r, const doub
             return cfi_error(ctx, CF_ERR_NUMERICAL, "tangential_relaxation: vertex %d: position is not finite",
                              (int)(i / 3));
     /* below the threshold the map is left as it is: E / sum A0 is the
-     * area-weighted mean of (Q + 1 / Q) / 2 */
-    double energy = mips_energy(mesh, r->area0, r->cot0, in, NULL, NULL, NULL);
+     * area-weighted mean of (Q + 1 / Q) / 2 (E from the reference itself,
+     * the same values as from the arrays, which may not exist yet) */
+    double energy = INFINITY;
+    cf_status st = reference_energy(ctx, mesh, r->reference, in, &energy, NULL);
+    if (st != CF_OK) return st;
     cf_tangential_relaxation_report rep = {0, 0, energy, energy};
     if (out != in) memcpy(out, in, n3 * sizeof(double));
     if (report) *report = rep;
     if (!isfinite(energy))
         return cfi_error(ctx, CF_ERR_DEGENERATE_FACE, "tangential_relaxation: a face of the surface has no area");
     if (iterations == 0 || energy <= 0.5 * (min_mean_q + 1.0 / min_mean_q) * r->area0_total) return CF_OK;
+    if (!r->area0 && (st = make_arrays(r)) != CF_OK) return st;
     memcpy(r->surface, in, n3 * sizeof(double));
     for (int32_t f = 0; f < r->nf; ++f) cfi_face_area_vector(mesh, in, f, r->surface_normal + 3 * f);
     for (int32_t v = 0; v < r->nv; ++v) r->home[v] = -1;

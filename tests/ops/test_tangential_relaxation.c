@@ -275,6 +275,32 @@ static cf_status create_and_destroy(cf_context *ctx, void *user)
     return st;
 }
 
+/* create, then one apply above the threshold on the mesh stretched 2x
+ * along z (out = in when it fails) */
+static cf_status create_and_apply(cf_context *ctx, void *user)
+{
+    const create_call *c = user;
+    int32_t nv = cf_mesh_vertex_count(c->mesh);
+    double *in = malloc(3 * (size_t)nv * sizeof(double)), *out = malloc(3 * (size_t)nv * sizeof(double));
+    if (!in || !out) {
+        free(in);
+        free(out);
+        return CF_ERR_INVALID_ARG;
+    }
+    memcpy(in, cf_mesh_positions(c->mesh), 3 * (size_t)nv * sizeof(double));
+    for (int32_t i = 0; i < nv; ++i) in[3 * i + 2] *= 2.0;
+    cf_tangential_relaxation *r = NULL;
+    cf_tangential_relaxation_report rep = {0, 0, 0.0, 0.0};
+    cf_status st = cf_tangential_relaxation_create(ctx, c->mesh, NULL, 1, &r);
+    if (st == CF_OK) st = cf_tangential_relaxation_apply(r, in, 2, 1.0, out, &rep);
+    if (st == CF_OK && rep.iterations == 0) st = CF_ERR_INVALID_ARG; /* it must have relaxed */
+    if (st == CF_ERR_NOMEM && r && memcmp(in, out, 3 * (size_t)nv * sizeof(double)) != 0) st = CF_ERR_INVALID_ARG;
+    cf_tangential_relaxation_destroy(&r);
+    free(in);
+    free(out);
+    return st;
+}
+
 static void test_bad_input(void)
 {
     cf_context *ctx = cft_context();
@@ -312,6 +338,14 @@ static void test_bad_input(void)
     /* every allocation failing in turn: an error, nothing leaked */
     create_call call = {mesh};
     CHECK(cft_allocation_sweep(ctx, "tangential_relaxation_create", create_and_destroy, &call, 0) > 0);
+    /* below the threshold apply makes nothing; the first call above it makes
+     * the descent's arrays (each failure an error, nothing leaked, out = in) */
+    CHECK_OK(ctx, cf_tangential_relaxation_create(ctx, mesh, NULL, 1, &r));
+    size_t created = cf_context_bytes_in_use(ctx);
+    CHECK_OK(ctx, cf_tangential_relaxation_apply(r, p, 5, 1.0, out, NULL)); /* the identity: E = sum A0 */
+    CHECK(cf_context_bytes_in_use(ctx) == created);
+    cf_tangential_relaxation_destroy(&r);
+    CHECK(cft_allocation_sweep(ctx, "tangential_relaxation_apply", create_and_apply, &call, 0) > 0);
     free(x);
     free(out);
     cf_mesh_destroy(&mesh);

@@ -377,12 +377,15 @@ cf_status cfi_spin_create(cf_flow *flow, const void *options)
      * prescribed / cmc boundaries set their boundary vectors themselves */
     if (st == CF_OK && s->faired)
         st = cf_vertex_fairing_create_floored(ctx, mesh, flow->positions, 1, o->weight_floor, &s->fairing);
-    /* the relaxation itself is made when a step's map first passes its
-     * threshold (relax_positions), as the current-metric solver at a first
-     * stall (cfi_spin_fallback): most flows never get there, and its
-     * reference triangles and the recovery's refill data would be held from
-     * here on (icosphere of 655k vertices: peak 4.50 GB against 4.36) */
-    if (st == CF_OK && s->relax_iterations > 0) st = cf_total_area(ctx, mesh, mesh->positions, &s->rest_total_area);
+    /* against the input's triangles (the mesh's rest positions, also when
+     * the run starts elsewhere): the distortion the flow is judged by. It
+     * makes its arrays when a step's map first passes its threshold, as the
+     * recovery's refill data come back with the first kept relaxed state
+     * and the current-metric solver at a first stall: most flows never get
+     * there (icosphere of 655k vertices: peak 4.50 GB against 4.36 with
+     * both made here) */
+    if (st == CF_OK && s->relax_iterations > 0)
+        st = cf_tangential_relaxation_create(ctx, mesh, NULL, 1, &s->relaxation);
     if (st != CF_OK) goto fail;
 
     flow->info.energy = s->energy;
@@ -989,27 +992,9 @@ static cf_status relax_positions(cf_flow *flow, cfi_spin_state *s)
 {
     double *x = flow->positions;
     double w_step = s->energy;
-    cf_status st = CF_OK;
-    if (!s->relaxation) {
-        /* below the threshold nothing is made (the relaxation's own test:
-         * E / sum A0 is the area-weighted mean of (Q + 1 / Q) / 2), against
-         * the input's triangles: the mesh's rest positions, also when the
-         * run starts elsewhere, the distortion the flow is judged by */
-        double e = 0.0, q = CFI_SPIN_RELAXATION_MEAN_Q;
-        st = cf_mips_energy(flow->ctx, flow->mesh, NULL, x, &e, NULL);
-        if (st == CF_ERR_DEGENERATE_FACE) {
-            /* a face without area: the layer's face check judges the step itself */
-            cf_context_clear_error(flow->ctx);
-            return CF_OK;
-        }
-        if (st != CF_OK) return st;
-        if (e <= 0.5 * (q + 1.0 / q) * s->rest_total_area) return CF_OK;
-        st = cf_tangential_relaxation_create(flow->ctx, flow->mesh, NULL, 1, &s->relaxation);
-        if (st != CF_OK) return st;
-    }
     cf_tangential_relaxation_report rep = {0, 0, 0.0, 0.0};
-    st = cf_tangential_relaxation_apply(s->relaxation, x, s->relax_iterations, CFI_SPIN_RELAXATION_MEAN_Q, s->relaxed,
-                                        &rep);
+    cf_status st = cf_tangential_relaxation_apply(s->relaxation, x, s->relax_iterations, CFI_SPIN_RELAXATION_MEAN_Q,
+                                                  s->relaxed, &rep);
     if (st == CF_ERR_DEGENERATE_FACE) {
         /* a face without area: the layer's face check judges the step itself */
         cf_context_clear_error(flow->ctx);

@@ -60,9 +60,7 @@ typedef struct cfi_spin_state {
     cf_vertex_fairing *fairing; /* fairing > 0 (not prescribed / cmc): the vertex-scale fairing (curvflow/ops.h) */
     double *faired;          /* 3 nv: the faired candidate of an attempt (fairing only) */
     int32_t faired_won;      /* the faired candidate had the lower W in the last attempt */
-    cf_tangential_relaxation *relaxation; /* relaxation resolved > 0: its descent (curvflow/ops.h), made
-                                           * when a step's map first passes its threshold */
-    double rest_total_area;  /* relaxation resolved > 0: total area of the mesh's rest positions */
+    cf_tangential_relaxation *relaxation; /* relaxation resolved > 0: its descent (curvflow/ops.h) */
     int32_t relax_iterations;  /* option relaxation (0 with prescribed / cmc boundaries) */
     double *relaxed;         /* 3 nv: the relaxed candidate of a step (relaxation only) */
     int32_t harmonic_dim;    /* dim H^1 (2g + b - 1 with boundary) if the exactness constraint is active */

@@ -321,9 +321,9 @@ static void test_one_limb(void)
     cf_context_destroy(&ctx);
 }
 
-/* The relaxation is made when a step's map first passes its threshold, and
- * the recovery's refill data again when the first relaxed state is kept:
- * allocations in a step. On the star (both in step 1), create + two steps
+/* The relaxation makes its arrays when a step's map first passes its
+ * threshold, and the recovery's refill data come back when the first
+ * relaxed state is kept: allocations in a step. On the star (both in step 1), create + two steps
  * + destroy with each allocation failing in turn: CF_ERR_NOMEM (or a
  * recovery inside CHOLMOD), nothing left behind; and the flow has a
  * relaxation only from that step on (the bumpy sphere, whose map stays
@@ -360,7 +360,7 @@ static void test_allocations_in_steps(void)
         fprintf(stderr, "   star: %lld allocations at create, %lld in step 1 (relaxation sweeps kept: %g)\n",
                 (long long)(created - before), (long long)(stepped - created),
                 flow ? cft_flow_residual(&info, "relaxation_sweeps") : -1.0);
-        CHECK(stepped > created); /* the relaxation and the refill data, made in step 1 */
+        CHECK(stepped > created); /* the relaxation's arrays and the refill data, made in step 1 */
         CHECK(flow && cft_flow_residual(&info, "relaxation_sweeps") > 0.0);
         cf_flow_destroy(&flow);
         CHECK(cft_allocation_sweep(ctx, "star, two steps", star_two_steps, star, 1) > 0);

@@ -9,8 +9,8 @@
  * allocations: steps allocate nothing (the solve workspaces are reserved at
  * create, cf_cholesky_reserve_solve), but for two objects made on first
  * need, which these flows never reach: the current-metric solver at a first
- * stall, and the tangential relaxation when a map first passes its
- * threshold (swept in test `relaxation`). */
+ * stall, and the tangential relaxation's arrays when a map first passes
+ * its threshold (swept in test `relaxation`). */
 #include "curvflow/flow.h"
 #include "curvflow/generate.h"
 #include "test.h"

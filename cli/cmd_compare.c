@@ -28,7 +28,10 @@ static void usage(FILE *out)
             "its lengths so rescaled: the part of Q that the variation of the conformal scale\n"
             "across the faces causes by itself, which a conformal map of that scale cannot avoid\n"
             "on this triangulation (near the measured Q: the map is as conformal as its scale\n"
-            "allows). The residual is the RMS log-length change that no vertex scale explains.\n\n"
+            "allows). The residual is the RMS log-length change that no vertex scale explains.\n"
+            "On a closed connected surface of genus >= 1 also the distance between the conformal\n"
+            "classes of A and B (0: conformally equivalent; genus 1: the hyperbolic distance of the\n"
+            "moduli, both printed; docs/ops.md, \"Conformal class\").\n\n"
             "  --json       print one JSON object instead of text\n"
             "  --ply OUT    write B with per-face fields Q and log_area_distortion and the per-vertex\n"
             "               field log_scale, the fitted log conformal factor (OUT.ply: PLY properties;\n"
@@ -129,6 +132,19 @@ int cli_compare(int argc, char **argv)
         if (code == CLI_EXIT_USAGE) code = CLI_EXIT_INPUT;
         goto done;
     }
+    /* closed surfaces of genus >= 1: how far B's conformal class is from A's */
+    int class_measured = 0;
+    const char *class_problem = NULL;
+    double class_distance = NAN;
+    cf_conformal_class ca, cb;
+    if (cf_mesh_component_count(a) == 1 && cf_mesh_boundary_loop_count(a) == 0 && cf_mesh_genus(a) >= 1) {
+        if (cf_conformal_class_compute(ctx, a, xa, NULL, &ca) == CF_OK &&
+            cf_conformal_class_compute(ctx, a, xb, NULL, &cb) == CF_OK &&
+            cf_conformal_class_distance(ctx, a, xa, xb, &class_distance) == CF_OK)
+            class_measured = 1;
+        else
+            class_problem = cf_context_message(ctx);
+    }
     const double deg = 180.0 / acos(-1.0);
     if (as_json) {
         json_t *root = json_object();
@@ -144,6 +160,20 @@ int cli_compare(int argc, char **argv)
         json_object_set_new(model, "invalid_faces", json_integer(fit.invalid_faces));
         json_object_set_new(model, "rms_log_length_residual", num(fit.rms_residual));
         json_object_set_new(root, "vertex_scale_model_q", model);
+        json_t *cls = json_null();
+        if (class_measured) {
+            cls = json_object();
+            json_object_set_new(cls, "genus", json_integer(ca.genus));
+            json_object_set_new(cls, "distance", num(class_distance));
+            if (ca.genus == 1) {
+                json_object_set_new(cls, "modulus_a", json_pack("[o, o]", num(ca.modulus[0]), num(ca.modulus[1])));
+                json_object_set_new(cls, "modulus_b", json_pack("[o, o]", num(cb.modulus[0]), num(cb.modulus[1])));
+            }
+        } else if (class_problem) {
+            cls = json_object();
+            json_object_set_new(cls, "error", json_string(class_problem));
+        }
+        json_object_set_new(root, "conformal_class", cls);
         char *text = json_dumps(root, JSON_INDENT(2) | JSON_REAL_PRECISION(10) | JSON_PRESERVE_ORDER);
         if (text) puts(text);
         free(text);
@@ -159,6 +189,13 @@ int cli_compare(int argc, char **argv)
         printf("vertex-scale model Q:  mean %.6f  median %.6f  p95 %.6f  max %.6f  (%d faces without a model "
                "triangle; log-length residual rms %.4f)\n",
                fit.q.weighted_mean, fit.q.p50, fit.q.p95, fit.q.max, (int)fit.invalid_faces, fit.rms_residual);
+        if (class_measured && ca.genus == 1)
+            printf("conformal class:       distance %.4e  (genus 1: modulus %.6f%+.6fi -> %.6f%+.6fi)\n", class_distance,
+                   ca.modulus[0], ca.modulus[1], cb.modulus[0], cb.modulus[1]);
+        else if (class_measured)
+            printf("conformal class:       distance %.4e  (genus %d)\n", class_distance, (int)ca.genus);
+        else if (class_problem)
+            printf("conformal class:       not measured: %s\n", class_problem);
     }
     if (ply) {
         cf_field fields[3] = {{"Q", CF_FIELD_FACE, q},

@@ -380,6 +380,19 @@ CF_API int64_t cf_dense_least_squares_work_size(int32_t m, int32_t n);
 CF_API cf_status cf_dense_least_squares(int32_t m, int32_t n, double *a, double *b, double rcond, double *work,
                                         int64_t work_size, int32_t *rank);
 
+/* Doubles of workspace cf_dense_generalized_eigenvalues needs (n x n). */
+CF_API int64_t cf_dense_generalized_eigenvalues_work_size(int32_t n);
+
+/* Eigenvalues (ascending) of the small dense symmetric-definite pencil
+ * a x = lambda b x (n x n, column-major, lower triangles read, both
+ * overwritten; b positive definite), by LAPACK's dsygv. work:
+ * cf_dense_generalized_eigenvalues_work_size(n) doubles. Statuses:
+ * CF_ERR_INVALID_ARG (bad size, NULL, too little work), CF_ERR_NONFINITE,
+ * CF_ERR_NOT_POSDEF (b not positive definite), CF_ERR_NUMERICAL (no
+ * convergence). */
+CF_API cf_status cf_dense_generalized_eigenvalues(int32_t n, double *a, double *b, double *eigenvalues, double *work,
+                                                  int64_t work_size);
+
 /* ---- Quadratics with fixed values and linear equalities --------------- */
 
 /* Precompute / solve for

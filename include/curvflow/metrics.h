@@ -107,6 +107,42 @@ CF_API int64_t cf_conformal_excess_work_size(const cf_mesh *mesh);
 CF_API cf_status cf_conformal_excess(cf_context *ctx, const cf_mesh *mesh, const double *a, const double *b,
                                      double *work, double *mean_q, double *mean_model_q);
 
+/* ---- conformal class (closed surfaces of genus >= 1) ----------------------- */
+
+/* The conformal class of a closed connected surface of genus g >= 1, from
+ * its discrete harmonic 1-forms (cotan metric) and the periods along 2g
+ * homology cycles that the connectivity alone fixes (a tree-cotree split),
+ * so that two position sets of one mesh are compared on the same marked
+ * cycles (docs/ops.md, "Conformal class"). */
+typedef struct cf_conformal_class {
+    int32_t genus;
+    double modulus[2];         /* genus 1: tau = modulus[0] + i modulus[1] with C / (Z + tau Z) conformally
+                                * equivalent, in the standard fundamental domain (|Re| <= 1/2, |tau| >= 1; a torus
+                                * of revolution with radii R > r: i sqrt(R^2 - r^2) / r or its inverse); NaN for
+                                * genus > 1 */
+    double intersection_error; /* largest distance of the dual forms' intersection numbers from integers: rounding
+                                * (a check of the computation) */
+    double hodge_defect;       /* |det(G)^(1/2g) - 1| for the Gram matrix G below, 0 for a smooth surface */
+} cf_conformal_class;
+
+/* gram (optional, (2g)^2 doubles, column-major): G, the *1 Gram matrix of
+ * the harmonic forms dual to the marked cycles (period 1 along one, 0 along
+ * the others), a complete invariant of the marked conformal class.
+ * Statuses: CF_ERR_INVALID_ARG (NULL), CF_ERR_NONFINITE (naming the vertex),
+ * CF_ERR_BAD_MESH (several components, a boundary, genus 0),
+ * CF_ERR_DEGENERATE_FACE, CF_ERR_NUMERICAL, CF_ERR_NOMEM, solver errors. */
+CF_API cf_status cf_conformal_class_compute(cf_context *ctx, const cf_mesh *mesh, const double *positions,
+                                            double *gram, cf_conformal_class *out);
+
+/* Distance between the marked conformal classes of two position sets of
+ * one mesh: sqrt(sum log^2 mu / 2) over the eigenvalues mu of G_a^-1 G_b,
+ * both scaled to det 1. 0 for conformally equivalent positions (up to the
+ * discretisation); for genus 1 the hyperbolic distance between the two
+ * moduli (before their reduction to the fundamental domain). Statuses as
+ * cf_conformal_class_compute's. */
+CF_API cf_status cf_conformal_class_distance(cf_context *ctx, const cf_mesh *mesh, const double *a, const double *b,
+                                             double *distance);
+
 /* ---- single-shape summary -------------------------------------------------- */
 
 typedef struct cf_shape_summary {

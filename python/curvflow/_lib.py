@@ -148,6 +148,11 @@ class HandleSet(Structure):
                 ("moved_count", c_int32), ("ctx", c_void_p)]
 
 
+class ConformalClass(Structure):
+    _fields_ = [("genus", c_int32), ("modulus", c_double * 2), ("intersection_error", c_double),
+                ("hodge_defect", c_double)]
+
+
 class ShapeSummary(Structure):
     _fields_ = [("area", c_double), ("volume", c_double), ("willmore", c_double),
                 ("willmore_over_4pi", c_double), ("total_angle_defect", c_double),
@@ -312,6 +317,8 @@ def _declare(lib):
     f("cf_log_area_distortion", S, P, P, P, P, P, POINTER(Stats))
     f("cf_angle_change", S, P, P, P, P, P, POINTER(Stats))
     f("cf_vertex_scale_fit_compute", S, P, P, P, P, P, P, POINTER(VertexScaleFit))
+    f("cf_conformal_class_compute", S, P, P, P, P, POINTER(ConformalClass))
+    f("cf_conformal_class_distance", S, P, P, P, P, POINTER(D))
     f("cf_shape_summary_compute", S, P, P, P, POINTER(ShapeSummary))
     f("cf_mesh_quality_compute", S, P, P, P, POINTER(MeshQuality))
     # ops.h

@@ -18,7 +18,7 @@ import math
 import os
 import signal
 import threading
-from ctypes import byref, c_int, c_int32, c_void_p, POINTER
+from ctypes import byref, c_double, c_int, c_int32, c_void_p, POINTER
 
 import numpy as np
 
@@ -564,7 +564,11 @@ def compare(V0, V1, F):
     is the vertex-scale model of `compare`: log scales fitted at the vertices to
     the change of edge lengths ("log_scale", (n,)) and the Q of each face with its
     lengths so rescaled ("vertex_scale_model_q_per_face", (m,), NaN where they form
-    no triangle): the Q that the conformal scale's variation causes by itself."""
+    no triangle): the Q that the conformal scale's variation causes by itself.
+    "conformal_class": on a closed connected surface of genus >= 1 the distance
+    between the conformal classes of V0 and V1 ("genus", "distance"; for genus 1
+    also the moduli "modulus_a", "modulus_b" as (real, imag) in the standard
+    fundamental domain), as `compare --json`; None on other surfaces."""
     V0 = _vertices(V0, "V0")
     V1 = _vertices(V1, "V1")
     F = _faces(F)
@@ -581,7 +585,20 @@ def compare(V0, V1, F):
         u, qm, fit = np.empty(n), np.empty(m), _lib.VertexScaleFit()
         ctx.check(ctx.L.cf_vertex_scale_fit_compute(ctx.ptr, mesh, a, b, u.ctypes.data, qm.ctypes.data, byref(fit)))
         model = dict(_stats(fit.q), invalid_faces=fit.invalid_faces, rms_log_length_residual=fit.rms_residual)
-        return {"faces": m, "quasi_conformal_error": _stats(sq), "log_area_distortion": _stats(sl),
+        cls = None
+        L = ctx.L
+        if L.cf_mesh_component_count(mesh) == 1 and L.cf_mesh_boundary_loop_count(mesh) == 0 and L.cf_mesh_genus(mesh) >= 1:
+            ca, cb, dist = _lib.ConformalClass(), _lib.ConformalClass(), c_double()
+            # as `compare`: a class that cannot be measured (a degenerate face of V1) is said, not raised
+            if (L.cf_conformal_class_compute(ctx.ptr, mesh, a, None, byref(ca)) == 0
+                    and L.cf_conformal_class_compute(ctx.ptr, mesh, b, None, byref(cb)) == 0
+                    and L.cf_conformal_class_distance(ctx.ptr, mesh, a, b, byref(dist)) == 0):
+                cls = {"genus": ca.genus, "distance": dist.value}
+                if ca.genus == 1:
+                    cls.update(modulus_a=tuple(ca.modulus), modulus_b=tuple(cb.modulus))
+            else:
+                cls = {"error": ctx.message()}
+        return {"conformal_class": cls, "faces": m, "quasi_conformal_error": _stats(sq), "log_area_distortion": _stats(sl),
                 "angle_change": dict(_stats(sa), unit="radians"), "vertex_scale_model_q": model, "Q": q,
                 "log_area_distortion_per_face": lad, "angle_change_per_vertex": ang, "log_scale": u,
                 "vertex_scale_model_q_per_face": qm}

@@ -7,6 +7,7 @@ per-step logs are compared field by field too (JSONL with 17 significant
 digits), except the timings.
 """
 import json
+import math
 
 import numpy as np
 import pytest
@@ -222,6 +223,29 @@ def test_compare_equals_cli(cli, meshes, tmp_path):
     assert model["rms_log_length_residual"] < 1e-3
     assert got["log_scale"].shape == (len(V),) and got["vertex_scale_model_q_per_face"].shape == (len(F),)
     assert got["faces"] == js["faces"] == len(F)
+    assert got["conformal_class"] is None and js["conformal_class"] is None  # genus 0: one class
+
+
+def test_compare_conformal_class_equals_cli(cli, tmp_path):
+    """On a torus `compare` also measures the conformal class (docs/ops.md,
+    "Conformal class"): Python and the CLI agree, and a torus of revolution
+    with radii 1, 0.4 has the modulus sqrt(1 - 0.16) / 0.4 = 2.2913 i (2.2981 at
+    48 x 24, measured)."""
+    a, b = tmp_path / "a.obj", tmp_path / "b.obj"
+    run_cli(cli, "generate", "torus", "-o", a)
+    run_cli(cli, "generate", "torus", "--minor-radius", "0.3", "-o", b)
+    V, F, _ = curvflow.load(a)
+    W = curvflow.load(b)[0]
+    js = json.loads(run_cli(cli, "compare", a, b, "--json").stdout)["conformal_class"]
+    got = curvflow.compare(V, W, F)["conformal_class"]
+    assert got["genus"] == js["genus"] == 1
+    assert got["distance"] == pytest.approx(js["distance"], rel=1e-9)
+    assert got["modulus_a"] == pytest.approx(js["modulus_a"], rel=1e-9, abs=1e-12)
+    assert got["modulus_b"] == pytest.approx(js["modulus_b"], rel=1e-9, abs=1e-12)
+    assert got["modulus_a"][1] == pytest.approx((1 - 0.4 ** 2) ** 0.5 / 0.4, rel=5e-3)
+    assert got["modulus_b"][1] == pytest.approx((1 - 0.3 ** 2) ** 0.5 / 0.3, rel=5e-3)
+    # genus 1: the hyperbolic distance of two rectangular moduli i b1, i b2 is |log(b2 / b1)|
+    assert got["distance"] == pytest.approx(abs(math.log(got["modulus_b"][1] / got["modulus_a"][1])), rel=1e-3)
 
 
 @pytest.mark.parametrize("mesh", ["bumpy", "grid", "torus"])

@@ -1,7 +1,9 @@
 /*
- * Small dense least squares through LAPACK (dgelss, from the OpenBLAS /
- * LAPACK that CHOLMOD links anyway): the few-by-few systems of the methods,
- * e.g. spin-willmore's Newton correction of the periods (3 x 2g unknowns).
+ * Small dense least squares (dgelss) and symmetric-definite eigenvalues
+ * (dsygv) through LAPACK (from the OpenBLAS / LAPACK that CHOLMOD links
+ * anyway): the few-by-few systems of the methods, e.g. spin-willmore's
+ * Newton correction of the periods (3 x 2g unknowns), and the conformal
+ * class's 2g x 2g period matrices.
  */
 #include "linalg/linalg_internal.h"
 
@@ -39,5 +41,27 @@ cf_status cf_dense_least_squares(int32_t m, int32_t n, double *a, double *b, dou
     if (info < 0) return CF_ERR_INVALID_ARG;
     if (info > 0) return CF_ERR_NUMERICAL;
     if (rank) *rank = r;
+    return CF_OK;
+}
+
+extern void dsygv_(const int *itype, const char *jobz, const char *uplo, const int *n, double *a, const int *lda,
+                   double *b, const int *ldb, double *w, double *work, const int *lwork, int *info);
+
+/* dsygv's minimal workspace without vectors, 3 n - 1 (at least 1). */
+int64_t cf_dense_generalized_eigenvalues_work_size(int32_t n) { return n > 0 ? 3 * (int64_t)n : 0; }
+
+cf_status cf_dense_generalized_eigenvalues(int32_t n, double *a, double *b, double *eigenvalues, double *work,
+                                           int64_t work_size)
+{
+    if (n <= 0 || !a || !b || !eigenvalues || !work) return CF_ERR_INVALID_ARG;
+    int64_t need = cf_dense_generalized_eigenvalues_work_size(n);
+    if (work_size < need || need > INT32_MAX) return CF_ERR_INVALID_ARG;
+    for (int64_t k = 0; k < (int64_t)n * n; ++k)
+        if (!isfinite(a[k]) || !isfinite(b[k])) return CF_ERR_NONFINITE;
+    int itype = 1, in = n, lda = n, lwork = (int)need, info = 0;
+    dsygv_(&itype, "N", "L", &in, a, &lda, b, &lda, eigenvalues, work, &lwork, &info);
+    if (info < 0) return CF_ERR_INVALID_ARG;
+    if (info > n) return CF_ERR_NOT_POSDEF;
+    if (info > 0) return CF_ERR_NUMERICAL;
     return CF_OK;
 }

@@ -542,6 +542,51 @@ static void test_compare(void)
     }
     cf_mesh_data_destroy(&data);
     cf_context_destroy(&ctx);
+    /* a genus-0 surface has one conformal class: nothing said */
+    CHECK_RUN("compare bumpy.obj smooth.obj", 0);
+    CHECK(strstr(cft_out, "conformal class") == NULL);
+    /* tori of radii (1, 0.4) and (1, 0.3): moduli near sqrt(0.84) / 0.4 = 2.291 i and
+     * sqrt(0.91) / 0.3 = 3.180 i, their hyperbolic distance near log(3.180 / 2.291) = 0.328 */
+    CHECK_RUN("generate torus --n-major 48 --n-minor 24 -o torus_a.obj", 0);
+    CHECK_RUN("generate torus --n-major 48 --n-minor 24 --minor-radius 0.3 -o torus_b.obj", 0);
+    CHECK_RUN("compare torus_a.obj torus_b.obj --json", 0);
+    root = json_loads(cft_out, 0, &jerr);
+    CHECK(root != NULL);
+    if (root) {
+        json_t *cls = json_object_get(root, "conformal_class");
+        CHECK(json_integer_value(json_object_get(cls, "genus")) == 1);
+        CHECK_NEAR(json_real_value(json_object_get(cls, "distance")), 0.328, 0.0, 0.005);
+        CHECK_NEAR(json_real_value(json_array_get(json_object_get(cls, "modulus_a"), 1)), 2.291, 0.0, 0.01);
+        CHECK_NEAR(json_real_value(json_array_get(json_object_get(cls, "modulus_b"), 1)), 3.180, 0.0, 0.01);
+    }
+    json_decref(root);
+    /* a face of B collapsed onto a line up to 1e-13 (the file loads): one face changes the class
+     * by no more than its share (measured 1.3e-5) */
+    ctx = cft_context();
+    cf_mesh *torus = NULL;
+    CHECK_OK(ctx, cf_load_mesh(ctx, cft_in_dir("torus_a.obj"), &torus));
+    if (torus) {
+        int32_t nv = cf_mesh_vertex_count(torus);
+        const int32_t *t = cf_mesh_triangles(torus);
+        double *x = malloc(3 * (size_t)nv * sizeof *x);
+        memcpy(x, cf_mesh_positions(torus), 3 * (size_t)nv * sizeof *x);
+        for (int c = 0; c < 3; ++c) x[3 * t[0] + c] = 0.5 * (x[3 * t[1] + c] + x[3 * t[2] + c]) + 1e-13 * (c == 2);
+        CHECK_OK(ctx, cf_write_mesh_file(ctx, cft_in_dir("torus_flat_face.obj"), torus, x, NULL, 0));
+        free(x);
+    }
+    cf_mesh_destroy(&torus);
+    cf_context_destroy(&ctx);
+    CHECK_RUN("compare torus_a.obj torus_flat_face.obj --json", 0);
+    root = json_loads(cft_out, 0, &jerr);
+    CHECK(root != NULL);
+    if (root) {
+        double d = json_real_value(json_object_get(json_object_get(root, "conformal_class"), "distance"));
+        CHECK(d > 0.0 && d < 1e-3);
+    }
+    json_decref(root);
+    remove(cft_in_dir("torus_a.obj"));
+    remove(cft_in_dir("torus_b.obj"));
+    remove(cft_in_dir("torus_flat_face.obj"));
     CHECK_RUN("compare bumpy.obj ico.obj", 2);
     CHECK(strstr(cft_err, "connectivity") != NULL);
     CHECK_RUN("compare bumpy.obj missing.obj", 2);

@@ -1,7 +1,8 @@
 /* Small dense least squares (cf_dense_least_squares, LAPACK dgelss):
  * consistent and inconsistent overdetermined systems against the normal
  * equations, the minimum-norm solution of a rank-deficient one, and the
- * statuses of bad input. */
+ * statuses of bad input; the eigenvalues of a symmetric-definite pencil
+ * (cf_dense_generalized_eigenvalues, LAPACK dsygv). */
 #include "test.h"
 
 #include "curvflow/linalg.h"
@@ -65,10 +66,40 @@ static void test_bad_input(void)
     CHECK(cf_dense_least_squares_work_size(0, 3) == 0);
 }
 
+/* a x = mu b x for b = L L^T and a = L diag(1, 2, 5) L^T: mu = 1, 2, 5 */
+static void test_generalized_eigenvalues(void)
+{
+    const double l[9] = {2.0, 0.5, -1.0, 0.0, 1.5, 0.3, 0.0, 0.0, 0.7}; /* lower triangular, column-major */
+    const double d[3] = {1.0, 2.0, 5.0};
+    double a[9], b[9], mu[3], work[16];
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+            double sa = 0.0, sb = 0.0;
+            for (int k = 0; k < 3; ++k) {
+                sa += l[i + 3 * k] * d[k] * l[j + 3 * k];
+                sb += l[i + 3 * k] * l[j + 3 * k];
+            }
+            a[i + 3 * j] = sa;
+            b[i + 3 * j] = sb;
+        }
+    CHECK(cf_dense_generalized_eigenvalues_work_size(3) <= 16);
+    CHECK_STATUS(cf_dense_generalized_eigenvalues(3, a, b, mu, work, 16), CF_OK);
+    for (int k = 0; k < 3; ++k) CHECK_NEAR(mu[k], d[k], 1e-13, 0.0); /* ascending */
+    /* b not positive definite */
+    double a2[4] = {1.0, 0.0, 0.0, 1.0}, b2[4] = {1.0, 0.0, 0.0, -1.0};
+    CHECK_STATUS(cf_dense_generalized_eigenvalues(2, a2, b2, mu, work, 16), CF_ERR_NOT_POSDEF);
+    double a3[4] = {1.0, NAN, NAN, 1.0}, b3[4] = {1.0, 0.0, 0.0, 1.0};
+    CHECK_STATUS(cf_dense_generalized_eigenvalues(2, a3, b3, mu, work, 16), CF_ERR_NONFINITE);
+    CHECK_STATUS(cf_dense_generalized_eigenvalues(2, b3, b3, mu, work, 1), CF_ERR_INVALID_ARG);
+    CHECK_STATUS(cf_dense_generalized_eigenvalues(0, b3, b3, mu, work, 16), CF_ERR_INVALID_ARG);
+    CHECK_STATUS(cf_dense_generalized_eigenvalues(2, NULL, b3, mu, work, 16), CF_ERR_INVALID_ARG);
+}
+
 int main(void)
 {
     CFT_RUN(test_overdetermined);
     CFT_RUN(test_rank_deficient);
     CFT_RUN(test_bad_input);
+    CFT_RUN(test_generalized_eigenvalues);
     return cft_finish();
 }

@@ -1,0 +1,383 @@
+/*
+ * The conformal class of a closed surface of genus g >= 1, measured from
+ * its discrete harmonic 1-forms: what the conformal Willmore flow (Crane,
+ * Pinkall, Schroeder 2013, Sec. 6.2 and App. C) keeps, and what a
+ * tangential motion or a non-conformal flow changes.
+ *
+ * Homology generators come from a tree-cotree split (Eppstein 2003;
+ * Erickson & Whittlesey 2005): a breadth-first spanning tree of the
+ * vertices from vertex 0, a spanning tree of the faces from face 0 across
+ * the edges not in it; each of the 2g edges left closes one cycle through
+ * the vertex tree. They depend on the connectivity alone, so two position
+ * sets of one mesh are measured against the same marked cycles.
+ *
+ * With h_1 .. h_2g the harmonic forms of the positions (cf_harmonic_basis,
+ * orthonormal under *1) and P_ik the period of h_i along cycle k, the forms
+ * eta = h P^-T have period delta_jk along cycle j (the cohomology basis dual
+ * to the cycles), and their Gram matrix is G = (P^T P)^-1. The Hodge star
+ * on H^1 in that integral basis is S = I^-1 G, where I_jk = int eta_j ^
+ * eta_k is the intersection form (integers: a cohomological quantity, the
+ * same for any positions), and S determines the period matrix: G is a
+ * complete invariant of the marked conformal class. In the smooth setting
+ * det G = det I = 1 (S^2 = -1); the discrete star misses that by
+ * `hodge_defect`.
+ *
+ * Genus 1: for the flat torus C / (Z + tau Z), the forms dual to the cycles
+ * 1 and tau are dx - (x / y) dy and dy / y (tau = x + i y), whose Gram
+ * matrix is (1 / y) [[|tau|^2, -x], [-x, 1]] when int eta_1 ^ eta_2 = +1;
+ * hence x = K12 / K11 and y = sqrt(det K) / K11 with K = P^T P (the square
+ * root scales out the discrete det K != 1). tau is then brought into the
+ * standard fundamental domain |x| <= 1/2, |tau| >= 1.
+ *
+ * The distance between two classes of one marked surface is that of their
+ * Gram matrices scaled to det 1, sqrt(sum log^2 mu / 2) over the
+ * eigenvalues mu of the pencil (K_a, K_b): the hyperbolic distance between
+ * tau_a and tau_b in the upper half-plane for genus 1 (G(tau) above is the
+ * standard map of the half-plane onto the 2 x 2 positive matrices of det 1).
+ */
+#include "metrics/metrics_internal.h"
+#include "curvflow/linalg.h"
+#include "curvflow/ops.h"
+
+#include <math.h>
+#include <string.h>
+
+/* edge flags of the tree-cotree split */
+enum { EDGE_FREE = 0, EDGE_TREE = 1, EDGE_COTREE = 2 };
+
+/* The marked cycles: the vertex tree (BFS order and each vertex's edge to
+ * its parent) and the 2g generator edges. */
+typedef struct homology_cycles {
+    int32_t dim;
+    int32_t *order;       /* nv, parents first */
+    int32_t *parent_edge; /* nv, -1 at the root */
+    int32_t *generators;  /* dim edges */
+    double *potential;    /* nv scratch: a form integrated along the tree */
+} homology_cycles;
+
+static void cycles_free(cf_context *ctx, const cf_mesh *mesh, homology_cycles *c)
+{
+    CFI_FREE(ctx, c->order, mesh->nv);
+    CFI_FREE(ctx, c->parent_edge, mesh->nv);
+    CFI_FREE(ctx, c->generators, c->dim);
+    CFI_FREE(ctx, c->potential, mesh->nv);
+}
+
+/* Closed, connected, genus >= 1: the surfaces whose class this measures. */
+static cf_status check_surface(cf_context *ctx, const cf_mesh *mesh, const char *fn)
+{
+    if (mesh->component_count != 1)
+        return cfi_error(ctx, CF_ERR_BAD_MESH, "%s: one connected surface needed, the mesh has %d components", fn,
+                         (int)mesh->component_count);
+    if (cf_mesh_boundary_loop_count(mesh) != 0)
+        return cfi_error(ctx, CF_ERR_BAD_MESH, "%s: closed surfaces only, the mesh has %d boundary loops", fn,
+                         (int)cf_mesh_boundary_loop_count(mesh));
+    if (cf_mesh_genus(mesh) < 1)
+        return cfi_error(ctx, CF_ERR_BAD_MESH, "%s: genus >= 1 needed (a sphere has one conformal class)", fn);
+    return CF_OK;
+}
+
+static cf_status find_cycles(cf_context *ctx, const cf_mesh *mesh, homology_cycles *c)
+{
+    int32_t nv = mesh->nv, nf = mesh->nf, ne = mesh->ne;
+    c->dim = 2 * cf_mesh_genus(mesh);
+    c->order = CFI_ALLOC(ctx, int32_t, nv);
+    c->parent_edge = CFI_ALLOC(ctx, int32_t, nv);
+    c->generators = CFI_ALLOC(ctx, int32_t, c->dim);
+    c->potential = CFI_ALLOC(ctx, double, nv);
+    uint8_t *flag = CFI_ALLOC(ctx, uint8_t, ne);
+    int32_t *face_queue = CFI_ALLOC(ctx, int32_t, nf);
+    uint8_t *face_seen = CFI_ALLOC(ctx, uint8_t, nf);
+    cf_status st = CF_OK;
+    if (!c->order || !c->parent_edge || !c->generators || !c->potential || !flag || !face_queue || !face_seen) {
+        st = CF_ERR_NOMEM;
+        goto done;
+    }
+    memset(flag, EDGE_FREE, (size_t)ne);
+    memset(face_seen, 0, (size_t)nf);
+    for (int32_t v = 0; v < nv; ++v) c->parent_edge[v] = -2; /* unseen */
+    int32_t head = 0, tail = 0;
+    c->order[tail++] = 0;
+    c->parent_edge[0] = -1;
+    while (head < tail) {
+        int32_t u = c->order[head++];
+        for (int32_t k = mesh->ring_offsets[u]; k < mesh->ring_offsets[u + 1]; ++k) {
+            int32_t w = mesh->ring_neighbors[k];
+            if (c->parent_edge[w] != -2) continue;
+            c->parent_edge[w] = mesh->ring_edges[k];
+            flag[mesh->ring_edges[k]] = EDGE_TREE;
+            c->order[tail++] = w;
+        }
+    }
+    head = tail = 0;
+    face_queue[tail++] = 0;
+    face_seen[0] = 1;
+    while (head < tail) {
+        int32_t f = face_queue[head++];
+        for (int k = 0; k < 3; ++k) {
+            int32_t e = mesh->halfedge_edge[3 * f + k], twin = mesh->halfedge_twin[3 * f + k];
+            if (flag[e] == EDGE_TREE || twin < 0 || face_seen[twin / 3]) continue;
+            face_seen[twin / 3] = 1;
+            flag[e] = EDGE_COTREE;
+            face_queue[tail++] = twin / 3;
+        }
+    }
+    int32_t count = 0;
+    for (int32_t e = 0; e < ne; ++e) {
+        if (flag[e] != EDGE_FREE) continue;
+        if (count == c->dim) break;
+        c->generators[count++] = e;
+    }
+    /* nv - 1 tree edges and nf - 1 cotree edges leave ne - nv - nf + 2 = 2g */
+    if (count != c->dim || tail != nf)
+        st = cfi_error(ctx, CF_ERR_BAD_MESH, "cf_conformal_class: the tree-cotree split left %d cycles for genus %d",
+                       (int)count, (int)(c->dim / 2));
+done:
+    CFI_FREE(ctx, flag, ne);
+    CFI_FREE(ctx, face_queue, nf);
+    CFI_FREE(ctx, face_seen, nf);
+    return st;
+}
+
+/* The checks both entry points make (positions finite, a closed connected
+ * surface of genus >= 1) and its marked cycles; c is freed on failure. */
+static cf_status open_surface(cf_context *ctx, const cf_mesh *mesh, const double *a, const double *b, const char *fn,
+                              homology_cycles *c)
+{
+    cf_status st = cfi_metrics_check_pair(ctx, mesh, a, b, fn);
+    if (st == CF_OK) st = check_surface(ctx, mesh, fn);
+    if (st == CF_OK) st = find_cycles(ctx, mesh, c);
+    if (st != CF_OK && c->dim > 0) cycles_free(ctx, mesh, c);
+    return st;
+}
+
+/* Periods of the 1-form `form` (ne values on edges i -> j, i < j) along the
+ * marked cycles: column `column` of periods (dim x dim, column-major). */
+static void form_periods(const cf_mesh *mesh, const homology_cycles *c, const double *form, double *periods,
+                         int32_t row)
+{
+    double *phi = c->potential;
+    phi[0] = 0.0;
+    for (int32_t k = 1; k < mesh->nv; ++k) {
+        int32_t v = c->order[k], e = c->parent_edge[v];
+        int32_t a = mesh->edge_vertices[2 * e], b = mesh->edge_vertices[2 * e + 1];
+        phi[v] = v == b ? phi[a] + form[e] : phi[b] - form[e];
+    }
+    for (int32_t k = 0; k < c->dim; ++k) {
+        int32_t e = c->generators[k];
+        periods[row + (int64_t)k * c->dim] =
+            phi[mesh->edge_vertices[2 * e]] + form[e] - phi[mesh->edge_vertices[2 * e + 1]];
+    }
+}
+
+/* K = P^T P of positions x (dim x dim), and optionally the harmonic forms'
+ * wedge matrix int h_i ^ h_j (dim x dim) and P itself. */
+static cf_status class_matrix(cf_context *ctx, const cf_mesh *mesh, const double *x, const homology_cycles *c,
+                              double *k_matrix, double *wedge, double *periods_out)
+{
+    int32_t dim = c->dim, ne = mesh->ne, nf = mesh->nf;
+    int32_t got = 0;
+    double *forms = CFI_ALLOC(ctx, double, (int64_t)ne * dim);
+    double *periods = CFI_ALLOC(ctx, double, (int64_t)dim * dim);
+    double *fields = wedge ? CFI_ALLOC(ctx, double, 3 * (int64_t)nf * dim) : NULL;
+    cf_status st = CF_OK;
+    if (!forms || !periods || (wedge && !fields)) {
+        st = CF_ERR_NOMEM;
+        goto done;
+    }
+    st = cf_harmonic_basis(ctx, mesh, x, &got, forms);
+    if (st != CF_OK) goto done;
+    if (got != dim) {
+        st = cfi_error(ctx, CF_ERR_NUMERICAL, "cf_conformal_class: %d harmonic forms for genus %d", (int)got,
+                       (int)(dim / 2));
+        goto done;
+    }
+    for (int32_t i = 0; i < dim; ++i) form_periods(mesh, c, forms + (int64_t)i * ne, periods, i);
+    for (int32_t k = 0; k < dim; ++k)
+        for (int32_t l = 0; l < dim; ++l) {
+            double s = 0.0;
+            for (int32_t i = 0; i < dim; ++i) s += periods[i + (int64_t)k * dim] * periods[i + (int64_t)l * dim];
+            k_matrix[k + (int64_t)l * dim] = s;
+        }
+    if (periods_out) memcpy(periods_out, periods, (size_t)dim * dim * sizeof(double));
+    if (wedge) {
+        for (int32_t i = 0; i < dim && st == CF_OK; ++i)
+            st = cf_one_form_to_vector_field(ctx, mesh, x, forms + (int64_t)i * ne, fields + 3 * (int64_t)i * nf);
+        if (st != CF_OK) goto done;
+        memset(wedge, 0, (size_t)dim * dim * sizeof(double));
+        for (int32_t f = 0; f < nf; ++f) {
+            const int32_t *t = mesh->triangles + 3 * f;
+            double e1[3], e2[3];
+            for (int q = 0; q < 3; ++q) {
+                e1[q] = x[3 * t[1] + q] - x[3 * t[0] + q];
+                e2[q] = x[3 * t[2] + q] - x[3 * t[0] + q];
+            }
+            /* twice the area times the unit normal of the face's winding */
+            double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+            for (int32_t i = 0; i < dim; ++i)
+                for (int32_t j = i + 1; j < dim; ++j) {
+                    const double *a = fields + 3 * ((int64_t)i * nf + f), *b = fields + 3 * ((int64_t)j * nf + f);
+                    /* int_f alpha ^ beta = area (a x b) . n for constant a, b */
+                    double w = 0.5 * ((a[1] * b[2] - a[2] * b[1]) * n[0] + (a[2] * b[0] - a[0] * b[2]) * n[1] +
+                                      (a[0] * b[1] - a[1] * b[0]) * n[2]);
+                    wedge[i + (int64_t)j * dim] += w;
+                    wedge[j + (int64_t)i * dim] -= w;
+                }
+        }
+    }
+done:
+    CFI_FREE(ctx, forms, (int64_t)ne * dim);
+    CFI_FREE(ctx, periods, (int64_t)dim * dim);
+    if (fields) CFI_FREE(ctx, fields, 3 * (int64_t)nf * dim);
+    return st;
+}
+
+/* Solves the square system a x = b column by column (a: n x n, kept; b: n x
+ * m, overwritten by x) through the dense least-squares routine. */
+static cf_status dense_solve(cf_context *ctx, int32_t n, int32_t m, const double *a, double *b)
+{
+    int64_t lwork = cf_dense_least_squares_work_size(n, n);
+    double *copy = CFI_ALLOC(ctx, double, (int64_t)n * n), *work = CFI_ALLOC(ctx, double, lwork);
+    cf_status st = copy && work ? CF_OK : CF_ERR_NOMEM;
+    for (int32_t j = 0; j < m && st == CF_OK; ++j) {
+        memcpy(copy, a, (size_t)n * n * sizeof(double));
+        int32_t rank = 0;
+        st = cf_dense_least_squares(n, n, copy, b + (int64_t)j * n, 1e-13, work, lwork, &rank);
+        if (st == CF_OK && rank < n)
+            st = cfi_error(ctx, CF_ERR_NUMERICAL, "cf_conformal_class: the periods of the harmonic forms are singular");
+    }
+    CFI_FREE(ctx, copy, (int64_t)n * n);
+    CFI_FREE(ctx, work, lwork);
+    return st;
+}
+
+/* log det of the positive definite k (n x n) from its eigenvalues */
+static cf_status log_determinant(cf_context *ctx, int32_t n, const double *k, double *logdet)
+{
+    int64_t lwork = cf_dense_generalized_eigenvalues_work_size(n);
+    double *a = CFI_ALLOC(ctx, double, (int64_t)n * n), *b = CFI_ALLOC(ctx, double, (int64_t)n * n);
+    double *mu = CFI_ALLOC(ctx, double, n), *work = CFI_ALLOC(ctx, double, lwork);
+    cf_status st = a && b && mu && work ? CF_OK : CF_ERR_NOMEM;
+    if (st == CF_OK) {
+        memcpy(a, k, (size_t)n * n * sizeof(double));
+        memset(b, 0, (size_t)n * n * sizeof(double));
+        for (int32_t i = 0; i < n; ++i) b[i + (int64_t)i * n] = 1.0;
+        st = cf_dense_generalized_eigenvalues(n, a, b, mu, work, lwork);
+    }
+    *logdet = 0.0;
+    for (int32_t i = 0; i < n && st == CF_OK; ++i) {
+        if (!(mu[i] > 0.0)) st = cfi_error(ctx, CF_ERR_NUMERICAL, "cf_conformal_class: the periods are singular");
+        else *logdet += log(mu[i]);
+    }
+    CFI_FREE(ctx, a, (int64_t)n * n);
+    CFI_FREE(ctx, b, (int64_t)n * n);
+    CFI_FREE(ctx, mu, n);
+    CFI_FREE(ctx, work, lwork);
+    return st;
+}
+
+/* tau into |Re tau| <= 1/2, |tau| >= 1 (the modular group's standard
+ * fundamental domain) */
+static void reduce_modulus(double *x, double *y)
+{
+    for (int it = 0; it < 200; ++it) {
+        *x -= nearbyint(*x);
+        double r2 = *x * *x + *y * *y;
+        if (r2 >= 1.0 - 1e-15) break;
+        *x = -*x / r2;
+        *y = *y / r2;
+    }
+}
+
+cf_status cf_conformal_class_compute(cf_context *ctx, const cf_mesh *mesh, const double *positions, double *gram,
+                                     cf_conformal_class *out)
+{
+    static const char fn[] = "cf_conformal_class_compute";
+    if (!ctx) return CF_ERR_INVALID_ARG;
+    if (!out) return cfi_error(ctx, CF_ERR_INVALID_ARG, "%s: out is NULL", fn);
+    homology_cycles c = {0};
+    cf_status st = open_surface(ctx, mesh, positions, positions, fn, &c);
+    if (st != CF_OK) return st;
+    int32_t dim = c.dim;
+    int64_t n2 = (int64_t)dim * dim;
+    double *k = CFI_ALLOC(ctx, double, n2), *wedge = CFI_ALLOC(ctx, double, n2);
+    double *periods = CFI_ALLOC(ctx, double, n2), *inv = CFI_ALLOC(ctx, double, n2); /* inv: the intersection form */
+    if (st == CF_OK && (!k || !wedge || !periods || !inv)) st = CF_ERR_NOMEM;
+    if (st == CF_OK) st = class_matrix(ctx, mesh, positions, &c, k, wedge, periods);
+    /* the intersection form P^-1 W P^-T of the dual forms */
+    if (st == CF_OK) st = dense_solve(ctx, dim, dim, periods, wedge);
+    if (st == CF_OK) {
+        for (int32_t i = 0; i < dim; ++i)
+            for (int32_t j = 0; j < dim; ++j) inv[i + (int64_t)j * dim] = wedge[j + (int64_t)i * dim];
+        st = dense_solve(ctx, dim, dim, periods, inv); /* P^-1 W^T P^-T, W antisymmetric */
+        for (int64_t q = 0; q < n2; ++q) inv[q] = -inv[q];
+    }
+    double logdet = 0.0;
+    if (st == CF_OK) st = log_determinant(ctx, dim, k, &logdet);
+    if (st == CF_OK) {
+        memset(out, 0, sizeof *out);
+        out->genus = dim / 2;
+        double worst = 0.0;
+        for (int64_t q = 0; q < n2; ++q) worst = fmax(worst, fabs(inv[q] - nearbyint(inv[q])));
+        out->intersection_error = worst;
+        /* det G = 1 / det K, 1 for the smooth surface */
+        out->hodge_defect = fabs(expm1(-logdet / dim));
+        out->modulus[0] = out->modulus[1] = NAN;
+        if (dim == 2) {
+            /* int eta_1 ^ eta_2 = -1: the cycles in the other order */
+            double kaa = inv[2] > 0.0 ? k[0] : k[3];
+            double x = k[2] / kaa, y = sqrt(exp(logdet)) / kaa;
+            reduce_modulus(&x, &y);
+            out->modulus[0] = x;
+            out->modulus[1] = y;
+        }
+        if (gram) {
+            /* G = K^-1 */
+            memset(gram, 0, (size_t)n2 * sizeof(double));
+            for (int32_t i = 0; i < dim; ++i) gram[i + (int64_t)i * dim] = 1.0;
+            st = dense_solve(ctx, dim, dim, k, gram);
+        }
+    }
+    CFI_FREE(ctx, k, n2);
+    CFI_FREE(ctx, wedge, n2);
+    CFI_FREE(ctx, periods, n2);
+    CFI_FREE(ctx, inv, n2);
+    cycles_free(ctx, mesh, &c);
+    return st;
+}
+
+cf_status cf_conformal_class_distance(cf_context *ctx, const cf_mesh *mesh, const double *a, const double *b,
+                                      double *distance)
+{
+    static const char fn[] = "cf_conformal_class_distance";
+    if (!ctx) return CF_ERR_INVALID_ARG;
+    if (!distance) return cfi_error(ctx, CF_ERR_INVALID_ARG, "%s: distance is NULL", fn);
+    *distance = NAN;
+    homology_cycles c = {0};
+    cf_status st = open_surface(ctx, mesh, a, b, fn, &c);
+    if (st != CF_OK) return st;
+    int32_t dim = c.dim;
+    int64_t n2 = (int64_t)dim * dim, lwork = cf_dense_generalized_eigenvalues_work_size(dim);
+    double *ka = CFI_ALLOC(ctx, double, n2), *kb = CFI_ALLOC(ctx, double, n2);
+    double *mu = CFI_ALLOC(ctx, double, dim), *work = CFI_ALLOC(ctx, double, lwork);
+    if (st == CF_OK && (!ka || !kb || !mu || !work)) st = CF_ERR_NOMEM;
+    if (st == CF_OK) st = class_matrix(ctx, mesh, a, &c, ka, NULL, NULL);
+    if (st == CF_OK) st = class_matrix(ctx, mesh, b, &c, kb, NULL, NULL);
+    if (st == CF_OK) st = cf_dense_generalized_eigenvalues(dim, ka, kb, mu, work, lwork);
+    if (st == CF_OK) {
+        /* both scaled to det 1: the log eigenvalues less their mean */
+        double mean = 0.0, sum2 = 0.0;
+        for (int32_t i = 0; i < dim && st == CF_OK; ++i) {
+            if (!(mu[i] > 0.0)) st = cfi_error(ctx, CF_ERR_NUMERICAL, "%s: the periods are singular", fn);
+            else mean += log(mu[i]) / dim;
+        }
+        for (int32_t i = 0; i < dim && st == CF_OK; ++i) sum2 += (log(mu[i]) - mean) * (log(mu[i]) - mean);
+        if (st == CF_OK) *distance = sqrt(0.5 * sum2);
+    }
+    CFI_FREE(ctx, ka, n2);
+    CFI_FREE(ctx, kb, n2);
+    CFI_FREE(ctx, mu, dim);
+    CFI_FREE(ctx, work, lwork);
+    cycles_free(ctx, mesh, &c);
+    return st;
+}

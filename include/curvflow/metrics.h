@@ -143,6 +143,18 @@ CF_API cf_status cf_conformal_class_compute(cf_context *ctx, const cf_mesh *mesh
 CF_API cf_status cf_conformal_class_distance(cf_context *ctx, const cf_mesh *mesh, const double *a, const double *b,
                                              double *distance);
 
+/* G of cf_conformal_class_compute (gram, (2g)^2 doubles, required) and,
+ * if gradient is not NULL, its derivative in the positions: for each pair
+ * k <= l in the order (0,0), (0,1), (1,1), (0,2), ... (m = g (2g + 1)
+ * pairs), 3 nv doubles d G_kl / d x. The harmonic representatives are held
+ * fixed in it: they minimise the Dirichlet energy within their cohomology
+ * class, so their own change does not enter at first order. G here is
+ * summed face by face as area <v_k, v_l> of the forms' constant fields,
+ * equal to cf_conformal_class_compute's (P^T P)^-1 up to rounding.
+ * Statuses as cf_conformal_class_compute's. */
+CF_API cf_status cf_conformal_class_gram_gradient(cf_context *ctx, const cf_mesh *mesh, const double *positions,
+                                                  double *gram, double *gradient);
+
 /* ---- single-shape summary -------------------------------------------------- */
 
 typedef struct cf_shape_summary {

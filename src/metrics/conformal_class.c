@@ -34,6 +34,11 @@
  * eigenvalues mu of the pencil (K_a, K_b): the hyperbolic distance between
  * tau_a and tau_b in the upper half-plane for genus 1 (G(tau) above is the
  * standard map of the half-plane onto the 2 x 2 positive matrices of det 1).
+ *
+ * The derivative of G in the positions holds the harmonic representatives
+ * fixed: each minimises the Dirichlet energy within its cohomology class,
+ * so its own change does not enter at first order (the envelope argument;
+ * checked against central differences in test `metrics.conformal_class`).
  */
 #include "metrics/metrics_internal.h"
 #include "curvflow/linalg.h"
@@ -378,6 +383,126 @@ cf_status cf_conformal_class_distance(cf_context *ctx, const cf_mesh *mesh, cons
     CFI_FREE(ctx, kb, n2);
     CFI_FREE(ctx, mu, dim);
     CFI_FREE(ctx, work, lwork);
+    cycles_free(ctx, mesh, &c);
+    return st;
+}
+
+/* d/dx of F = area <v_a, v_b> on one face, for the constant fields v of two
+ * closed forms with values a = (a1, a2), b on its edges e1 = x1 - x0,
+ * e2 = x2 - x0: with E the Gram matrix of e1, e2, F = sqrt(det E) / 2
+ * a^T E^-1 b, so dF = 1/2 (d sqrt(det E) q - sqrt(det E) alpha^T dE beta)
+ * with q = a^T E^-1 b, alpha = E^-1 a, beta = E^-1 b, and dE_ij =
+ * de_i . e_j + e_i . de_j. Adds scale * dF/dx to the face's three
+ * vertices of grad. Returns F. */
+static double face_pair_gradient(const double *e1, const double *e2, const double a[2], const double b[2],
+                                 double scale, double *g0, double *g1, double *g2)
+{
+    double e11 = e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2];
+    double e12 = e1[0] * e2[0] + e1[1] * e2[1] + e1[2] * e2[2];
+    double e22 = e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2];
+    double det = e11 * e22 - e12 * e12, s = sqrt(det);
+    /* E^-1 = [[e22, -e12], [-e12, e11]] / det */
+    double inv[2][2] = {{e22 / det, -e12 / det}, {-e12 / det, e11 / det}};
+    double alpha[2] = {inv[0][0] * a[0] + inv[0][1] * a[1], inv[1][0] * a[0] + inv[1][1] * a[1]};
+    double beta[2] = {inv[0][0] * b[0] + inv[0][1] * b[1], inv[1][0] * b[0] + inv[1][1] * b[1]};
+    double q = a[0] * beta[0] + a[1] * beta[1];
+    /* S_ij = dF / dE_ij with E's entries taken apart; T = S + S^T */
+    double sij[2][2], t[2][2];
+    for (int i = 0; i < 2; ++i)
+        for (int j = 0; j < 2; ++j) sij[i][j] = 0.5 * (0.5 * s * q * inv[j][i] - s * alpha[i] * beta[j]);
+    for (int i = 0; i < 2; ++i)
+        for (int j = 0; j < 2; ++j) t[i][j] = sij[i][j] + sij[j][i];
+    for (int c = 0; c < 3; ++c) {
+        double d1 = scale * (t[0][0] * e1[c] + t[0][1] * e2[c]);
+        double d2 = scale * (t[1][0] * e1[c] + t[1][1] * e2[c]);
+        g1[c] += d1;
+        g2[c] += d2;
+        g0[c] -= d1 + d2;
+    }
+    return 0.5 * s * q;
+}
+
+cf_status cf_conformal_class_gram_gradient(cf_context *ctx, const cf_mesh *mesh, const double *positions, double *gram,
+                                           double *gradient)
+{
+    static const char fn[] = "cf_conformal_class_gram_gradient";
+    if (!ctx) return CF_ERR_INVALID_ARG;
+    if (!gram) return cfi_error(ctx, CF_ERR_INVALID_ARG, "%s: gram is NULL", fn);
+    homology_cycles c = {0};
+    cf_status st = open_surface(ctx, mesh, positions, positions, fn, &c);
+    if (st != CF_OK) return st;
+    int32_t dim = c.dim, ne = mesh->ne, nf = mesh->nf, nv = mesh->nv, got = 0;
+    int64_t n2 = (int64_t)dim * dim, pairs = (int64_t)dim * (dim + 1) / 2;
+    double *forms = CFI_ALLOC(ctx, double, (int64_t)ne * dim), *dual = CFI_ALLOC(ctx, double, (int64_t)ne * dim);
+    double *periods = CFI_ALLOC(ctx, double, n2), *coef = CFI_ALLOC(ctx, double, n2);
+    double *vals = CFI_ALLOC(ctx, double, 2 * (int64_t)dim); /* one face's */
+    if (!forms || !dual || !periods || !coef || !vals) st = CF_ERR_NOMEM;
+    if (st == CF_OK) st = cf_harmonic_basis(ctx, mesh, positions, &got, forms);
+    if (st == CF_OK && got != dim)
+        st = cfi_error(ctx, CF_ERR_NUMERICAL, "%s: %d harmonic forms for genus %d", fn, (int)got, (int)(dim / 2));
+    if (st == CF_OK) {
+        for (int32_t i = 0; i < dim; ++i) form_periods(mesh, &c, forms + (int64_t)i * ne, periods, i);
+        /* C = P^-T: P^T C = I */
+        double *pt = CFI_ALLOC(ctx, double, n2);
+        if (!pt) st = CF_ERR_NOMEM;
+        if (st == CF_OK) {
+            for (int32_t i = 0; i < dim; ++i)
+                for (int32_t k = 0; k < dim; ++k) {
+                    pt[i + (int64_t)k * dim] = periods[k + (int64_t)i * dim];
+                    coef[i + (int64_t)k * dim] = i == k;
+                }
+            st = dense_solve(ctx, dim, dim, pt, coef);
+        }
+        CFI_FREE(ctx, pt, n2);
+    }
+    if (st == CF_OK) {
+        /* eta_k = sum_i h_i C_ik: the harmonic forms dual to the cycles */
+        memset(dual, 0, (size_t)ne * dim * sizeof(double));
+        for (int32_t k = 0; k < dim; ++k)
+            for (int32_t i = 0; i < dim; ++i) {
+                double w = coef[i + (int64_t)k * dim];
+                const double *h = forms + (int64_t)i * ne;
+                double *eta = dual + (int64_t)k * ne;
+                for (int32_t e = 0; e < ne; ++e) eta[e] += w * h[e];
+            }
+        memset(gram, 0, (size_t)n2 * sizeof(double));
+        if (gradient) memset(gradient, 0, (size_t)(pairs * 3 * nv) * sizeof(double));
+        for (int32_t f = 0; f < nf; ++f) {
+            const int32_t *t = mesh->triangles + 3 * f;
+            double e1[3], e2[3];
+            for (int q = 0; q < 3; ++q) {
+                e1[q] = positions[3 * t[1] + q] - positions[3 * t[0] + q];
+                e2[q] = positions[3 * t[2] + q] - positions[3 * t[0] + q];
+            }
+            /* each form's values along t0 -> t1 and t0 -> t2 (= t0 -> t1 -> t2: closed) */
+            for (int32_t k = 0; k < dim; ++k) {
+                double along[2];
+                for (int h = 0; h < 2; ++h) {
+                    int32_t ed = mesh->halfedge_edge[3 * f + h];
+                    double sgn = mesh->edge_vertices[2 * ed] == t[h] ? 1.0 : -1.0;
+                    along[h] = sgn * dual[(int64_t)k * ne + ed];
+                }
+                vals[2 * k] = along[0];
+                vals[2 * k + 1] = along[0] + along[1];
+            }
+            int64_t pair = 0;
+            for (int32_t l = 0; l < dim; ++l)
+                for (int32_t k = 0; k <= l; ++k, ++pair) {
+                    double *g = gradient ? gradient + pair * 3 * nv : NULL;
+                    double dummy[9] = {0};
+                    double F = face_pair_gradient(e1, e2, &vals[2 * k], &vals[2 * l], g ? 1.0 : 0.0,
+                                                  g ? g + 3 * t[0] : dummy, g ? g + 3 * t[1] : dummy + 3,
+                                                  g ? g + 3 * t[2] : dummy + 6);
+                    gram[k + (int64_t)l * dim] += F;
+                    if (k != l) gram[l + (int64_t)k * dim] += F;
+                }
+        }
+    }
+    CFI_FREE(ctx, forms, (int64_t)ne * dim);
+    CFI_FREE(ctx, dual, (int64_t)ne * dim);
+    CFI_FREE(ctx, periods, n2);
+    CFI_FREE(ctx, coef, n2);
+    CFI_FREE(ctx, vals, 2 * (int64_t)dim);
     cycles_free(ctx, mesh, &c);
     return st;
 }

@@ -104,6 +104,62 @@ static void test_invariance(void)
     cf_context_destroy(&ctx);
 }
 
+/* the Gram matrix summed face by face equals (P^T P)^-1, and its gradient
+ * (harmonic representatives held fixed) matches central differences of G
+ * recomputed with new harmonic forms: the envelope argument, checked */
+static void test_gram_gradient(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *m = NULL;
+    CHECK_OK(ctx, cf_generate_torus(ctx, 1.0, 0.45, 24, 12, &m));
+    if (!m) return;
+    int32_t nv = cf_mesh_vertex_count(m);
+    double *x = malloc(sizeof(double) * 3 * nv), *d = malloc(sizeof(double) * 3 * nv);
+    double *xp = malloc(sizeof(double) * 3 * nv), *xm = malloc(sizeof(double) * 3 * nv);
+    double *grad = malloc(sizeof(double) * 3 * 3 * nv);
+    unsigned seed = 12345u;
+    for (int32_t i = 0; i < 3 * nv; ++i) {
+        seed = seed * 1103515245u + 12345u;
+        double r = (double)(seed >> 8) / (double)(1u << 24) - 0.5;
+        seed = seed * 1103515245u + 12345u;
+        double r2 = (double)(seed >> 8) / (double)(1u << 24) - 0.5;
+        x[i] = cf_mesh_positions(m)[i] * (1.0 + 0.3 * (i % 3 == 0)) + 0.02 * r; /* generic: not a torus of revolution */
+        d[i] = r2;
+    }
+    double gram[4], g_ref[4], gp[4], gm[4];
+    cf_conformal_class cls;
+    CHECK_OK(ctx, cf_conformal_class_gram_gradient(ctx, m, x, gram, grad));
+    CHECK_OK(ctx, cf_conformal_class_compute(ctx, m, x, g_ref, &cls));
+    for (int k = 0; k < 4; ++k) CHECK_NEAR(gram[k], g_ref[k], 1e-10, 0);
+    const double h = 1e-6;
+    for (int32_t i = 0; i < 3 * nv; ++i) {
+        xp[i] = x[i] + h * d[i];
+        xm[i] = x[i] - h * d[i];
+    }
+    CHECK_OK(ctx, cf_conformal_class_compute(ctx, m, xp, gp, &cls));
+    CHECK_OK(ctx, cf_conformal_class_compute(ctx, m, xm, gm, &cls));
+    const int kk[3] = {0, 0, 1}, ll[3] = {0, 1, 1};
+    for (int p = 0; p < 3; ++p) {
+        double fd = (gp[kk[p] + 2 * ll[p]] - gm[kk[p] + 2 * ll[p]]) / (2 * h), an = 0.0;
+        for (int32_t i = 0; i < 3 * nv; ++i) an += grad[(int64_t)p * 3 * nv + i] * d[i];
+        fprintf(stderr, "   G_%d%d: directional derivative %.10f, central difference %.10f\n", kk[p], ll[p], an, fd);
+        CHECK_NEAR(an, fd, 1e-6, 1e-9);
+    }
+    /* with no gradient asked: the same G */
+    double g2[4];
+    CHECK_OK(ctx, cf_conformal_class_gram_gradient(ctx, m, x, g2, NULL));
+    for (int k = 0; k < 4; ++k) CHECK(g2[k] == gram[k]);
+    CHECK_STATUS(cf_conformal_class_gram_gradient(ctx, m, x, NULL, grad), CF_ERR_INVALID_ARG);
+    free(x);
+    free(d);
+    free(xp);
+    free(xm);
+    free(grad);
+    cf_mesh_destroy(&m);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 static void test_bad_input(void)
 {
     cf_context *ctx = cft_context();
@@ -136,6 +192,7 @@ int main(void)
 {
     CFT_RUN(test_torus_of_revolution);
     CFT_RUN(test_invariance);
+    CFT_RUN(test_gram_gradient);
     CFT_RUN(test_bad_input);
     return cft_finish();
 }

@@ -157,7 +157,8 @@ static cf_status open_surface(cf_context *ctx, const cf_mesh *mesh, const double
 }
 
 /* Periods of the 1-form `form` (ne values on edges i -> j, i < j) along the
- * marked cycles: column `column` of periods (dim x dim, column-major). */
+ * marked cycles: row `row` of periods (dim x dim, column-major; column k
+ * for cycle k). */
 static void form_periods(const cf_mesh *mesh, const homology_cycles *c, const double *form, double *periods,
                          int32_t row)
 {
@@ -175,13 +176,27 @@ static void form_periods(const cf_mesh *mesh, const homology_cycles *c, const do
     }
 }
 
+/* The harmonic forms of positions x (cf_harmonic_basis: ne x dim) and
+ * their periods P along the marked cycles (dim x dim). */
+static cf_status harmonic_periods(cf_context *ctx, const cf_mesh *mesh, const double *x, const homology_cycles *c,
+                                  double *forms, double *periods)
+{
+    int32_t got = 0;
+    cf_status st = cf_harmonic_basis(ctx, mesh, x, &got, forms);
+    if (st != CF_OK) return st;
+    if (got != c->dim)
+        return cfi_error(ctx, CF_ERR_NUMERICAL, "cf_conformal_class: %d harmonic forms for genus %d", (int)got,
+                         (int)(c->dim / 2));
+    for (int32_t i = 0; i < c->dim; ++i) form_periods(mesh, c, forms + (int64_t)i * mesh->ne, periods, i);
+    return CF_OK;
+}
+
 /* K = P^T P of positions x (dim x dim), and optionally the harmonic forms'
  * wedge matrix int h_i ^ h_j (dim x dim) and P itself. */
 static cf_status class_matrix(cf_context *ctx, const cf_mesh *mesh, const double *x, const homology_cycles *c,
                               double *k_matrix, double *wedge, double *periods_out)
 {
     int32_t dim = c->dim, ne = mesh->ne, nf = mesh->nf;
-    int32_t got = 0;
     double *forms = CFI_ALLOC(ctx, double, (int64_t)ne * dim);
     double *periods = CFI_ALLOC(ctx, double, (int64_t)dim * dim);
     double *fields = wedge ? CFI_ALLOC(ctx, double, 3 * (int64_t)nf * dim) : NULL;
@@ -190,14 +205,8 @@ static cf_status class_matrix(cf_context *ctx, const cf_mesh *mesh, const double
         st = CF_ERR_NOMEM;
         goto done;
     }
-    st = cf_harmonic_basis(ctx, mesh, x, &got, forms);
+    st = harmonic_periods(ctx, mesh, x, c, forms, periods);
     if (st != CF_OK) goto done;
-    if (got != dim) {
-        st = cfi_error(ctx, CF_ERR_NUMERICAL, "cf_conformal_class: %d harmonic forms for genus %d", (int)got,
-                       (int)(dim / 2));
-        goto done;
-    }
-    for (int32_t i = 0; i < dim; ++i) form_periods(mesh, c, forms + (int64_t)i * ne, periods, i);
     for (int32_t k = 0; k < dim; ++k)
         for (int32_t l = 0; l < dim; ++l) {
             double s = 0.0;
@@ -431,17 +440,14 @@ cf_status cf_conformal_class_gram_gradient(cf_context *ctx, const cf_mesh *mesh,
     homology_cycles c = {0};
     cf_status st = open_surface(ctx, mesh, positions, positions, fn, &c);
     if (st != CF_OK) return st;
-    int32_t dim = c.dim, ne = mesh->ne, nf = mesh->nf, nv = mesh->nv, got = 0;
+    int32_t dim = c.dim, ne = mesh->ne, nf = mesh->nf, nv = mesh->nv;
     int64_t n2 = (int64_t)dim * dim, pairs = (int64_t)dim * (dim + 1) / 2;
     double *forms = CFI_ALLOC(ctx, double, (int64_t)ne * dim), *dual = CFI_ALLOC(ctx, double, (int64_t)ne * dim);
     double *periods = CFI_ALLOC(ctx, double, n2), *coef = CFI_ALLOC(ctx, double, n2);
     double *vals = CFI_ALLOC(ctx, double, 2 * (int64_t)dim); /* one face's */
     if (!forms || !dual || !periods || !coef || !vals) st = CF_ERR_NOMEM;
-    if (st == CF_OK) st = cf_harmonic_basis(ctx, mesh, positions, &got, forms);
-    if (st == CF_OK && got != dim)
-        st = cfi_error(ctx, CF_ERR_NUMERICAL, "%s: %d harmonic forms for genus %d", fn, (int)got, (int)(dim / 2));
+    if (st == CF_OK) st = harmonic_periods(ctx, mesh, positions, &c, forms, periods);
     if (st == CF_OK) {
-        for (int32_t i = 0; i < dim; ++i) form_periods(mesh, &c, forms + (int64_t)i * ne, periods, i);
         /* C = P^-T: P^T C = I */
         double *pt = CFI_ALLOC(ctx, double, n2);
         if (!pt) st = CF_ERR_NOMEM;

@@ -17,6 +17,7 @@
 
 #include <errno.h>
 #include <getopt.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -264,7 +265,10 @@ static int apply_params(cf_context *ctx, const cli_flow_job *job, cf_flow_option
  * Where the tangential relaxation did not run (set to 0, or its default on a
  * surface with a boundary or of genus > 0) the note names it; where it ran
  * (the flow's last step reports its `relaxation_sweeps`, which the method
- * names whenever the relaxation is on) it says what is left. */
+ * names whenever the relaxation is on) it says what is left. On a closed
+ * connected surface of genus > 0 without keep_class it names that option
+ * and the class distance instead (the relaxation moves the class there;
+ * docs/spin.md, "The conformal class the flow keeps"). */
 static void relaxation_hint(cf_context *ctx, const cf_flow_options *options, const cf_mesh *mesh,
                             const cf_flow *flow)
 {
@@ -276,6 +280,19 @@ static void relaxation_hint(cf_context *ctx, const cf_flow_options *options, con
         return;
     }
     if (!(q.weighted_mean > CLI_RELAXATION_HINT_MEAN_Q)) return;
+    if (!spin->keep_class && cf_mesh_component_count(mesh) == 1 && cf_mesh_boundary_loop_count(mesh) == 0 &&
+        cf_mesh_genus(mesh) >= 1) {
+        /* genus > 0: the relaxation moves the class; holding the class keeps the triangles */
+        double drift = NAN;
+        if (cf_conformal_class_distance(ctx, mesh, cf_mesh_positions(mesh), cf_flow_positions(flow), &drift) != CF_OK)
+            cf_context_clear_error(ctx);
+        fprintf(stderr,
+                "curvflow: note: the result's mean Q against the input is %.3f and its conformal class moved by %.3g: "
+                "-p keep_class=1 holds the input's class, which keeps the triangles here at some cost in W and "
+                "time; a finer input helps too (docs/spin.md, \"The conformal class the flow keeps\")\n",
+                q.weighted_mean, drift);
+        return;
+    }
     const cf_flow_info *last = cf_flow_last_info(flow);
     int relaxed = 0;
     for (int k = 0; last && k < CF_FLOW_MAX_RESIDUALS; ++k)

@@ -208,6 +208,15 @@ typedef struct cf_spin_willmore_options {
                                 * the resampling moves the conformal class the flow keeps, and with a
                                 * boundary (held) it slowed bunny_scan_35k's flow (W/4pi 5.10 -> 8.83
                                 * after 10 steps). 0: off (docs/spin.md, "Tangential relaxation") */
+    int32_t keep_class;        /* closed surfaces of genus >= 1: after each attempt, two Gauss-Newton
+                                * steps move its positions back onto the input's conformal class
+                                * (the Gram matrix G of cf_conformal_class_gram_gradient, the
+                                * correction smoothed as (I + 10 L0)^-1 J^T y), before its W is judged.
+                                * The discrete flow otherwise drifts from the class on coarse meshes
+                                * (elephant_g3_3k 0.78, elk 0.092 after 10 steps). Default 0 (an
+                                * experiment: it stalls coarse meshes early, and costs 2-4x the time;
+                                * docs/spin.md, "The conformal class the flow keeps"); 1 on another
+                                * surface is refused */
 } cf_spin_willmore_options;
 
 CF_API void cf_spin_willmore_options_default(cf_spin_willmore_options *options);

@@ -96,6 +96,7 @@ void cfi_spin_destroy(cf_flow *flow)
     cf_spectral_filter_destroy(&s->filter);
     cf_vertex_fairing_destroy(&s->fairing);
     cf_tangential_relaxation_destroy(&s->relaxation);
+    cfi_spin_class_destroy(flow->ctx, &s->keep_class);
     cfi_workspace_free_all(&s->ws);
     CFI_FREE(ctx, s, 1);
     flow->impl = NULL;
@@ -386,6 +387,7 @@ cf_status cfi_spin_create(cf_flow *flow, const void *options)
      * both made here) */
     if (st == CF_OK && s->relax_iterations > 0)
         st = cf_tangential_relaxation_create(ctx, mesh, NULL, 1, &s->relaxation);
+    if (st == CF_OK && o->keep_class) st = cfi_spin_class_create(flow, &s->keep_class);
     if (st != CF_OK) goto fail;
 
     flow->info.energy = s->energy;
@@ -704,6 +706,21 @@ static cf_status check_excess(cf_flow *flow, cfi_spin_state *s, const double *x,
     return CF_OK;
 }
 
+/* Option keep_class: the positions x kept by the attempt moved back onto
+ * the input's conformal class (keep_class.c), placed again, and s's
+ * geometry (W) made for them: the step policy judges the projected state.
+ * A face of x that degenerates or a factor that fails fails the attempt,
+ * which the layer retries at a smaller step. Projecting the plain and the
+ * faired candidate each before choosing (twice the cost) stalled the flow
+ * sooner (elephant_g3_3k: 5 steps, class distance 0.05). */
+static cf_status project_to_class(cf_flow *flow, cfi_spin_state *s, const placement *pl, double *x)
+{
+    cf_status st = cfi_spin_class_project(flow, s->keep_class, x, &s->diag.class_residual);
+    if (st == CF_OK) st = place(flow, s, pl, x, x);
+    if (st == CF_OK) st = cfi_spin_update_geometry(flow, s, x);
+    return st;
+}
+
 /* The fallback's last variant (cfi_spin_fallback): the step's start
  * relaxed by the vertex-scale fairing alone, kappa = fairing tau, placed
  * like a step's positions. */
@@ -728,6 +745,7 @@ static cf_status realise_fairing_only(cf_flow *flow, cfi_spin_state *s, double t
     s->diag.fairing_kept = 1;
     s->diag.predicted_energy = NAN; /* no curvature-space model: no realised decrease, tau may grow */
     st = cfi_spin_update_geometry(flow, s, x);
+    if (st == CF_OK && s->keep_class) st = project_to_class(flow, s, &pl, x);
     s->diag.fairing_energy = s->diag.plain_energy = s->energy;
     if (st == CF_OK) st = check_excess(flow, s, x, too_large);
     t->assemble += cfi_now_seconds() - ta;
@@ -834,6 +852,7 @@ cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, cf
 
     ta = cfi_now_seconds();
     st = kappa > 0.0 ? keep_lower(flow, s, x) : cfi_spin_update_geometry(flow, s, x);
+    if (st == CF_OK && s->keep_class) st = project_to_class(flow, s, &pl, x);
     if (st == CF_OK) st = check_excess(flow, s, x, too_large);
     t->assemble += cfi_now_seconds() - ta;
     return st;
@@ -1074,6 +1093,11 @@ cf_status cfi_spin_end_step(cf_flow *flow, cf_flow_info *info)
          * kept, or below its threshold) */
         info->residuals[8] = s->diag.relaxation_kept ? s->diag.relaxation_iterations : 0.0;
         info->residual_names[8] = "relaxation_sweeps";
+    }
+    if (s->keep_class) {
+        /* what the projection's second Gauss-Newton step started from */
+        info->residuals[9] = s->diag.class_residual;
+        info->residual_names[9] = "class";
     }
     flow->converged = cfi_spin_converged(s, s->energy_before);
     /* what the next step's reuse of X(0) is judged by (exactness.c); at a

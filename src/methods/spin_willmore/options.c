@@ -36,6 +36,7 @@ void cf_spin_willmore_options_default(cf_spin_willmore_options *o)
     o->period_tolerance = 3e-3;
     o->max_period_error = 3e-2;
     o->relaxation = -1;
+    o->keep_class = 0;
     o->max_integrability_error = 0.0;
     o->max_conformal_excess = -1.0; /* automatic: the bound on closed surfaces only */
     o->stall_fairing = 1;
@@ -106,6 +107,9 @@ static const cf_param_desc spin_params[] = {
      "many sweeps moving every vertex within its star on the surface to lower the MIPS energy against the input's "
      "triangles, kept if W does not rise (-1, default: 10 on a closed surface of genus 0, 0 otherwise, since on "
      "genus > 0 it moves the conformal class and with a boundary it can slow the flow; 0: off)"},
+    {"keep_class", CF_PARAM_BOOL, OPT(keep_class), 0, 1, NULL,
+     "closed genus > 0: after each attempt two Gauss-Newton steps move its positions back onto the input's "
+     "conformal class (smoothed; off by default: it stalls coarse meshes early and costs 2-4x the time)"},
     {"max_integrability_error", CF_PARAM_DOUBLE, OPT(max_integrability_error), 0.0, 1.0, NULL,
      "adaptive: redo a step with half tau while its transformed edges are non-integrable by more than this "
      "(relative; 0: no bound; e.g. 0.04 keeps triangles better at some cost in W)"},
@@ -179,6 +183,10 @@ cf_status cfi_spin_validate_options(cf_context *ctx, const cf_mesh *mesh, const 
                                  i, t[0], t[1], t[2], isfinite(len) ? "zero" : "not finite");
         }
     int32_t has_boundary = mesh->boundary_loop_count > 0;
+    if (o->keep_class && (has_boundary || cf_mesh_genus(mesh) < 1))
+        return cfi_error(ctx, CF_ERR_BAD_MESH,
+                         "spin-willmore: keep_class needs a closed surface of genus >= 1 (this one has %s)",
+                         has_boundary ? "a boundary" : "genus 0: a sphere has one conformal class");
     if (o->boundary_mode != CF_SPIN_BOUNDARY_FREE && !has_boundary)
         return cfi_error(ctx, CF_ERR_BAD_MESH, "spin-willmore: boundary=%s needs a mesh with boundary",
                          cfi_spin_boundary_choices[o->boundary_mode]);

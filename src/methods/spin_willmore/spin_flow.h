@@ -7,6 +7,7 @@
  *   boundary_frames.c  boundary vectors and frames, prescribed targets (Sec. 6.3.1)
  *   exactness.c        harmonic 1-forms and the exactness columns (App. C; genus > 0, holes)
  *   periods.c          Newton corrections of the periods left by the linearised exactness (closed genus > 0)
+ *   keep_class.c       option keep_class: each attempt projected back onto the input's conformal class
  *   mobius.c           Moebius balancing (App. E.1)
  *   constraints.c      assembling and projecting the constraints (Sec. 6.2)
  *   step_policy.c      the scale-change measure of the adaptive step, blow-up and
@@ -37,6 +38,10 @@
  * 1.4959 / 1.5005) */
 #define CFI_SPIN_RELAXATION_AUTO_SWEEPS 10
 
+/* the projection onto the input's conformal class (option keep_class;
+ * keep_class.c) */
+typedef struct cfi_spin_class cfi_spin_class;
+
 typedef struct cfi_spin_state {
     cf_spin_willmore_options opt;
     cfi_workspace ws;        /* every array below */
@@ -63,6 +68,7 @@ typedef struct cfi_spin_state {
     cf_tangential_relaxation *relaxation; /* relaxation resolved > 0: its descent (curvflow/ops.h) */
     int32_t relax_iterations;  /* option relaxation (0 with prescribed / cmc boundaries) */
     double *relaxed;         /* 3 nv: the relaxed candidate of a step (relaxation only) */
+    cfi_spin_class *keep_class; /* option keep_class: the projection onto the input's class (keep_class.c) */
     int32_t harmonic_dim;    /* dim H^1 (2g + b - 1 with boundary) if the exactness constraint is active */
     int32_t linearized;      /* exactness by the discrete linearisation instead of App. C's Z_i */
     int32_t period_newton;   /* closed, genus > 0, linearised, period_iterations > 0: the Newton
@@ -181,6 +187,17 @@ double cfi_spin_periods(const cf_mesh *mesh, const cfi_spin_state *s, const doub
  * in s->period_values (as cfi_spin_periods left them; overwritten): writes
  * s->rho. */
 cf_status cfi_spin_period_correction(cf_flow *flow, cfi_spin_state *s, cfi_spin_timers *t);
+
+/* Option keep_class (keep_class.c; docs/spin.md, "The conformal class the
+ * flow keeps"): the class of the input positions, the smoother and the
+ * work arrays; the projection of positions x (3 nv, in place) back onto
+ * that class by CFI_SPIN_CLASS_ITERATIONS Gauss-Newton steps; *distance
+ * (may be NULL) the residual |G(x) - G0| before the last of them. */
+#define CFI_SPIN_CLASS_ITERATIONS 2
+#define CFI_SPIN_CLASS_SMOOTHING 10.0
+cf_status cfi_spin_class_create(cf_flow *flow, cfi_spin_class **out);
+cf_status cfi_spin_class_project(cf_flow *flow, cfi_spin_class *c, double *x, double *residual);
+void cfi_spin_class_destroy(cf_context *ctx, cfi_spin_class **c);
 /* Steps IV-VI for the time step tau from the current state (rhodot and its
  * constraints computed): rho, lambda, edges, positions (flow->positions in
  * place) and the geometry of the new surface (s->energy). *too_large (only

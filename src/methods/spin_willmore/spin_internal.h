@@ -171,6 +171,7 @@ typedef struct cfi_spin_diagnostics {
     int32_t fairing_kept;           /* 1: the faired positions had the lower W and were kept */
     double fairing_energy;          /* W of the faired candidate (NaN when it could not be evaluated; 0 without) */
     int32_t relaxation_kept;        /* 1: the tangentially relaxed positions were kept */
+    double class_residual;          /* keep_class: |G - G0| before the projection's last Gauss-Newton step */
     int32_t relaxation_iterations;  /* descent steps the relaxation took (0 without) */
     double relaxation_energy;       /* W of the relaxed candidate (0 without) */
     double plain_energy;            /* W of the recovered positions without the fairing */

@@ -138,9 +138,7 @@ int cli_compare(int argc, char **argv)
     double class_distance = NAN;
     cf_conformal_class ca, cb;
     if (cf_mesh_component_count(a) == 1 && cf_mesh_boundary_loop_count(a) == 0 && cf_mesh_genus(a) >= 1) {
-        if (cf_conformal_class_compute(ctx, a, xa, NULL, &ca) == CF_OK &&
-            cf_conformal_class_compute(ctx, a, xb, NULL, &cb) == CF_OK &&
-            cf_conformal_class_distance(ctx, a, xa, xb, &class_distance) == CF_OK)
+        if (cf_conformal_class_distance(ctx, a, xa, xb, &ca, &cb, &class_distance) == CF_OK)
             class_measured = 1;
         else
             class_problem = cf_context_message(ctx);

@@ -284,7 +284,8 @@ static void relaxation_hint(cf_context *ctx, const cf_flow_options *options, con
         cf_mesh_genus(mesh) >= 1) {
         /* genus > 0: the relaxation moves the class; holding the class keeps the triangles */
         double drift = NAN;
-        if (cf_conformal_class_distance(ctx, mesh, cf_mesh_positions(mesh), cf_flow_positions(flow), &drift) != CF_OK)
+        if (cf_conformal_class_distance(ctx, mesh, cf_mesh_positions(mesh), cf_flow_positions(flow), NULL, NULL,
+                                        &drift) != CF_OK)
             cf_context_clear_error(ctx);
         fprintf(stderr,
                 "curvflow: note: the result's mean Q against the input is %.3f and its conformal class moved by %.3g: "

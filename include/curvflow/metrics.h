@@ -138,9 +138,11 @@ CF_API cf_status cf_conformal_class_compute(cf_context *ctx, const cf_mesh *mesh
  * one mesh: sqrt(sum log^2 mu / 2) over the eigenvalues mu of G_a^-1 G_b,
  * both scaled to det 1. 0 for conformally equivalent positions (up to the
  * discretisation); for genus 1 the hyperbolic distance between the two
- * moduli (before their reduction to the fundamental domain). Statuses as
- * cf_conformal_class_compute's. */
+ * moduli (before their reduction to the fundamental domain). class_a and
+ * class_b (each may be NULL) receive cf_conformal_class_compute's for a and
+ * b from the same harmonic forms. Statuses as cf_conformal_class_compute's. */
 CF_API cf_status cf_conformal_class_distance(cf_context *ctx, const cf_mesh *mesh, const double *a, const double *b,
+                                             cf_conformal_class *class_a, cf_conformal_class *class_b,
                                              double *distance);
 
 /* G of cf_conformal_class_compute (gram, (2g)^2 doubles, required) and,

@@ -319,7 +319,7 @@ def _declare(lib):
     f("cf_angle_change", S, P, P, P, P, P, POINTER(Stats))
     f("cf_vertex_scale_fit_compute", S, P, P, P, P, P, P, POINTER(VertexScaleFit))
     f("cf_conformal_class_compute", S, P, P, P, P, POINTER(ConformalClass))
-    f("cf_conformal_class_distance", S, P, P, P, P, POINTER(D))
+    f("cf_conformal_class_distance", S, P, P, P, P, POINTER(ConformalClass), POINTER(ConformalClass), POINTER(D))
     f("cf_shape_summary_compute", S, P, P, P, POINTER(ShapeSummary))
     f("cf_mesh_quality_compute", S, P, P, P, POINTER(MeshQuality))
     # ops.h

@@ -590,9 +590,7 @@ def compare(V0, V1, F):
         if L.cf_mesh_component_count(mesh) == 1 and L.cf_mesh_boundary_loop_count(mesh) == 0 and L.cf_mesh_genus(mesh) >= 1:
             ca, cb, dist = _lib.ConformalClass(), _lib.ConformalClass(), c_double()
             # as `compare`: a class that cannot be measured (a degenerate face of V1) is said, not raised
-            if (L.cf_conformal_class_compute(ctx.ptr, mesh, a, None, byref(ca)) == 0
-                    and L.cf_conformal_class_compute(ctx.ptr, mesh, b, None, byref(cb)) == 0
-                    and L.cf_conformal_class_distance(ctx.ptr, mesh, a, b, byref(dist)) == 0):
+            if L.cf_conformal_class_distance(ctx.ptr, mesh, a, b, byref(ca), byref(cb), byref(dist)) == 0:
                 cls = {"genus": ca.genus, "distance": dist.value}
                 if ca.genus == 1:
                     cls.update(modulus_a=tuple(ca.modulus), modulus_b=tuple(cb.modulus))

@@ -303,21 +303,17 @@ static void reduce_modulus(double *x, double *y)
     }
 }
 
-cf_status cf_conformal_class_compute(cf_context *ctx, const cf_mesh *mesh, const double *positions, double *gram,
-                                     cf_conformal_class *out)
+/* The class of positions x on the marked cycles c: K = P^T P (k, dim x dim),
+ * *out, and G = K^-1 into gram if not NULL. */
+static cf_status measure_class(cf_context *ctx, const cf_mesh *mesh, const double *x, const homology_cycles *c,
+                               double *k, double *gram, cf_conformal_class *out)
 {
-    static const char fn[] = "cf_conformal_class_compute";
-    if (!ctx) return CF_ERR_INVALID_ARG;
-    if (!out) return cfi_error(ctx, CF_ERR_INVALID_ARG, "%s: out is NULL", fn);
-    homology_cycles c = {0};
-    cf_status st = open_surface(ctx, mesh, positions, positions, fn, &c);
-    if (st != CF_OK) return st;
-    int32_t dim = c.dim;
+    int32_t dim = c->dim;
     int64_t n2 = (int64_t)dim * dim;
-    double *k = CFI_ALLOC(ctx, double, n2), *wedge = CFI_ALLOC(ctx, double, n2);
-    double *periods = CFI_ALLOC(ctx, double, n2), *inv = CFI_ALLOC(ctx, double, n2); /* inv: the intersection form */
-    if (st == CF_OK && (!k || !wedge || !periods || !inv)) st = CF_ERR_NOMEM;
-    if (st == CF_OK) st = class_matrix(ctx, mesh, positions, &c, k, wedge, periods);
+    double *wedge = CFI_ALLOC(ctx, double, n2), *periods = CFI_ALLOC(ctx, double, n2);
+    double *inv = CFI_ALLOC(ctx, double, n2); /* the intersection form */
+    cf_status st = wedge && periods && inv ? CF_OK : CF_ERR_NOMEM;
+    if (st == CF_OK) st = class_matrix(ctx, mesh, x, c, k, wedge, periods);
     /* the intersection form P^-1 W P^-T of the dual forms */
     if (st == CF_OK) st = dense_solve(ctx, dim, dim, periods, wedge);
     if (st == CF_OK) {
@@ -340,10 +336,10 @@ cf_status cf_conformal_class_compute(cf_context *ctx, const cf_mesh *mesh, const
         if (dim == 2) {
             /* int eta_1 ^ eta_2 = -1: the cycles in the other order */
             double kaa = inv[2] > 0.0 ? k[0] : k[3];
-            double x = k[2] / kaa, y = sqrt(exp(logdet)) / kaa;
-            reduce_modulus(&x, &y);
-            out->modulus[0] = x;
-            out->modulus[1] = y;
+            double xr = k[2] / kaa, yi = sqrt(exp(logdet)) / kaa;
+            reduce_modulus(&xr, &yi);
+            out->modulus[0] = xr;
+            out->modulus[1] = yi;
         }
         if (gram) {
             /* G = K^-1 */
@@ -352,16 +348,31 @@ cf_status cf_conformal_class_compute(cf_context *ctx, const cf_mesh *mesh, const
             st = dense_solve(ctx, dim, dim, k, gram);
         }
     }
-    CFI_FREE(ctx, k, n2);
     CFI_FREE(ctx, wedge, n2);
     CFI_FREE(ctx, periods, n2);
     CFI_FREE(ctx, inv, n2);
+    return st;
+}
+
+cf_status cf_conformal_class_compute(cf_context *ctx, const cf_mesh *mesh, const double *positions, double *gram,
+                                     cf_conformal_class *out)
+{
+    static const char fn[] = "cf_conformal_class_compute";
+    if (!ctx) return CF_ERR_INVALID_ARG;
+    if (!out) return cfi_error(ctx, CF_ERR_INVALID_ARG, "%s: out is NULL", fn);
+    homology_cycles c = {0};
+    cf_status st = open_surface(ctx, mesh, positions, positions, fn, &c);
+    if (st != CF_OK) return st;
+    int64_t n2 = (int64_t)c.dim * c.dim;
+    double *k = CFI_ALLOC(ctx, double, n2);
+    st = k ? measure_class(ctx, mesh, positions, &c, k, gram, out) : CF_ERR_NOMEM;
+    CFI_FREE(ctx, k, n2);
     cycles_free(ctx, mesh, &c);
     return st;
 }
 
 cf_status cf_conformal_class_distance(cf_context *ctx, const cf_mesh *mesh, const double *a, const double *b,
-                                      double *distance)
+                                      cf_conformal_class *class_a, cf_conformal_class *class_b, double *distance)
 {
     static const char fn[] = "cf_conformal_class_distance";
     if (!ctx) return CF_ERR_INVALID_ARG;
@@ -375,8 +386,11 @@ cf_status cf_conformal_class_distance(cf_context *ctx, const cf_mesh *mesh, cons
     double *ka = CFI_ALLOC(ctx, double, n2), *kb = CFI_ALLOC(ctx, double, n2);
     double *mu = CFI_ALLOC(ctx, double, dim), *work = CFI_ALLOC(ctx, double, lwork);
     if (st == CF_OK && (!ka || !kb || !mu || !work)) st = CF_ERR_NOMEM;
-    if (st == CF_OK) st = class_matrix(ctx, mesh, a, &c, ka, NULL, NULL);
-    if (st == CF_OK) st = class_matrix(ctx, mesh, b, &c, kb, NULL, NULL);
+    /* each class in full only when asked (it adds the intersection form) */
+    if (st == CF_OK)
+        st = class_a ? measure_class(ctx, mesh, a, &c, ka, NULL, class_a) : class_matrix(ctx, mesh, a, &c, ka, NULL, NULL);
+    if (st == CF_OK)
+        st = class_b ? measure_class(ctx, mesh, b, &c, kb, NULL, class_b) : class_matrix(ctx, mesh, b, &c, kb, NULL, NULL);
     if (st == CF_OK) st = cf_dense_generalized_eigenvalues(dim, ka, kb, mu, work, lwork);
     if (st == CF_OK) {
         /* both scaled to det 1: the log eigenvalues less their mean */

@@ -78,7 +78,7 @@ static double class_distance(cf_context *ctx, const cf_mesh *mesh, const double 
     if (cf_mesh_component_count(mesh) != 1 || cf_mesh_boundary_loop_count(mesh) != 0 || cf_mesh_genus(mesh) < 1)
         return NAN;
     double d = NAN;
-    if (cf_conformal_class_distance(ctx, mesh, cf_mesh_positions(mesh), x, &d) != CF_OK) {
+    if (cf_conformal_class_distance(ctx, mesh, cf_mesh_positions(mesh), x, NULL, NULL, &d) != CF_OK) {
         cf_context_clear_error(ctx);
         return NAN;
     }

@@ -38,7 +38,7 @@ static cf_status op_conformal_class(cf_context *ctx, const cf_mesh *m, const dou
     cf_conformal_class cls;
     double gram[4], d;
     cf_status s = cf_conformal_class_compute(ctx, m, x, gram, &cls);
-    if (s == CF_OK) s = cf_conformal_class_distance(ctx, m, x, g_torus_b, &d);
+    if (s == CF_OK) s = cf_conformal_class_distance(ctx, m, x, g_torus_b, &cls, &cls, &d);
     double *gradient = malloc(sizeof(double) * 3 * 3 * (size_t)cf_mesh_vertex_count(m));
     if (s == CF_OK) s = gradient ? cf_conformal_class_gram_gradient(ctx, m, g_torus_b, gram, gradient) : CF_ERR_NOMEM;
     free(gradient);

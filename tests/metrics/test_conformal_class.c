@@ -78,19 +78,25 @@ static void test_invariance(void)
     double dist_similar = -1, dist_inverted = -1, dist_other = -1;
     CHECK_OK(ctx, cf_conformal_class_compute(ctx, m, x, NULL, &a));
     CHECK_OK(ctx, cf_conformal_class_compute(ctx, m, y, NULL, &b));
-    CHECK_OK(ctx, cf_conformal_class_distance(ctx, m, x, y, &dist_similar));
+    CHECK_OK(ctx, cf_conformal_class_distance(ctx, m, x, y, NULL, NULL, &dist_similar));
     /* the inversion reverses the orientation of the surface */
-    CHECK_OK(ctx, cf_conformal_class_distance(ctx, m, x, z, &dist_inverted));
+    CHECK_OK(ctx, cf_conformal_class_distance(ctx, m, x, z, NULL, NULL, &dist_inverted));
     CHECK_OK(ctx, cf_conformal_class_compute(ctx, m, z, NULL, &c));
     /* a torus of another class on the same connectivity: radii 1, 0.3 */
     cf_mesh *other = NULL;
     CHECK_OK(ctx, cf_generate_torus(ctx, 1.0, 0.3, 96, 48, &other));
-    if (other) CHECK_OK(ctx, cf_conformal_class_distance(ctx, m, x, cf_mesh_positions(other), &dist_other));
+    if (other) CHECK_OK(ctx, cf_conformal_class_distance(ctx, m, x, cf_mesh_positions(other), NULL, NULL, &dist_other));
     fprintf(stderr, "   similarity: tau %.9f -> %.9f, distance %.2g; inversion: tau %.6f (defect %.2g -> %.2g), distance %.2g; "
                     "R 1 r 0.3: distance %.6f (hyperbolic %.6f)\n",
             a.modulus[1], b.modulus[1], dist_similar, c.modulus[1], a.hodge_defect, c.hodge_defect, dist_inverted,
             dist_other, log(revolution_modulus(1.0, 0.3) / revolution_modulus(1.0, 0.45)));
     CHECK_NEAR(b.modulus[1], a.modulus[1], 1e-10, 0);
+    /* the distance hands back both classes, as cf_conformal_class_compute makes them */
+    cf_conformal_class a2, b2;
+    double dist2 = -1;
+    CHECK_OK(ctx, cf_conformal_class_distance(ctx, m, x, y, &a2, &b2, &dist2));
+    CHECK(a2.modulus[1] == a.modulus[1] && b2.modulus[1] == b.modulus[1] && dist2 == dist_similar);
+    CHECK(a2.hodge_defect == a.hodge_defect && b2.intersection_error == b.intersection_error);
     CHECK_NEAR(dist_similar, 0.0, 0, 1e-10);
     CHECK_NEAR(c.modulus[1], a.modulus[1], 2e-3, 0);
     CHECK_LE(dist_inverted, 2e-3);
@@ -173,13 +179,13 @@ static void test_bad_input(void)
     CHECK(strstr(cf_context_message(ctx), "genus") != NULL);
     CHECK_STATUS(cf_conformal_class_compute(ctx, torus, NULL, NULL, &cls), CF_ERR_INVALID_ARG);
     CHECK_STATUS(cf_conformal_class_compute(ctx, torus, cf_mesh_positions(torus), NULL, NULL), CF_ERR_INVALID_ARG);
-    CHECK_STATUS(cf_conformal_class_distance(ctx, torus, cf_mesh_positions(torus), cf_mesh_positions(torus), NULL),
+    CHECK_STATUS(cf_conformal_class_distance(ctx, torus, cf_mesh_positions(torus), cf_mesh_positions(torus), NULL, NULL, NULL),
                  CF_ERR_INVALID_ARG);
     int32_t nv = cf_mesh_vertex_count(torus);
     double *x = malloc(sizeof(double) * 3 * nv);
     memcpy(x, cf_mesh_positions(torus), sizeof(double) * 3 * nv);
     x[3 * 7 + 1] = NAN;
-    CHECK_STATUS(cf_conformal_class_distance(ctx, torus, cf_mesh_positions(torus), x, &d), CF_ERR_NONFINITE);
+    CHECK_STATUS(cf_conformal_class_distance(ctx, torus, cf_mesh_positions(torus), x, NULL, NULL, &d), CF_ERR_NONFINITE);
     CHECK(strstr(cf_context_message(ctx), "vertex 7") != NULL);
     free(x);
     cf_mesh_destroy(&sphere);

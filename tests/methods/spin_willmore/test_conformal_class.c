@@ -162,7 +162,7 @@ static void record_class(cf_context *ctx, const cf_flow *flow, int step, void *u
     const cf_mesh *mesh = cf_flow_mesh(flow);
     cf_conformal_class cls;
     CHECK_OK(ctx, cf_conformal_class_compute(ctx, mesh, cf_flow_positions(flow), NULL, &cls));
-    CHECK_OK(ctx, cf_conformal_class_distance(ctx, mesh, cf_mesh_positions(mesh), cf_flow_positions(flow),
+    CHECK_OK(ctx, cf_conformal_class_distance(ctx, mesh, cf_mesh_positions(mesh), cf_flow_positions(flow), NULL, NULL,
                                               &c->distance[k]));
     c->modulus[k] = cls.modulus[1];
     c->real_part = fmax(c->real_part, fabs(cls.modulus[0]));
@@ -250,7 +250,7 @@ static int run_keep_class(cf_context *ctx, const cf_mesh *mesh, int keep, class_
     cf_stats q;
     CHECK_OK(ctx, cf_quasi_conformal_error(ctx, mesh, cf_mesh_positions(mesh), cf_flow_positions(flow), NULL, &q));
     r->mean_q = q.weighted_mean;
-    CHECK_OK(ctx, cf_conformal_class_distance(ctx, mesh, cf_mesh_positions(mesh), cf_flow_positions(flow),
+    CHECK_OK(ctx, cf_conformal_class_distance(ctx, mesh, cf_mesh_positions(mesh), cf_flow_positions(flow), NULL, NULL,
                                               &out->distance));
     cf_flow_destroy(&flow);
     return 1;

@@ -211,12 +211,13 @@ typedef struct cf_spin_willmore_options {
     int32_t keep_class;        /* closed surfaces of genus >= 1: after each attempt, two Gauss-Newton
                                 * steps move its positions back onto the input's conformal class
                                 * (the Gram matrix G of cf_conformal_class_gram_gradient, the
-                                * correction smoothed as (I + 10 L0)^-1 J^T y), before its W is judged.
-                                * The discrete flow otherwise drifts from the class on coarse meshes
+                                * correction smoothed as (I + 10 L)^-1 J^T y with L the cotan
+                                * Laplacian of the positions projected), before its W is judged. The
+                                * discrete flow otherwise drifts from the class on coarse meshes
                                 * (elephant_g3_3k 0.78, elk 0.092 after 10 steps). Default 0 (an
-                                * experiment: it stalls coarse meshes early, and costs 2-4x the time;
-                                * docs/spin.md, "The conformal class the flow keeps"); 1 on another
-                                * surface is refused */
+                                * experiment: it stalls knotted tubes and coarse meshes early, 1.1-5x
+                                * the time; docs/spin.md, "The conformal class the flow keeps"); 1 on
+                                * another surface is refused */
 } cf_spin_willmore_options;
 
 CF_API void cf_spin_willmore_options_default(cf_spin_willmore_options *options);

@@ -109,7 +109,7 @@ static const cf_param_desc spin_params[] = {
      "genus > 0 it moves the conformal class and with a boundary it can slow the flow; 0: off)"},
     {"keep_class", CF_PARAM_BOOL, OPT(keep_class), 0, 1, NULL,
      "closed genus > 0: after each attempt two Gauss-Newton steps move its positions back onto the input's "
-     "conformal class (smoothed; off by default: it stalls coarse meshes early and costs 2-4x the time)"},
+     "conformal class (smoothed; off by default: it stalls knotted tubes and coarse meshes early, 1.1-5x the time)"},
     {"max_integrability_error", CF_PARAM_DOUBLE, OPT(max_integrability_error), 0.0, 1.0, NULL,
      "adaptive: redo a step with half tau while its transformed edges are non-integrable by more than this "
      "(relative; 0: no bound; e.g. 0.04 keeps triangles better at some cost in W)"},

@@ -295,17 +295,15 @@ cf_status cf_mips_energy(cf_context *ctx, const cf_mesh *mesh, const double *ref
     return st;
 }
 
-void cf_tangential_relaxation_destroy(cf_tangential_relaxation **r)
+/* The arrays make_arrays makes (each NULL after, so that they can be made
+ * again): by destroy, and by make_arrays when one of them failed. */
+static void free_arrays(cf_tangential_relaxation *t)
 {
-    if (!r || !*r) return;
-    cf_tangential_relaxation *t = *r;
     cf_context *ctx = t->ctx;
     size_t nv = (size_t)t->nv, nf = (size_t)t->nf;
-    CFI_FREE(ctx, t->reference_copy, 3 * nv);
     CFI_FREE(ctx, t->area0, nf);
     CFI_FREE(ctx, t->cot0, 3 * nf);
     CFI_FREE(ctx, t->star_area0, nv);
-    CFI_FREE(ctx, t->held, nv);
     CFI_FREE(ctx, t->home, nv);
     CFI_FREE(ctx, t->surface, 3 * nv);
     CFI_FREE(ctx, t->surface_normal, 3 * nf);
@@ -313,6 +311,17 @@ void cf_tangential_relaxation_destroy(cf_tangential_relaxation **r)
     CFI_FREE(ctx, t->proposal, 3 * nv);
     CFI_FREE(ctx, t->proposed, nv);
     CFI_FREE(ctx, t->vertex_step, nv);
+}
+
+void cf_tangential_relaxation_destroy(cf_tangential_relaxation **r)
+{
+    if (!r || !*r) return;
+    cf_tangential_relaxation *t = *r;
+    cf_context *ctx = t->ctx;
+    size_t nv = (size_t)t->nv;
+    free_arrays(t);
+    CFI_FREE(ctx, t->reference_copy, 3 * nv);
+    CFI_FREE(ctx, t->held, nv);
     CFI_FREE(ctx, t, 1);
     *r = NULL;
 }
@@ -370,16 +379,7 @@ static cf_status make_arrays(cf_tangential_relaxation *r)
     r->vertex_step = CFI_ALLOC(ctx, double, nv);
     if (!r->area0 || !r->cot0 || !r->star_area0 || !r->surface || !r->surface_normal || !r->x || !r->vertex_step ||
         !r->home || !r->proposal || !r->proposed) {
-        CFI_FREE(ctx, r->area0, nf);
-        CFI_FREE(ctx, r->cot0, 3 * nf);
-        CFI_FREE(ctx, r->star_area0, nv);
-        CFI_FREE(ctx, r->home, nv);
-        CFI_FREE(ctx, r->surface, 3 * nv);
-        CFI_FREE(ctx, r->surface_normal, 3 * nf);
-        CFI_FREE(ctx, r->x, 3 * nv);
-        CFI_FREE(ctx, r->proposal, 3 * nv);
-        CFI_FREE(ctx, r->proposed, nv);
-        CFI_FREE(ctx, r->vertex_step, nv);
+        free_arrays(r);
         return cfi_error(ctx, CF_ERR_NOMEM, "tangential_relaxation: out of memory for %d vertices", (int)nv);
     }
     /* checked at create: no error here */

@@ -744,8 +744,7 @@ static cf_status realise_fairing_only(cf_flow *flow, cfi_spin_state *s, double t
     s->diag.fairing_kappa = kappa;
     s->diag.fairing_kept = 1;
     s->diag.predicted_energy = NAN; /* no curvature-space model: no realised decrease, tau may grow */
-    st = cfi_spin_update_geometry(flow, s, x);
-    if (st == CF_OK && s->keep_class) st = project_to_class(flow, s, &pl, x);
+    st = s->keep_class ? project_to_class(flow, s, &pl, x) : cfi_spin_update_geometry(flow, s, x);
     s->diag.fairing_energy = s->diag.plain_energy = s->energy;
     if (st == CF_OK) st = check_excess(flow, s, x, too_large);
     t->assemble += cfi_now_seconds() - ta;
@@ -851,7 +850,10 @@ cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, cf
         if (!isfinite(x[i])) return cfi_error(ctx, CF_ERR_NUMERICAL, "vertex %d: position is not finite", i / 3);
 
     ta = cfi_now_seconds();
-    st = kappa > 0.0 ? keep_lower(flow, s, x) : cfi_spin_update_geometry(flow, s, x);
+    /* with keep_class the geometry is made once, for the projected positions
+     * (project_to_class), unless the fairing's choice needs both candidates' */
+    if (kappa > 0.0) st = keep_lower(flow, s, x);
+    else if (!s->keep_class) st = cfi_spin_update_geometry(flow, s, x);
     if (st == CF_OK && s->keep_class) st = project_to_class(flow, s, &pl, x);
     if (st == CF_OK) st = check_excess(flow, s, x, too_large);
     t->assemble += cfi_now_seconds() - ta;

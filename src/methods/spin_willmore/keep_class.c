@@ -38,7 +38,7 @@ struct cfi_spin_class {
     double *jacobian;      /* pairs x 3 nv: dG_kl / dx */
     double *smoothed;      /* pairs x 3 nv: S applied to each row */
     double *system;        /* pairs x pairs: J S J^T */
-    double *rhs;           /* max(pairs, pairs) */
+    double *rhs;           /* pairs: G - G0, then y */
     double *work;          /* the least squares' */
     int64_t work_size, slot_count;
     double *columns;       /* 3 pairs x nv: the Jacobian's rows by coordinate, column-major */

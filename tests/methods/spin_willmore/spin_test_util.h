@@ -252,4 +252,20 @@ static inline int spin_run_steps(cf_context *ctx, const cf_mesh *mesh, const cf_
     return spin_run_steps_hooked(ctx, mesh, o, steps, r, w_history, NULL, NULL);
 }
 
+/* For allocation sweeps (cft_allocation_sweep): create a spin-willmore
+ * flow on mesh with the defaults and `settings` (name, value, ..., NULL;
+ * may be NULL), take two steps, destroy it. */
+static inline cf_status spin_two_steps(cf_context *ctx, const cf_mesh *mesh, const char *const *settings)
+{
+    cf_flow_options o;
+    cf_status st = cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o);
+    for (const char *const *k = settings; st == CF_OK && k && k[0]; k += 2) st = cf_flow_options_set(ctx, &o, k[0], k[1]);
+    cf_flow *flow = NULL;
+    if (st == CF_OK) st = cf_flow_create(ctx, mesh, NULL, &o, &flow);
+    if (st == CF_OK && !flow) st = CF_ERR_NUMERICAL;
+    if (st == CF_OK) st = cf_flow_run(flow, 2, NULL);
+    cf_flow_destroy(&flow);
+    return st;
+}
+
 #endif /* CF_TESTS_SPIN_TEST_UTIL_H */

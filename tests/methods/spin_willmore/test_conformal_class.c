@@ -349,14 +349,8 @@ static void test_keep_class_refused(void)
  * gives CF_ERR_NOMEM (or CHOLMOD recovers) and leaks nothing */
 static cf_status keep_class_two_steps(cf_context *ctx, void *user)
 {
-    cf_flow_options o;
-    cf_status st = cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o);
-    if (st == CF_OK) st = cf_flow_options_set(ctx, &o, "keep_class", "1");
-    cf_flow *flow = NULL;
-    if (st == CF_OK) st = cf_flow_create(ctx, user, NULL, &o, &flow);
-    if (st == CF_OK) st = cf_flow_run(flow, 2, NULL);
-    cf_flow_destroy(&flow);
-    return st;
+    static const char *const keep[] = {"keep_class", "1", NULL};
+    return spin_two_steps(ctx, user, keep);
 }
 
 static void test_keep_class_allocations(void)

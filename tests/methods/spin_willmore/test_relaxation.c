@@ -328,18 +328,7 @@ static void test_one_limb(void)
  * recovery inside CHOLMOD), nothing left behind; and the flow has a
  * relaxation only from that step on (the bumpy sphere, whose map stays
  * below the threshold, never makes one: test_workspace's sweeps). */
-static cf_status star_two_steps(cf_context *ctx, void *user)
-{
-    const cf_mesh *mesh = user;
-    cf_flow_options o;
-    cf_status st = cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o);
-    cf_flow *flow = NULL;
-    if (st == CF_OK) st = cf_flow_create(ctx, mesh, NULL, &o, &flow);
-    if (st == CF_OK && !flow) st = CF_ERR_NUMERICAL;
-    if (st == CF_OK) st = cf_flow_run(flow, 2, NULL);
-    cf_flow_destroy(&flow);
-    return st;
-}
+static cf_status star_two_steps(cf_context *ctx, void *user) { return spin_two_steps(ctx, user, NULL); }
 
 static void test_allocations_in_steps(void)
 {

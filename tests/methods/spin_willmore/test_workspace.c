@@ -13,6 +13,7 @@
  * its threshold (swept in test `relaxation`). */
 #include "curvflow/flow.h"
 #include "curvflow/generate.h"
+#include "spin_test_util.h"
 #include "test.h"
 
 #include <stdio.h>
@@ -44,13 +45,8 @@ static cf_status create_destroy(cf_context *ctx, void *user)
 
 static cf_status create_step_destroy(cf_context *ctx, void *user)
 {
-    sweep_case *sc = user;
-    cf_flow *flow = NULL;
-    cf_status st = make_flow(ctx, sc, &flow);
-    if (st == CF_OK && !flow) st = CF_ERR_NUMERICAL;
-    if (st == CF_OK) st = cf_flow_run(flow, 2, NULL);
-    cf_flow_destroy(&flow);
-    return st;
+    const sweep_case *sc = user;
+    return spin_two_steps(ctx, sc->mesh, sc->settings);
 }
 
 static void sweep(const char *name, const cf_mesh *mesh, const char *const *settings)

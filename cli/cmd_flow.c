@@ -266,9 +266,10 @@ static int apply_params(cf_context *ctx, const cli_flow_job *job, cf_flow_option
  * surface with a boundary or of genus > 0) the note names it; where it ran
  * (the flow's last step reports its `relaxation_sweeps`, which the method
  * names whenever the relaxation is on) it says what is left. On a closed
- * connected surface of genus > 0 without keep_class it names that option
- * and the class distance instead (the relaxation moves the class there;
- * docs/spin.md, "The conformal class the flow keeps"). */
+ * connected surface of genus > 0 it names keep_class's modes instead (the
+ * relaxation moves the class there; docs/spin.md, "The conformal class the
+ * flow keeps"): without keep_class with the class distance, with 1 the
+ * second mode. */
 static void relaxation_hint(cf_context *ctx, const cf_flow_options *options, const cf_mesh *mesh,
                             const cf_flow *flow)
 {
@@ -280,18 +281,34 @@ static void relaxation_hint(cf_context *ctx, const cf_flow_options *options, con
         return;
     }
     if (!(q.weighted_mean > CLI_RELAXATION_HINT_MEAN_Q)) return;
-    if (!spin->keep_class && cf_mesh_component_count(mesh) == 1 && cf_mesh_boundary_loop_count(mesh) == 0 &&
-        cf_mesh_genus(mesh) >= 1) {
-        /* genus > 0: the relaxation moves the class; holding the class keeps the triangles */
+    if (cf_mesh_component_count(mesh) == 1 && cf_mesh_boundary_loop_count(mesh) == 0 && cf_mesh_genus(mesh) >= 1) {
+        /* genus > 0: the relaxation moves the class; holding the class, and
+         * with keep_class 2 the triangulation's part of G too, keeps the
+         * triangles */
         double drift = NAN;
         if (cf_conformal_class_distance(ctx, mesh, cf_mesh_positions(mesh), cf_flow_positions(flow), NULL, NULL,
                                         &drift) != CF_OK)
             cf_context_clear_error(ctx);
-        fprintf(stderr,
-                "curvflow: note: the result's mean Q against the input is %.3f and its conformal class moved by %.3g: "
-                "-p keep_class=1 holds the input's class, which keeps the triangles here at some cost in W and "
-                "time; a finer input helps too (docs/spin.md, \"The conformal class the flow keeps\")\n",
-                q.weighted_mean, drift);
+        if (spin->keep_class == 0)
+            fprintf(stderr,
+                    "curvflow: note: the result's mean Q against the input is %.3f and its conformal class moved by "
+                    "%.3g: -p keep_class=1 holds the input's class, -p keep_class=2 also the triangulation's part of "
+                    "its Gram matrix, which keeps the triangles at some cost in W and time; a finer input helps too "
+                    "(docs/spin.md, \"The conformal class the flow keeps\")\n",
+                    q.weighted_mean, drift);
+        else if (spin->keep_class == 1)
+            fprintf(stderr,
+                    "curvflow: note: the result's mean Q against the input is %.3f with its conformal class held: "
+                    "-p keep_class=2 also holds the triangulation's part of the class's Gram matrix, which keeps the "
+                    "triangles at some cost in W and time; a finer input helps too (docs/spin.md, \"The conformal "
+                    "class the flow keeps\")\n",
+                    q.weighted_mean);
+        else
+            fprintf(stderr,
+                    "curvflow: note: the result's mean Q against the input is %.3f with its conformal class and Gram "
+                    "matrix held: thin parts crowded by the conformal map; a finer input helps (docs/spin.md, \"The "
+                    "conformal class the flow keeps\")\n",
+                    q.weighted_mean);
         return;
     }
     const cf_flow_info *last = cf_flow_last_info(flow);

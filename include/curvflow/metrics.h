@@ -157,6 +157,32 @@ CF_API cf_status cf_conformal_class_distance(cf_context *ctx, const cf_mesh *mes
 CF_API cf_status cf_conformal_class_gram_gradient(cf_context *ctx, const cf_mesh *mesh, const double *positions,
                                                   double *gram, double *gradient);
 
+/* The intersection form I_jk = int eta_j ^ eta_k of the harmonic forms dual
+ * to the marked cycles (form: (2g)^2 doubles, column-major; integers,
+ * antisymmetric, det 1, the same for every position set of the mesh).
+ * Statuses as cf_conformal_class_compute's, and CF_ERR_NUMERICAL where the
+ * computed numbers are not within 1/4 of integers. */
+CF_API cf_status cf_conformal_class_intersection_form(cf_context *ctx, const cf_mesh *mesh, const double *positions,
+                                                      double *form);
+
+/* The class alone from G: the discrete Hodge star S = I^-1 G misses the
+ * smooth surface's S^2 = -1 by O(h^2) (`hodge_defect` is one of those
+ * g^2 numbers), so G has g (2g + 1) entries where a marked class has
+ * g (g + 1) degrees of freedom. normalized (dim x dim) receives
+ * G^ = I J with J = S (-S^2)^-1/2, the complex structure nearest S (the
+ * Newton iteration S <- (S - S^-1) / 2): symmetric, positive, J^2 = -1,
+ * unchanged by G -> c G, equal to G for a smooth surface, and two position
+ * sets are conformally equivalent exactly when their G^ agree. Genus 1:
+ * G^ = G / sqrt(det G). If derivative is not NULL, it receives the
+ * pairs x pairs matrix (column-major, pairs = g (2g + 1), the pair order of
+ * cf_conformal_class_gram_gradient) of d G^_p / d G_q, G_q moved in both of
+ * its symmetric entries; its rank is g (g + 1). Statuses: CF_ERR_INVALID_ARG
+ * (NULL, dim not even and positive, I singular), CF_ERR_NONFINITE,
+ * CF_ERR_NUMERICAL (no complex structure: G not positive definite or I not
+ * antisymmetric), CF_ERR_NOMEM. */
+CF_API cf_status cf_conformal_class_normalize(cf_context *ctx, int32_t dim, const double *form, const double *gram,
+                                              double *normalized, double *derivative);
+
 /* ---- single-shape summary -------------------------------------------------- */
 
 typedef struct cf_shape_summary {

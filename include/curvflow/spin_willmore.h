@@ -208,16 +208,20 @@ typedef struct cf_spin_willmore_options {
                                 * the resampling moves the conformal class the flow keeps, and with a
                                 * boundary (held) it slowed bunny_scan_35k's flow (W/4pi 5.10 -> 8.83
                                 * after 10 steps). 0: off (docs/spin.md, "Tangential relaxation") */
-    int32_t keep_class;        /* closed surfaces of genus >= 1: after each attempt, two Gauss-Newton
-                                * steps move its positions back onto the input's conformal class
-                                * (the Gram matrix G of cf_conformal_class_gram_gradient, the
+    int32_t keep_class;        /* closed surfaces of genus >= 1: after each attempt, Gauss-Newton
+                                * steps (halved until the residual falls) move its positions back
+                                * onto the input's conformal class before its W is judged, the
                                 * correction smoothed as (I + 10 L)^-1 J^T y with L the cotan
-                                * Laplacian of the positions projected), before its W is judged. The
-                                * discrete flow otherwise drifts from the class on coarse meshes
-                                * (elephant_g3_3k 0.78, elk 0.092 after 10 steps). Default 0 (an
-                                * experiment: it stalls knotted tubes and coarse meshes early, 1.1-5x
-                                * the time; docs/spin.md, "The conformal class the flow keeps"); 1 on
-                                * another surface is refused */
+                                * Laplacian of the positions projected. 1: the class alone (G^ of
+                                * cf_conformal_class_normalize, to 1e-10 relative); 2: the Gram
+                                * matrix G of cf_conformal_class_gram_gradient itself, which also
+                                * holds the discrete Hodge star's defect, a property of the
+                                * triangles (elk_g1_2k: mean Q 1.35 against 1.71 with 1, but the
+                                * knotted tubes stall). The discrete flow otherwise drifts from the
+                                * class on coarse meshes (elephant_g3_3k 0.78, elk 0.092 after 10
+                                * steps). Default 0 (W falls less on most meshes of genus > 0 and
+                                * it costs 1.5-10x the time; docs/spin.md, "The conformal class the
+                                * flow keeps"); on another surface it is refused */
 } cf_spin_willmore_options;
 
 CF_API void cf_spin_willmore_options_default(cf_spin_willmore_options *options);

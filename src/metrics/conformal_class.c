@@ -246,9 +246,11 @@ done:
     return st;
 }
 
+#define PERIODS_SINGULAR "cf_conformal_class: the matrix of the harmonic forms' periods"
+
 /* Solves the square system a x = b column by column (a: n x n, kept; b: n x
  * m, overwritten by x) through the dense least-squares routine. */
-static cf_status dense_solve(cf_context *ctx, int32_t n, int32_t m, const double *a, double *b)
+static cf_status dense_solve(cf_context *ctx, int32_t n, int32_t m, const double *a, double *b, const char *what)
 {
     int64_t lwork = cf_dense_least_squares_work_size(n, n);
     double *copy = CFI_ALLOC(ctx, double, (int64_t)n * n), *work = CFI_ALLOC(ctx, double, lwork);
@@ -258,7 +260,7 @@ static cf_status dense_solve(cf_context *ctx, int32_t n, int32_t m, const double
         int32_t rank = 0;
         st = cf_dense_least_squares(n, n, copy, b + (int64_t)j * n, 1e-13, work, lwork, &rank);
         if (st == CF_OK && rank < n)
-            st = cfi_error(ctx, CF_ERR_NUMERICAL, "cf_conformal_class: the periods of the harmonic forms are singular");
+            st = cfi_error(ctx, CF_ERR_NUMERICAL, "%s is singular", what);
     }
     CFI_FREE(ctx, copy, (int64_t)n * n);
     CFI_FREE(ctx, work, lwork);
@@ -306,7 +308,7 @@ static void reduce_modulus(double *x, double *y)
 /* The class of positions x on the marked cycles c: K = P^T P (k, dim x dim),
  * *out, and G = K^-1 into gram if not NULL. */
 static cf_status measure_class(cf_context *ctx, const cf_mesh *mesh, const double *x, const homology_cycles *c,
-                               double *k, double *gram, cf_conformal_class *out)
+                               double *k, double *gram, double *form, cf_conformal_class *out)
 {
     int32_t dim = c->dim;
     int64_t n2 = (int64_t)dim * dim;
@@ -315,11 +317,11 @@ static cf_status measure_class(cf_context *ctx, const cf_mesh *mesh, const doubl
     cf_status st = wedge && periods && inv ? CF_OK : CF_ERR_NOMEM;
     if (st == CF_OK) st = class_matrix(ctx, mesh, x, c, k, wedge, periods);
     /* the intersection form P^-1 W P^-T of the dual forms */
-    if (st == CF_OK) st = dense_solve(ctx, dim, dim, periods, wedge);
+    if (st == CF_OK) st = dense_solve(ctx, dim, dim, periods, wedge, PERIODS_SINGULAR);
     if (st == CF_OK) {
         for (int32_t i = 0; i < dim; ++i)
             for (int32_t j = 0; j < dim; ++j) inv[i + (int64_t)j * dim] = wedge[j + (int64_t)i * dim];
-        st = dense_solve(ctx, dim, dim, periods, inv); /* P^-1 W^T P^-T, W antisymmetric */
+        st = dense_solve(ctx, dim, dim, periods, inv, PERIODS_SINGULAR); /* P^-1 W^T P^-T, W antisymmetric */
         for (int64_t q = 0; q < n2; ++q) inv[q] = -inv[q];
     }
     double logdet = 0.0;
@@ -330,6 +332,14 @@ static cf_status measure_class(cf_context *ctx, const cf_mesh *mesh, const doubl
         double worst = 0.0;
         for (int64_t q = 0; q < n2; ++q) worst = fmax(worst, fabs(inv[q] - nearbyint(inv[q])));
         out->intersection_error = worst;
+        if (form) {
+            /* integers: what is left is rounding (checked above, reported) */
+            if (!(worst < 0.25))
+                st = cfi_error(ctx, CF_ERR_NUMERICAL,
+                               "cf_conformal_class: the intersection numbers of the dual forms are %.3g from integers",
+                               worst);
+            for (int64_t q = 0; q < n2; ++q) form[q] = nearbyint(inv[q]);
+        }
         /* det G = 1 / det K, 1 for the smooth surface */
         out->hodge_defect = fabs(expm1(-logdet / dim));
         out->modulus[0] = out->modulus[1] = NAN;
@@ -341,11 +351,11 @@ static cf_status measure_class(cf_context *ctx, const cf_mesh *mesh, const doubl
             out->modulus[0] = xr;
             out->modulus[1] = yi;
         }
-        if (gram) {
+        if (gram && st == CF_OK) {
             /* G = K^-1 */
             memset(gram, 0, (size_t)n2 * sizeof(double));
             for (int32_t i = 0; i < dim; ++i) gram[i + (int64_t)i * dim] = 1.0;
-            st = dense_solve(ctx, dim, dim, k, gram);
+            st = dense_solve(ctx, dim, dim, k, gram, PERIODS_SINGULAR);
         }
     }
     CFI_FREE(ctx, wedge, n2);
@@ -365,7 +375,7 @@ cf_status cf_conformal_class_compute(cf_context *ctx, const cf_mesh *mesh, const
     if (st != CF_OK) return st;
     int64_t n2 = (int64_t)c.dim * c.dim;
     double *k = CFI_ALLOC(ctx, double, n2);
-    st = k ? measure_class(ctx, mesh, positions, &c, k, gram, out) : CF_ERR_NOMEM;
+    st = k ? measure_class(ctx, mesh, positions, &c, k, gram, NULL, out) : CF_ERR_NOMEM;
     CFI_FREE(ctx, k, n2);
     cycles_free(ctx, mesh, &c);
     return st;
@@ -386,11 +396,22 @@ cf_status cf_conformal_class_distance(cf_context *ctx, const cf_mesh *mesh, cons
     double *ka = CFI_ALLOC(ctx, double, n2), *kb = CFI_ALLOC(ctx, double, n2);
     double *mu = CFI_ALLOC(ctx, double, dim), *work = CFI_ALLOC(ctx, double, lwork);
     if (st == CF_OK && (!ka || !kb || !mu || !work)) st = CF_ERR_NOMEM;
-    /* each class in full only when asked (it adds the intersection form) */
+    double *form = CFI_ALLOC(ctx, double, n2), *g = CFI_ALLOC(ctx, double, n2);
+    if (st == CF_OK && (!form || !g)) st = CF_ERR_NOMEM;
+    /* a's class in full (it makes the intersection form), b's only when asked */
+    cf_conformal_class own_a;
+    if (st == CF_OK) st = measure_class(ctx, mesh, a, &c, ka, NULL, form, class_a ? class_a : &own_a);
     if (st == CF_OK)
-        st = class_a ? measure_class(ctx, mesh, a, &c, ka, NULL, class_a) : class_matrix(ctx, mesh, a, &c, ka, NULL, NULL);
-    if (st == CF_OK)
-        st = class_b ? measure_class(ctx, mesh, b, &c, kb, NULL, class_b) : class_matrix(ctx, mesh, b, &c, kb, NULL, NULL);
+        st = class_b ? measure_class(ctx, mesh, b, &c, kb, NULL, NULL, class_b)
+                     : class_matrix(ctx, mesh, b, &c, kb, NULL, NULL);
+    /* the classes alone: G^ of G = K^-1 (cf_conformal_class_normalize) */
+    for (int side = 0; side < 2 && st == CF_OK; ++side) {
+        double *k = side ? kb : ka;
+        memset(g, 0, (size_t)n2 * sizeof(double));
+        for (int32_t i = 0; i < dim; ++i) g[i + (int64_t)i * dim] = 1.0;
+        st = dense_solve(ctx, dim, dim, k, g, PERIODS_SINGULAR);
+        if (st == CF_OK) st = cf_conformal_class_normalize(ctx, dim, form, g, k, NULL);
+    }
     if (st == CF_OK) st = cf_dense_generalized_eigenvalues(dim, ka, kb, mu, work, lwork);
     if (st == CF_OK) {
         /* both scaled to det 1: the log eigenvalues less their mean */
@@ -404,6 +425,8 @@ cf_status cf_conformal_class_distance(cf_context *ctx, const cf_mesh *mesh, cons
     }
     CFI_FREE(ctx, ka, n2);
     CFI_FREE(ctx, kb, n2);
+    CFI_FREE(ctx, form, n2);
+    CFI_FREE(ctx, g, n2);
     CFI_FREE(ctx, mu, dim);
     CFI_FREE(ctx, work, lwork);
     cycles_free(ctx, mesh, &c);
@@ -471,7 +494,7 @@ cf_status cf_conformal_class_gram_gradient(cf_context *ctx, const cf_mesh *mesh,
                     pt[i + (int64_t)k * dim] = periods[k + (int64_t)i * dim];
                     coef[i + (int64_t)k * dim] = i == k;
                 }
-            st = dense_solve(ctx, dim, dim, pt, coef);
+            st = dense_solve(ctx, dim, dim, pt, coef, PERIODS_SINGULAR);
         }
         CFI_FREE(ctx, pt, n2);
     }
@@ -524,5 +547,140 @@ cf_status cf_conformal_class_gram_gradient(cf_context *ctx, const cf_mesh *mesh,
     CFI_FREE(ctx, coef, n2);
     CFI_FREE(ctx, vals, 2 * (int64_t)dim);
     cycles_free(ctx, mesh, &c);
+    return st;
+}
+
+cf_status cf_conformal_class_intersection_form(cf_context *ctx, const cf_mesh *mesh, const double *positions,
+                                               double *form)
+{
+    static const char fn[] = "cf_conformal_class_intersection_form";
+    if (!ctx) return CF_ERR_INVALID_ARG;
+    if (!form) return cfi_error(ctx, CF_ERR_INVALID_ARG, "%s: form is NULL", fn);
+    homology_cycles c = {0};
+    cf_status st = open_surface(ctx, mesh, positions, positions, fn, &c);
+    if (st != CF_OK) return st;
+    int64_t n2 = (int64_t)c.dim * c.dim;
+    double *k = CFI_ALLOC(ctx, double, n2);
+    cf_conformal_class cls;
+    st = k ? measure_class(ctx, mesh, positions, &c, k, NULL, form, &cls) : CF_ERR_NOMEM;
+    CFI_FREE(ctx, k, n2);
+    cycles_free(ctx, mesh, &c);
+    return st;
+}
+
+/* c = a b (n x n, column-major) */
+static void dense_product(int32_t n, const double *a, const double *b, double *c)
+{
+    for (int32_t j = 0; j < n; ++j)
+        for (int32_t i = 0; i < n; ++i) {
+            double s = 0.0;
+            for (int32_t k = 0; k < n; ++k) s += a[i + (int64_t)k * n] * b[k + (int64_t)j * n];
+            c[i + (int64_t)j * n] = s;
+        }
+}
+
+/* The Newton iteration S <- (S - S^-1) / 2 for the complex structure
+ * converges quadratically from a star whose eigenvalues are near +-i (they
+ * are +-i mu, mu = 1 + O(h^2) on a discrete surface); from far off it
+ * takes about log2 |log mu| steps more. */
+#define NORMALIZE_MAX_ITERATIONS 100
+
+cf_status cf_conformal_class_normalize(cf_context *ctx, int32_t dim, const double *form, const double *gram,
+                                       double *normalized, double *derivative)
+{
+    static const char fn[] = "cf_conformal_class_normalize";
+    if (!ctx) return CF_ERR_INVALID_ARG;
+    if (!form || !gram || !normalized) return cfi_error(ctx, CF_ERR_INVALID_ARG, "%s: NULL argument", fn);
+    if (dim < 2 || dim % 2 != 0 || dim > 4096)
+        return cfi_error(ctx, CF_ERR_INVALID_ARG, "%s: dim %d is not 2 g for a genus g >= 1", fn, (int)dim);
+    int64_t n2 = (int64_t)dim * dim, pairs = (int64_t)dim * (dim + 1) / 2;
+    for (int64_t q = 0; q < n2; ++q)
+        if (!isfinite(form[q]) || !isfinite(gram[q]))
+            return cfi_error(ctx, CF_ERR_NONFINITE, "%s: the %s matrix has a non-finite entry", fn,
+                             isfinite(form[q]) ? "Gram" : "intersection");
+    double *finv = CFI_ALLOC(ctx, double, n2), *s = CFI_ALLOC(ctx, double, n2), *sinv = CFI_ALLOC(ctx, double, n2);
+    double *tmp = CFI_ALLOC(ctx, double, n2), *tmp2 = CFI_ALLOC(ctx, double, n2);
+    double *ds = derivative ? CFI_ALLOC(ctx, double, pairs * n2) : NULL;
+    cf_status st = finv && s && sinv && tmp && tmp2 && (!derivative || ds) ? CF_OK : CF_ERR_NOMEM;
+    if (st == CF_OK) {
+        memset(finv, 0, (size_t)n2 * sizeof(double));
+        for (int32_t i = 0; i < dim; ++i) finv[i + (int64_t)i * dim] = 1.0;
+        st = dense_solve(ctx, dim, dim, form, finv, "cf_conformal_class_normalize: the intersection form");
+        if (st == CF_ERR_NUMERICAL) st = CF_ERR_INVALID_ARG;
+    }
+    if (st == CF_OK) {
+        /* S = I^-1 G; dS / dG_kl = I^-1 E_kl (E_kl: 1 at (k, l) and (l, k)) */
+        dense_product(dim, finv, gram, s);
+        int64_t p = 0;
+        for (int32_t l = 0; ds && l < dim; ++l)
+            for (int32_t k = 0; k <= l; ++k, ++p) {
+                double *d = ds + p * n2;
+                for (int32_t i = 0; i < dim; ++i) {
+                    d[i + (int64_t)k * dim] = finv[i + (int64_t)l * dim];
+                    d[i + (int64_t)l * dim] = k == l ? finv[i + (int64_t)l * dim] : finv[i + (int64_t)k * dim];
+                }
+                for (int32_t j = 0; j < dim; ++j)
+                    if (j != k && j != l)
+                        for (int32_t i = 0; i < dim; ++i) d[i + (int64_t)j * dim] = 0.0;
+            }
+    }
+    /* a relative change below 1e-8 leaves an error of about 1e-16 after one
+     * more step (quadratic convergence), which the loop then takes */
+    int converged = 0, last = 0;
+    for (int it = 0; st == CF_OK && it < NORMALIZE_MAX_ITERATIONS && !converged; ++it) {
+        memset(sinv, 0, (size_t)n2 * sizeof(double));
+        for (int32_t i = 0; i < dim; ++i) sinv[i + (int64_t)i * dim] = 1.0;
+        st = dense_solve(ctx, dim, dim, s, sinv, "cf_conformal_class_normalize: the Hodge star");
+        if (st != CF_OK) break;
+        /* forward derivative of the same map: dS <- (dS + S^-1 dS S^-1) / 2 */
+        for (int64_t p = 0; ds && p < pairs; ++p) {
+            double *d = ds + p * n2;
+            dense_product(dim, sinv, d, tmp);
+            dense_product(dim, tmp, sinv, tmp2);
+            for (int64_t q = 0; q < n2; ++q) d[q] = 0.5 * (d[q] + tmp2[q]);
+        }
+        double change = 0.0, size = 0.0;
+        for (int64_t q = 0; q < n2; ++q) {
+            double next = 0.5 * (s[q] - sinv[q]);
+            change += (next - s[q]) * (next - s[q]);
+            size += next * next;
+            s[q] = next;
+        }
+        if (!isfinite(change)) st = cfi_error(ctx, CF_ERR_NUMERICAL, "%s: the iteration diverged (step %d)", fn, it);
+        converged = last;
+        last = change <= 1e-16 * size;
+    }
+    if (st == CF_OK) {
+        /* J^2 = -1 holds only if the star's eigenvalues were imaginary (G
+         * positive definite, I antisymmetric) */
+        dense_product(dim, s, s, tmp);
+        double err = 0.0;
+        for (int32_t i = 0; i < dim; ++i)
+            for (int32_t j = 0; j < dim; ++j) err = fmax(err, fabs(tmp[i + (int64_t)j * dim] + (i == j)));
+        if (!converged || !(err < 1e-8))
+            st = cfi_error(ctx, CF_ERR_NUMERICAL,
+                           "%s: no complex structure (|J^2 + 1| = %.3g): is G positive definite and I antisymmetric?",
+                           fn, err);
+    }
+    if (st == CF_OK) {
+        /* G^ = I J, symmetric up to rounding: its mean with the transpose */
+        dense_product(dim, form, s, tmp);
+        for (int32_t i = 0; i < dim; ++i)
+            for (int32_t j = 0; j < dim; ++j)
+                normalized[i + (int64_t)j * dim] = 0.5 * (tmp[i + (int64_t)j * dim] + tmp[j + (int64_t)i * dim]);
+        for (int64_t q = 0; ds && q < pairs; ++q) {
+            dense_product(dim, form, ds + q * n2, tmp);
+            int64_t p = 0;
+            for (int32_t l = 0; l < dim; ++l)
+                for (int32_t k = 0; k <= l; ++k, ++p)
+                    derivative[p + q * pairs] = 0.5 * (tmp[k + (int64_t)l * dim] + tmp[l + (int64_t)k * dim]);
+        }
+    }
+    CFI_FREE(ctx, finv, n2);
+    CFI_FREE(ctx, s, n2);
+    CFI_FREE(ctx, sinv, n2);
+    CFI_FREE(ctx, tmp, n2);
+    CFI_FREE(ctx, tmp2, n2);
+    if (ds) CFI_FREE(ctx, ds, pairs * n2);
     return st;
 }

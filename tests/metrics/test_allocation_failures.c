@@ -42,6 +42,9 @@ static cf_status op_conformal_class(cf_context *ctx, const cf_mesh *m, const dou
     double *gradient = malloc(sizeof(double) * 3 * 3 * (size_t)cf_mesh_vertex_count(m));
     if (s == CF_OK) s = gradient ? cf_conformal_class_gram_gradient(ctx, m, g_torus_b, gram, gradient) : CF_ERR_NOMEM;
     free(gradient);
+    double form[4], normalized[4], derivative[9];
+    if (s == CF_OK) s = cf_conformal_class_intersection_form(ctx, m, x, form);
+    if (s == CF_OK) s = cf_conformal_class_normalize(ctx, 2, form, gram, normalized, derivative);
     return s;
 }
 

@@ -3,9 +3,12 @@
  * second-order convergence under refinement; invariance under
  * similarities (exact) and under an inversion in a sphere (a conformal map:
  * up to the discretisation); the intersection numbers integral; the
- * distance against the hyperbolic distance of the moduli; bad input. */
+ * distance against the hyperbolic distance of the moduli; the intersection
+ * form and the normalised Gram matrix G^ (the class alone) with its
+ * derivative; bad input. */
 #include "curvflow/generate.h"
 #include "curvflow/io.h"
+#include "curvflow/linalg.h"
 #include "curvflow/metrics.h"
 #include "test.h"
 
@@ -166,6 +169,168 @@ static void test_gram_gradient(void)
     cf_context_destroy(&ctx);
 }
 
+/* inverse of a small square matrix through the least-squares routine */
+static void small_inverse(int32_t n, const double *a, double *inv)
+{
+    int64_t lw = cf_dense_least_squares_work_size(n, n);
+    double *copy = malloc(sizeof(double) * n * n), *work = malloc(sizeof(double) * lw);
+    for (int32_t j = 0; j < n; ++j) {
+        memcpy(copy, a, sizeof(double) * n * n);
+        for (int32_t i = 0; i < n; ++i) inv[i + j * n] = i == j;
+        int32_t rank = 0;
+        CHECK(cf_dense_least_squares(n, n, copy, inv + j * n, 1e-14, work, lw, &rank) == CF_OK && rank == n);
+    }
+    free(copy);
+    free(work);
+}
+
+/* One surface's intersection form and normalised Gram matrix: I integral,
+ * antisymmetric and unimodular; G^ symmetric, with G^ I^-1 G^ = -I (J^2 =
+ * -1), a fixed point of the normalisation, unchanged by G -> c G, within
+ * the Hodge defect of G; its derivative against central differences and of
+ * rank g (g + 1). Returns the largest |G^ - G| relative to |G|. */
+static double check_normalized(cf_context *ctx, const cf_mesh *m, const double *x)
+{
+    int32_t dim = 2 * cf_mesh_genus(m), n2 = dim * dim, pairs = dim * (dim + 1) / 2;
+    double *form = malloc(sizeof(double) * n2), *gram = malloc(sizeof(double) * n2), *ghat = malloc(sizeof(double) * n2);
+    double *again = malloc(sizeof(double) * n2), *scaled = malloc(sizeof(double) * n2), *finv = malloc(sizeof(double) * n2);
+    double *gp = malloc(sizeof(double) * n2), *gm = malloc(sizeof(double) * n2);
+    double *deriv = malloc(sizeof(double) * pairs * pairs), *copy = malloc(sizeof(double) * pairs * pairs);
+    double worst_rel = 0.0;
+    CHECK_OK(ctx, cf_conformal_class_intersection_form(ctx, m, x, form));
+    CHECK_OK(ctx, cf_conformal_class_gram_gradient(ctx, m, x, gram, NULL));
+    CHECK_OK(ctx, cf_conformal_class_normalize(ctx, dim, form, gram, ghat, deriv));
+    small_inverse(dim, form, finv);
+    double gnorm = 0.0;
+    for (int32_t q = 0; q < n2; ++q) gnorm = fmax(gnorm, fabs(gram[q]));
+    for (int32_t i = 0; i < dim; ++i)
+        for (int32_t j = 0; j < dim; ++j) {
+            double f = form[i + j * dim];
+            CHECK(f == nearbyint(f));
+            CHECK(f == -form[j + i * dim]);
+            CHECK(ghat[i + j * dim] == ghat[j + i * dim]);
+            worst_rel = fmax(worst_rel, fabs(ghat[i + j * dim] - gram[i + j * dim]) / gnorm);
+            /* G^ I^-1 G^ + I = 0 */
+            double sum = form[i + j * dim];
+            for (int32_t k = 0; k < dim; ++k)
+                for (int32_t l = 0; l < dim; ++l) sum += ghat[i + k * dim] * finv[k + l * dim] * ghat[l + j * dim];
+            CHECK_NEAR(sum, 0.0, 0, 1e-11 * gnorm);
+        }
+    /* I^-1 integral too: unimodular */
+    for (int32_t q = 0; q < n2; ++q) CHECK_NEAR(finv[q], nearbyint(finv[q]), 0, 1e-12);
+    CHECK_OK(ctx, cf_conformal_class_normalize(ctx, dim, form, ghat, again, NULL));
+    for (int32_t q = 0; q < n2; ++q) CHECK_NEAR(again[q], ghat[q], 0, 1e-12 * gnorm);
+    for (int32_t q = 0; q < n2; ++q) scaled[q] = 3.7 * gram[q];
+    CHECK_OK(ctx, cf_conformal_class_normalize(ctx, dim, form, scaled, again, NULL));
+    for (int32_t q = 0; q < n2; ++q) CHECK_NEAR(again[q], ghat[q], 0, 1e-12 * gnorm);
+    /* the derivative against central differences in G */
+    double worst = 0.0, largest = 0.0, h = 1e-6 * gnorm;
+    int32_t q = 0;
+    for (int32_t l = 0; l < dim; ++l)
+        for (int32_t k = 0; k <= l; ++k, ++q) {
+            memcpy(gp, gram, sizeof(double) * n2);
+            memcpy(gm, gram, sizeof(double) * n2);
+            gp[k + l * dim] += h;
+            gm[k + l * dim] -= h;
+            if (k != l) {
+                gp[l + k * dim] += h;
+                gm[l + k * dim] -= h;
+            }
+            CHECK_OK(ctx, cf_conformal_class_normalize(ctx, dim, form, gp, again, NULL));
+            CHECK_OK(ctx, cf_conformal_class_normalize(ctx, dim, form, gm, scaled, NULL));
+            int32_t p = 0;
+            for (int32_t ll = 0; ll < dim; ++ll)
+                for (int32_t kk = 0; kk <= ll; ++kk, ++p) {
+                    double fd = (again[kk + ll * dim] - scaled[kk + ll * dim]) / (2 * h);
+                    worst = fmax(worst, fabs(fd - deriv[p + q * pairs]));
+                    largest = fmax(largest, fabs(fd));
+                }
+        }
+    memcpy(copy, deriv, sizeof(double) * pairs * pairs);
+    int64_t lw = cf_dense_least_squares_work_size(pairs, pairs);
+    double *work = malloc(sizeof(double) * lw), *rhs = calloc((size_t)pairs, sizeof(double));
+    int32_t rank = -1;
+    CHECK_OK(ctx, cf_dense_least_squares(pairs, pairs, copy, rhs, 1e-9, work, lw, &rank));
+    fprintf(stderr, "   genus %d: |G^ - G| / |G| %.3g, derivative against central differences %.2g (largest %.3g), rank %d of %d\n",
+            (int)(dim / 2), worst_rel, worst, largest, (int)rank, (int)pairs);
+    CHECK_LE(worst, 1e-7 * largest);
+    CHECK(rank == dim / 2 * (dim / 2 + 1));
+    free(work);
+    free(rhs);
+    free(form);
+    free(gram);
+    free(ghat);
+    free(again);
+    free(scaled);
+    free(finv);
+    free(gp);
+    free(gm);
+    free(deriv);
+    free(copy);
+    return worst_rel;
+}
+
+/* cf_conformal_class_intersection_form and cf_conformal_class_normalize on
+ * a generic torus (genus 1: G^ = G / sqrt(det G)) and the generated double
+ * torus, as given and moved generically; bad input */
+static void test_normalized_gram(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *torus = NULL, *dt = NULL;
+    CHECK_OK(ctx, cf_generate_torus(ctx, 1.0, 0.45, 24, 12, &torus));
+    CHECK_OK(ctx, cf_generate_double_torus(ctx, 2, &dt));
+    if (!torus || !dt) return;
+    cf_mesh *meshes[2] = {torus, dt};
+    for (int k = 0; k < 2; ++k) {
+        cf_mesh *m = meshes[k];
+        int32_t nv = cf_mesh_vertex_count(m);
+        double *x = malloc(sizeof(double) * 3 * nv);
+        unsigned seed = 777u;
+        for (int32_t i = 0; i < 3 * nv; ++i) {
+            seed = seed * 1103515245u + 12345u;
+            double r = (double)(seed >> 8) / (double)(1u << 24) - 0.5;
+            x[i] = cf_mesh_positions(m)[i] * (1.0 + 0.3 * (i % 3 == 0)) + 0.01 * r;
+        }
+        double rel[2] = {check_normalized(ctx, m, cf_mesh_positions(m)), check_normalized(ctx, m, x)};
+        /* G^ differs from G by about the Hodge defect, a discretisation error */
+        CHECK_LE(rel[0], 0.2);
+        CHECK_LE(rel[1], 0.2);
+        if (k == 0) {
+            double form[4], gram[4], ghat[4];
+            CHECK_OK(ctx, cf_conformal_class_intersection_form(ctx, m, x, form));
+            CHECK(form[0] == 0 && form[3] == 0 && fabs(form[1]) == 1 && form[2] == -form[1]);
+            CHECK_OK(ctx, cf_conformal_class_gram_gradient(ctx, m, x, gram, NULL));
+            CHECK_OK(ctx, cf_conformal_class_normalize(ctx, 2, form, gram, ghat, NULL));
+            double s = sqrt(gram[0] * gram[3] - gram[1] * gram[2]);
+            for (int q = 0; q < 4; ++q) CHECK_NEAR(ghat[q], gram[q] / s, 0, 1e-13 * fabs(gram[0]));
+            /* bad input */
+            double bad[4] = {0, 0, 0, 0}, out[4], neg[4] = {-gram[0], -gram[1], -gram[2], -gram[3]};
+            CHECK_STATUS(cf_conformal_class_normalize(ctx, 2, NULL, gram, out, NULL), CF_ERR_INVALID_ARG);
+            CHECK_STATUS(cf_conformal_class_normalize(ctx, 3, form, gram, out, NULL), CF_ERR_INVALID_ARG);
+            CHECK_STATUS(cf_conformal_class_normalize(ctx, 2, bad, gram, out, NULL), CF_ERR_INVALID_ARG);
+            CHECK(strstr(cf_context_message(ctx), "singular") != NULL);
+            double nan_gram[4] = {gram[0], NAN, gram[2], gram[3]};
+            CHECK_STATUS(cf_conformal_class_normalize(ctx, 2, form, nan_gram, out, NULL), CF_ERR_NONFINITE);
+            /* -G: the star's eigenvalues are still imaginary for genus 1, J flips sign and G^ = -G / sqrt(det) */
+            CHECK_OK(ctx, cf_conformal_class_normalize(ctx, 2, form, neg, out, NULL));
+            double sym[4] = {form[0], form[1], form[1], form[3]}; /* symmetric: real eigenvalues of S */
+            CHECK_STATUS(cf_conformal_class_normalize(ctx, 2, sym, gram, out, NULL), CF_ERR_NUMERICAL);
+            CHECK(strstr(cf_context_message(ctx), "complex structure") != NULL);
+            CHECK_STATUS(cf_conformal_class_intersection_form(ctx, m, x, NULL), CF_ERR_INVALID_ARG);
+        }
+        free(x);
+    }
+    cf_mesh *sphere = NULL;
+    CHECK_OK(ctx, cf_generate_icosphere(ctx, 1, 1.0, &sphere));
+    double f4[4];
+    if (sphere) CHECK_STATUS(cf_conformal_class_intersection_form(ctx, sphere, cf_mesh_positions(sphere), f4), CF_ERR_BAD_MESH);
+    cf_mesh_destroy(&sphere);
+    cf_mesh_destroy(&torus);
+    cf_mesh_destroy(&dt);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 static void test_bad_input(void)
 {
     cf_context *ctx = cft_context();
@@ -199,6 +364,7 @@ int main(void)
     CFT_RUN(test_torus_of_revolution);
     CFT_RUN(test_invariance);
     CFT_RUN(test_gram_gradient);
+    CFT_RUN(test_normalized_gram);
     CFT_RUN(test_bad_input);
     return cft_finish();
 }

@@ -387,7 +387,7 @@ cf_status cfi_spin_create(cf_flow *flow, const void *options)
      * both made here) */
     if (st == CF_OK && s->relax_iterations > 0)
         st = cf_tangential_relaxation_create(ctx, mesh, NULL, 1, &s->relaxation);
-    if (st == CF_OK && o->keep_class) st = cfi_spin_class_create(flow, &s->keep_class);
+    if (st == CF_OK && o->keep_class) st = cfi_spin_class_create(flow, o->keep_class == 2, &s->keep_class);
     if (st != CF_OK) goto fail;
 
     flow->info.energy = s->energy;
@@ -1097,7 +1097,7 @@ cf_status cfi_spin_end_step(cf_flow *flow, cf_flow_info *info)
         info->residual_names[8] = "relaxation_sweeps";
     }
     if (s->keep_class) {
-        /* what the projection's second Gauss-Newton step started from */
+        /* what the projection left: |G^ - G^0| (keep_class 2: |G - G0|) */
         info->residuals[9] = s->diag.class_residual;
         info->residual_names[9] = "class";
     }

@@ -107,9 +107,11 @@ static const cf_param_desc spin_params[] = {
      "many sweeps moving every vertex within its star on the surface to lower the MIPS energy against the input's "
      "triangles, kept if W does not rise (-1, default: 10 on a closed surface of genus 0, 0 otherwise, since on "
      "genus > 0 it moves the conformal class and with a boundary it can slow the flow; 0: off)"},
-    {"keep_class", CF_PARAM_BOOL, OPT(keep_class), 0, 1, NULL,
-     "closed genus > 0: after each attempt two Gauss-Newton steps move its positions back onto the input's "
-     "conformal class (smoothed; off by default: it stalls knotted tubes and coarse meshes early, 1.1-5x the time)"},
+    {"keep_class", CF_PARAM_INT, OPT(keep_class), 0, 2, NULL,
+     "closed genus > 0: after each attempt Gauss-Newton steps move its positions back onto the input's conformal "
+     "class (1: the class alone; 2: also the triangulation's part of its Gram matrix, which keeps triangles better "
+     "and stalls knotted tubes; smoothed; off by default: W falls less on most meshes of genus > 0, 1.5-10x the "
+     "time)"},
     {"max_integrability_error", CF_PARAM_DOUBLE, OPT(max_integrability_error), 0.0, 1.0, NULL,
      "adaptive: redo a step with half tau while its transformed edges are non-integrable by more than this "
      "(relative; 0: no bound; e.g. 0.04 keeps triangles better at some cost in W)"},

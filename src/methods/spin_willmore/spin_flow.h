@@ -189,13 +189,20 @@ double cfi_spin_periods(const cf_mesh *mesh, const cfi_spin_state *s, const doub
 cf_status cfi_spin_period_correction(cf_flow *flow, cfi_spin_state *s, cfi_spin_timers *t);
 
 /* Option keep_class (keep_class.c; docs/spin.md, "The conformal class the
- * flow keeps"): the class of the input positions, the smoother and the
- * work arrays; the projection of positions x (3 nv, in place) back onto
- * that class by CFI_SPIN_CLASS_ITERATIONS Gauss-Newton steps; *distance
- * (may be NULL) the residual |G(x) - G0| before the last of them. */
-#define CFI_SPIN_CLASS_ITERATIONS 2
+ * flow keeps"): the class of the input positions (whole_gram: its Gram
+ * matrix G, keep_class 2), the smoother and the work arrays; the projection
+ * of positions x (3 nv, in place) back onto it by at most
+ * CFI_SPIN_CLASS_ITERATIONS Gauss-Newton steps, each halved at most
+ * CFI_SPIN_CLASS_HALVINGS times until the residual falls, stopping below
+ * CFI_SPIN_CLASS_TOLERANCE and failing (CF_ERR_NUMERICAL) above
+ * CFI_SPIN_CLASS_ACCEPT (both relative to |G^0|); *residual (may be NULL)
+ * the residual |G^(x) - G^0| (|G(x) - G0|) it ends at. */
+#define CFI_SPIN_CLASS_ITERATIONS 8
+#define CFI_SPIN_CLASS_HALVINGS 4
+#define CFI_SPIN_CLASS_TOLERANCE 1e-10
+#define CFI_SPIN_CLASS_ACCEPT 1e-6
 #define CFI_SPIN_CLASS_SMOOTHING 10.0
-cf_status cfi_spin_class_create(cf_flow *flow, cfi_spin_class **out);
+cf_status cfi_spin_class_create(cf_flow *flow, int32_t whole_gram, cfi_spin_class **out);
 cf_status cfi_spin_class_project(cf_flow *flow, cfi_spin_class *c, double *x, double *residual);
 void cfi_spin_class_destroy(cf_context *ctx, cfi_spin_class **c);
 /* Steps IV-VI for the time step tau from the current state (rhodot and its

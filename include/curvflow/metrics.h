@@ -135,10 +135,12 @@ CF_API cf_status cf_conformal_class_compute(cf_context *ctx, const cf_mesh *mesh
                                             double *gram, cf_conformal_class *out);
 
 /* Distance between the marked conformal classes of two position sets of
- * one mesh: sqrt(sum log^2 mu / 2) over the eigenvalues mu of G_a^-1 G_b,
- * both scaled to det 1. 0 for conformally equivalent positions (up to the
- * discretisation); for genus 1 the hyperbolic distance between the two
- * moduli (before their reduction to the fundamental domain). class_a and
+ * one mesh: sqrt(sum log^2 mu / 2) over the eigenvalues mu of
+ * G^_a^-1 G^_b, the classes alone (cf_conformal_class_normalize; before
+ * session 38 of G_a^-1 G_b scaled to det 1, the same for genus 1). 0 for
+ * conformally equivalent positions (up to the discretisation); for genus 1
+ * the hyperbolic distance between the two moduli (before their reduction
+ * to the fundamental domain). class_a and
  * class_b (each may be NULL) receive cf_conformal_class_compute's for a and
  * b from the same harmonic forms. Statuses as cf_conformal_class_compute's. */
 CF_API cf_status cf_conformal_class_distance(cf_context *ctx, const cf_mesh *mesh, const double *a, const double *b,

@@ -29,9 +29,12 @@
  * root scales out the discrete det K != 1). tau is then brought into the
  * standard fundamental domain |x| <= 1/2, |tau| >= 1.
  *
- * The distance between two classes of one marked surface is that of their
- * Gram matrices scaled to det 1, sqrt(sum log^2 mu / 2) over the
- * eigenvalues mu of the pencil (K_a, K_b): the hyperbolic distance between
+ * The class alone is J = S (-S^2)^-1/2, the complex structure nearest the
+ * discrete star (whose S^2 = -1 holds only to O(h^2): g^2 numbers of G
+ * belong to the triangles, not to the Riemann surface), reported as
+ * G^ = I J (cf_conformal_class_normalize). The distance between two
+ * classes of one marked surface is sqrt(sum log^2 mu / 2) over the
+ * eigenvalues mu of the pencil (G^_a, G^_b): the hyperbolic distance between
  * tau_a and tau_b in the upper half-plane for genus 1 (G(tau) above is the
  * standard map of the half-plane onto the 2 x 2 positive matrices of det 1).
  *
@@ -249,7 +252,8 @@ done:
 #define PERIODS_SINGULAR "cf_conformal_class: the matrix of the harmonic forms' periods"
 
 /* Solves the square system a x = b column by column (a: n x n, kept; b: n x
- * m, overwritten by x) through the dense least-squares routine. */
+ * m, overwritten by x) through the dense least-squares routine; a singular
+ * a fails with CF_ERR_NUMERICAL, "<what> is singular". */
 static cf_status dense_solve(cf_context *ctx, int32_t n, int32_t m, const double *a, double *b, const char *what)
 {
     int64_t lwork = cf_dense_least_squares_work_size(n, n);

@@ -707,10 +707,11 @@ static cf_status check_excess(cf_flow *flow, cfi_spin_state *s, const double *x,
 }
 
 /* Option keep_class: the positions x kept by the attempt moved back onto
- * the input's conformal class (keep_class.c), placed again, and s's
- * geometry (W) made for them: the step policy judges the projected state.
- * A face of x that degenerates or a factor that fails fails the attempt,
- * which the layer retries at a smaller step. Projecting the plain and the
+ * the input's conformal class (keep_class 2: its Gram matrix; keep_class.c),
+ * placed again, and s's geometry (W) made for them: the step policy judges
+ * the projected state. A face of x that degenerates, a factor that fails or
+ * a projection that does not reach the class fails the attempt, which the
+ * layer retries at a smaller step. Projecting the plain and the
  * faired candidate each before choosing (twice the cost) stalled the flow
  * sooner (elephant_g3_3k: 5 steps, class distance 0.05). */
 static cf_status project_to_class(cf_flow *flow, cfi_spin_state *s, const placement *pl, double *x)

@@ -159,6 +159,20 @@ CF_API cf_status cf_conformal_class_distance(cf_context *ctx, const cf_mesh *mes
 CF_API cf_status cf_conformal_class_gram_gradient(cf_context *ctx, const cf_mesh *mesh, const double *positions,
                                                   double *gram, double *gradient);
 
+/* cf_conformal_class_gram_gradient for many position sets of one mesh (a
+ * Gauss-Newton projection): the marked cycles found and the harmonic
+ * forms' factorisations analysed once (cf_harmonic_workspace); each call
+ * returns what cf_conformal_class_gram_gradient returns, bit for bit. The
+ * workspace keeps `mesh`, which must outlive it. Statuses as
+ * cf_conformal_class_gram_gradient's (create: CF_ERR_BAD_MESH for a surface
+ * that is not closed, connected and of genus >= 1). */
+typedef struct cf_conformal_class_workspace cf_conformal_class_workspace;
+CF_API cf_status cf_conformal_class_workspace_create(cf_context *ctx, const cf_mesh *mesh,
+                                                     cf_conformal_class_workspace **out);
+CF_API cf_status cf_conformal_class_workspace_gram_gradient(cf_conformal_class_workspace *workspace,
+                                                            const double *positions, double *gram, double *gradient);
+CF_API void cf_conformal_class_workspace_destroy(cf_conformal_class_workspace **workspace);
+
 /* The intersection form I_jk = int eta_j ^ eta_k of the harmonic forms dual
  * to the marked cycles (form: (2g)^2 doubles, column-major; integers,
  * antisymmetric, det 1, the same for every position set of the mesh).

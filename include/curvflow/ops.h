@@ -367,6 +367,21 @@ CF_API cf_status cf_divergence(cf_context *ctx, const cf_mesh *mesh, const doubl
 CF_API cf_status cf_harmonic_basis(cf_context *ctx, const cf_mesh *mesh, const double *positions, int32_t *dimension,
                                    double *basis);
 
+/* cf_harmonic_basis for many position sets of one mesh (a Gauss-Newton
+ * projection, a flow's steps): _create factorises the combinatorial
+ * d1 d1^T once and analyses the cotan Laplacian's pattern once; each
+ * _compute refills and refactorises the Laplacian and returns what
+ * cf_harmonic_basis returns for those positions, bit for bit (basis:
+ * ne * dimension doubles), without allocating through the context. The
+ * workspace keeps `mesh`, which must outlive it. _dimension is dim
+ * (0 for NULL). Statuses as cf_harmonic_basis's. */
+typedef struct cf_harmonic_workspace cf_harmonic_workspace;
+CF_API cf_status cf_harmonic_workspace_create(cf_context *ctx, const cf_mesh *mesh, cf_harmonic_workspace **out);
+CF_API int32_t cf_harmonic_workspace_dimension(const cf_harmonic_workspace *workspace);
+CF_API cf_status cf_harmonic_workspace_compute(cf_harmonic_workspace *workspace, const double *positions,
+                                               double *basis);
+CF_API void cf_harmonic_workspace_destroy(cf_harmonic_workspace **workspace);
+
 /* Per-face vector field (3 nf) of a 1-form (ne values, on oriented edges):
  * the Whitney interpolation evaluated at the face barycentre. */
 CF_API cf_status cf_one_form_to_vector_field(cf_context *ctx, const cf_mesh *mesh, const double *positions,

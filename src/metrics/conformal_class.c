@@ -179,13 +179,14 @@ static void form_periods(const cf_mesh *mesh, const homology_cycles *c, const do
     }
 }
 
-/* The harmonic forms of positions x (cf_harmonic_basis: ne x dim) and
- * their periods P along the marked cycles (dim x dim). */
+/* The harmonic forms of positions x (cf_harmonic_basis, or the workspace
+ * hw's when not NULL: ne x dim) and their periods P along the marked
+ * cycles (dim x dim). */
 static cf_status harmonic_periods(cf_context *ctx, const cf_mesh *mesh, const double *x, const homology_cycles *c,
-                                  double *forms, double *periods)
+                                  cf_harmonic_workspace *hw, double *forms, double *periods)
 {
-    int32_t got = 0;
-    cf_status st = cf_harmonic_basis(ctx, mesh, x, &got, forms);
+    int32_t got = hw ? cf_harmonic_workspace_dimension(hw) : 0;
+    cf_status st = hw ? cf_harmonic_workspace_compute(hw, x, forms) : cf_harmonic_basis(ctx, mesh, x, &got, forms);
     if (st != CF_OK) return st;
     if (got != c->dim)
         return cfi_error(ctx, CF_ERR_NUMERICAL, "cf_conformal_class: %d harmonic forms for genus %d", (int)got,
@@ -208,7 +209,7 @@ static cf_status class_matrix(cf_context *ctx, const cf_mesh *mesh, const double
         st = CF_ERR_NOMEM;
         goto done;
     }
-    st = harmonic_periods(ctx, mesh, x, c, forms, periods);
+    st = harmonic_periods(ctx, mesh, x, c, NULL, forms, periods);
     if (st != CF_OK) goto done;
     for (int32_t k = 0; k < dim; ++k)
         for (int32_t l = 0; l < dim; ++l) {
@@ -472,45 +473,112 @@ static double face_pair_gradient(const double *e1, const double *e2, const doubl
     return 0.5 * s * q;
 }
 
-cf_status cf_conformal_class_gram_gradient(cf_context *ctx, const cf_mesh *mesh, const double *positions, double *gram,
-                                           double *gradient)
+struct cf_conformal_class_workspace {
+    cf_context *ctx;
+    const cf_mesh *mesh;
+    homology_cycles cycles;
+    cf_harmonic_workspace *harmonic;
+    double *forms, *dual;               /* ne x dim: the harmonic forms, the forms dual to the cycles */
+    double *periods, *coef, *transposed; /* dim x dim */
+    double *vals;                       /* 2 dim: one face's values of the dual forms */
+};
+
+void cf_conformal_class_workspace_destroy(cf_conformal_class_workspace **wp)
+{
+    cf_conformal_class_workspace *w = wp ? *wp : NULL;
+    if (!w) return;
+    cf_context *ctx = w->ctx;
+    const cf_mesh *mesh = w->mesh;
+    int32_t dim = w->cycles.dim;
+    int64_t n2 = (int64_t)dim * dim;
+    cf_harmonic_workspace_destroy(&w->harmonic);
+    CFI_FREE(ctx, w->forms, (int64_t)mesh->ne * dim);
+    CFI_FREE(ctx, w->dual, (int64_t)mesh->ne * dim);
+    CFI_FREE(ctx, w->periods, n2);
+    CFI_FREE(ctx, w->coef, n2);
+    CFI_FREE(ctx, w->transposed, n2);
+    CFI_FREE(ctx, w->vals, 2 * (int64_t)dim);
+    if (dim > 0) cycles_free(ctx, mesh, &w->cycles);
+    cfi_free(ctx, w, sizeof *w);
+    *wp = NULL;
+}
+
+cf_status cf_conformal_class_workspace_create(cf_context *ctx, const cf_mesh *mesh, cf_conformal_class_workspace **out)
+{
+    static const char fn[] = "cf_conformal_class_workspace_create";
+    if (!ctx) return CF_ERR_INVALID_ARG;
+    if (!out) return cfi_error(ctx, CF_ERR_INVALID_ARG, "%s: out is NULL", fn);
+    *out = NULL;
+    if (!mesh) return cfi_error(ctx, CF_ERR_INVALID_ARG, "%s: mesh is NULL", fn);
+    cf_status st = check_surface(ctx, mesh, fn);
+    if (st != CF_OK) return st;
+    cf_conformal_class_workspace *w = cfi_malloc(ctx, sizeof *w);
+    if (!w) return CF_ERR_NOMEM;
+    memset(w, 0, sizeof *w);
+    w->ctx = ctx;
+    w->mesh = mesh;
+    st = find_cycles(ctx, mesh, &w->cycles);
+    if (st != CF_OK) {
+        cycles_free(ctx, mesh, &w->cycles);
+        w->cycles.dim = 0;
+    }
+    int32_t dim = w->cycles.dim;
+    int64_t n2 = (int64_t)dim * dim;
+    if (st == CF_OK) st = cf_harmonic_workspace_create(ctx, mesh, &w->harmonic);
+    if (st == CF_OK && cf_harmonic_workspace_dimension(w->harmonic) != dim)
+        st = cfi_error(ctx, CF_ERR_NUMERICAL, "cf_conformal_class: %d harmonic forms for genus %d",
+                       (int)cf_harmonic_workspace_dimension(w->harmonic), (int)(dim / 2));
+    if (st == CF_OK) {
+        w->forms = CFI_ALLOC(ctx, double, (int64_t)mesh->ne * dim);
+        w->dual = CFI_ALLOC(ctx, double, (int64_t)mesh->ne * dim);
+        w->periods = CFI_ALLOC(ctx, double, n2);
+        w->coef = CFI_ALLOC(ctx, double, n2);
+        w->transposed = CFI_ALLOC(ctx, double, n2);
+        w->vals = CFI_ALLOC(ctx, double, 2 * (int64_t)dim);
+        if (!w->forms || !w->dual || !w->periods || !w->coef || !w->transposed || !w->vals) st = CF_ERR_NOMEM;
+    }
+    if (st != CF_OK) {
+        cf_conformal_class_workspace_destroy(&w);
+        return st;
+    }
+    *out = w;
+    return CF_OK;
+}
+
+cf_status cf_conformal_class_workspace_gram_gradient(cf_conformal_class_workspace *w, const double *positions,
+                                                     double *gram, double *gradient)
 {
     static const char fn[] = "cf_conformal_class_gram_gradient";
-    if (!ctx) return CF_ERR_INVALID_ARG;
+    if (!w) return CF_ERR_INVALID_ARG;
+    cf_context *ctx = w->ctx;
+    const cf_mesh *mesh = w->mesh;
     if (!gram) return cfi_error(ctx, CF_ERR_INVALID_ARG, "%s: gram is NULL", fn);
-    homology_cycles c = {0};
-    cf_status st = open_surface(ctx, mesh, positions, positions, fn, &c);
+    cf_status st = cfi_metrics_check_pair(ctx, mesh, positions, positions, fn);
     if (st != CF_OK) return st;
-    int32_t dim = c.dim, ne = mesh->ne, nf = mesh->nf, nv = mesh->nv;
+    const homology_cycles *c = &w->cycles;
+    int32_t dim = c->dim, ne = mesh->ne, nf = mesh->nf, nv = mesh->nv;
     int64_t n2 = (int64_t)dim * dim, pairs = (int64_t)dim * (dim + 1) / 2;
-    double *forms = CFI_ALLOC(ctx, double, (int64_t)ne * dim), *dual = CFI_ALLOC(ctx, double, (int64_t)ne * dim);
-    double *periods = CFI_ALLOC(ctx, double, n2), *coef = CFI_ALLOC(ctx, double, n2);
-    double *vals = CFI_ALLOC(ctx, double, 2 * (int64_t)dim); /* one face's */
-    if (!forms || !dual || !periods || !coef || !vals) st = CF_ERR_NOMEM;
-    if (st == CF_OK) st = harmonic_periods(ctx, mesh, positions, &c, forms, periods);
+    double *forms = w->forms, *dual = w->dual, *periods = w->periods, *coef = w->coef, *vals = w->vals;
+    st = harmonic_periods(ctx, mesh, positions, c, w->harmonic, forms, periods);
     if (st == CF_OK) {
         /* C = P^-T: P^T C = I */
-        double *pt = CFI_ALLOC(ctx, double, n2);
-        if (!pt) st = CF_ERR_NOMEM;
-        if (st == CF_OK) {
-            for (int32_t i = 0; i < dim; ++i)
-                for (int32_t k = 0; k < dim; ++k) {
-                    pt[i + (int64_t)k * dim] = periods[k + (int64_t)i * dim];
-                    coef[i + (int64_t)k * dim] = i == k;
-                }
-            st = dense_solve(ctx, dim, dim, pt, coef, PERIODS_SINGULAR);
-        }
-        CFI_FREE(ctx, pt, n2);
+        double *pt = w->transposed;
+        for (int32_t i = 0; i < dim; ++i)
+            for (int32_t k = 0; k < dim; ++k) {
+                pt[i + (int64_t)k * dim] = periods[k + (int64_t)i * dim];
+                coef[i + (int64_t)k * dim] = i == k;
+            }
+        st = dense_solve(ctx, dim, dim, pt, coef, PERIODS_SINGULAR);
     }
     if (st == CF_OK) {
         /* eta_k = sum_i h_i C_ik: the harmonic forms dual to the cycles */
         memset(dual, 0, (size_t)ne * dim * sizeof(double));
         for (int32_t k = 0; k < dim; ++k)
             for (int32_t i = 0; i < dim; ++i) {
-                double w = coef[i + (int64_t)k * dim];
+                double ck = coef[i + (int64_t)k * dim];
                 const double *h = forms + (int64_t)i * ne;
                 double *eta = dual + (int64_t)k * ne;
-                for (int32_t e = 0; e < ne; ++e) eta[e] += w * h[e];
+                for (int32_t e = 0; e < ne; ++e) eta[e] += ck * h[e];
             }
         memset(gram, 0, (size_t)n2 * sizeof(double));
         if (gradient) memset(gradient, 0, (size_t)(pairs * 3 * nv) * sizeof(double));
@@ -545,12 +613,21 @@ cf_status cf_conformal_class_gram_gradient(cf_context *ctx, const cf_mesh *mesh,
                 }
         }
     }
-    CFI_FREE(ctx, forms, (int64_t)ne * dim);
-    CFI_FREE(ctx, dual, (int64_t)ne * dim);
-    CFI_FREE(ctx, periods, n2);
-    CFI_FREE(ctx, coef, n2);
-    CFI_FREE(ctx, vals, 2 * (int64_t)dim);
-    cycles_free(ctx, mesh, &c);
+    return st;
+}
+
+cf_status cf_conformal_class_gram_gradient(cf_context *ctx, const cf_mesh *mesh, const double *positions, double *gram,
+                                           double *gradient)
+{
+    static const char fn[] = "cf_conformal_class_gram_gradient";
+    if (!ctx) return CF_ERR_INVALID_ARG;
+    if (!gram) return cfi_error(ctx, CF_ERR_INVALID_ARG, "%s: gram is NULL", fn);
+    cf_status st = cfi_metrics_check_pair(ctx, mesh, positions, positions, fn);
+    if (st != CF_OK) return st;
+    cf_conformal_class_workspace *w = NULL;
+    st = cf_conformal_class_workspace_create(ctx, mesh, &w);
+    if (st == CF_OK) st = cf_conformal_class_workspace_gram_gradient(w, positions, gram, gradient);
+    cf_conformal_class_workspace_destroy(&w);
     return st;
 }
 

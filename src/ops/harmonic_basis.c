@@ -41,6 +41,8 @@
 #include "curvflow/ops.h"
 #include "ops/ops_internal.h"
 
+#include <string.h>
+
 /* face-sign of halfedge h: +1 if it runs along its edge's orientation */
 static double halfedge_sign(const cf_mesh *mesh, int64_t h)
 {
@@ -88,51 +90,68 @@ done:
     return s;
 }
 
-/* cotan Laplacian plus its mean diagonal at the first vertex of each
- * component (scale-matched pin) */
-static cf_status pinned_laplacian(cf_context *ctx, const cf_mesh *mesh, const double *positions, cf_sparse **out)
+/* The pin of the cotan Laplacian: its mean diagonal added at the first
+ * vertex of each component (scale-matched); diag[v] is vertex v's diagonal
+ * slot in l->values. */
+static void pin_laplacian(const cf_mesh *mesh, cf_sparse *l, const int64_t *diag, const int32_t *pin_vertex,
+                          int32_t pins)
 {
-    cf_status s = cf_cotan_laplacian(ctx, mesh, positions, out);
-    if (s != CF_OK) return s;
-    cf_sparse *l = *out;
     double mean_diag = 0.0;
-    for (int32_t v = 0; v < mesh->nv; ++v) {
-        int64_t k = cf_sparse_find(l, v, v);
-        if (k >= 0) mean_diag += l->values[k];
-    }
+    for (int32_t v = 0; v < mesh->nv; ++v) mean_diag += l->values[diag[v]];
     mean_diag /= mesh->nv;
-    uint8_t *pinned = CFI_ALLOC(ctx, uint8_t, mesh->component_count);
-    if (!pinned) {
-        cf_sparse_destroy(out);
-        return CF_ERR_NOMEM;
-    }
-    for (int32_t v = 0; v < mesh->nv; ++v) {
-        int32_t c = mesh->vertex_component[v];
-        if (pinned[c]) continue;
-        pinned[c] = 1;
-        int64_t k = cf_sparse_find(l, v, v);
-        if (CF_NEVER(k < 0)) continue;
-        l->values[k] += mean_diag;
-    }
-    CFI_FREE(ctx, pinned, mesh->component_count);
-    return CF_OK;
+    for (int32_t p = 0; p < pins; ++p) l->values[diag[pin_vertex[p]]] += mean_diag;
 }
 
-static cf_status factor(cf_context *ctx, const cf_sparse *a, cf_cholesky **out)
+struct cf_harmonic_workspace {
+    cf_context *ctx;
+    const cf_mesh *mesh;
+    int32_t dim;
+    cf_sparse *dual, *laplacian; /* d1 d1^T (pinned, fixed), the pinned cotan Laplacian (refilled) */
+    cf_cholesky *dual_factor, *laplacian_factor;
+    int64_t *slots;              /* the Laplacian's refill map: vertex v's diagonal at slots[v] */
+    int64_t slot_count;
+    int32_t *pin_vertex;         /* the first vertex of each component */
+    double *weights, *rf, *rv;   /* *1 (ne), face and vertex right-hand sides (nf dim, nv dim) */
+};
+
+void cf_harmonic_workspace_destroy(cf_harmonic_workspace **wp)
 {
-    cf_status s = cf_cholesky_create(ctx, a, NULL, out);
-    if (s == CF_OK) s = cf_cholesky_factorize(*out, a);
-    return s;
+    cf_harmonic_workspace *w = wp ? *wp : NULL;
+    if (!w) return;
+    cf_context *ctx = w->ctx;
+    const cf_mesh *mesh = w->mesh;
+    cf_cholesky_destroy(&w->dual_factor);
+    cf_cholesky_destroy(&w->laplacian_factor);
+    cf_sparse_destroy(&w->dual);
+    cf_sparse_destroy(&w->laplacian);
+    CFI_FREE(ctx, w->slots, w->slot_count);
+    CFI_FREE(ctx, w->pin_vertex, mesh->component_count);
+    CFI_FREE(ctx, w->weights, mesh->ne);
+    CFI_FREE(ctx, w->rf, (int64_t)mesh->nf * w->dim);
+    CFI_FREE(ctx, w->rv, (int64_t)mesh->nv * w->dim);
+    cfi_free(ctx, w, sizeof *w);
+    *wp = NULL;
 }
 
-cf_status cf_harmonic_basis(cf_context *ctx, const cf_mesh *mesh, const double *positions, int32_t *dimension,
-                            double *basis)
+int32_t cf_harmonic_workspace_dimension(const cf_harmonic_workspace *w) { return w ? w->dim : 0; }
+
+cf_status cf_harmonic_workspace_create(cf_context *ctx, const cf_mesh *mesh, cf_harmonic_workspace **out)
 {
-    cf_status s = cfi_ops_check(ctx, mesh, positions, dimension, "harmonic_basis");
-    if (s != CF_OK) return s;
+    if (!ctx) return CF_ERR_INVALID_ARG;
+    if (!out) return cfi_error(ctx, CF_ERR_INVALID_ARG, "harmonic_workspace: out is NULL");
+    *out = NULL;
+    if (!mesh) return cfi_error(ctx, CF_ERR_INVALID_ARG, "harmonic_workspace: mesh is NULL");
+    cf_harmonic_workspace *w = cfi_malloc(ctx, sizeof *w);
+    if (!w) return CF_ERR_NOMEM;
+    memset(w, 0, sizeof *w);
+    w->ctx = ctx;
+    w->mesh = mesh;
     /* components that touch the boundary */
     uint8_t *open = CFI_ALLOC(ctx, uint8_t, mesh->component_count);
-    if (!open) return CF_ERR_NOMEM;
+    if (!open) {
+        cfi_free(ctx, w, sizeof *w);
+        return CF_ERR_NOMEM;
+    }
     int32_t closed_count = mesh->component_count;
     for (int32_t v = 0; v < mesh->nv; ++v) {
         int32_t c = mesh->vertex_component[v];
@@ -145,32 +164,66 @@ cf_status cf_harmonic_basis(cf_context *ctx, const cf_mesh *mesh, const double *
      * rank d1 = nf - #closed components: sum over components of 2g on closed
      * ones and 2g + b - 1 on ones with boundary. */
     int64_t k64 = (int64_t)mesh->ne - mesh->nv - mesh->nf + mesh->component_count + closed_count;
-    if (CF_NEVER(k64 < 0 || k64 > mesh->ne)) {
-        CFI_FREE(ctx, open, mesh->component_count);
-        return cfi_error(ctx, CF_ERR_NUMERICAL, "harmonic_basis: inconsistent first Betti number %lld", (long long)k64);
+    cf_status s = CF_OK;
+    if (CF_NEVER(k64 < 0 || k64 > mesh->ne))
+        s = cfi_error(ctx, CF_ERR_NUMERICAL, "harmonic_basis: inconsistent first Betti number %lld", (long long)k64);
+    w->dim = s == CF_OK ? (int32_t)k64 : 0;
+    if (s == CF_OK && w->dim > 0) {
+        w->slot_count = cf_cotan_laplacian_slot_count(mesh);
+        w->slots = CFI_ALLOC(ctx, int64_t, w->slot_count);
+        w->pin_vertex = CFI_ALLOC(ctx, int32_t, mesh->component_count);
+        w->weights = CFI_ALLOC(ctx, double, mesh->ne);
+        w->rf = CFI_ALLOC(ctx, double, (int64_t)mesh->nf * w->dim);
+        w->rv = CFI_ALLOC(ctx, double, (int64_t)mesh->nv * w->dim);
+        if (!w->slots || !w->pin_vertex || !w->weights || !w->rf || !w->rv) s = CF_ERR_NOMEM;
+        if (s == CF_OK) {
+            int32_t pins = 0;
+            memset(open, 0, (size_t)mesh->component_count); /* reused: component pinned */
+            for (int32_t v = 0; v < mesh->nv; ++v) {
+                int32_t c = mesh->vertex_component[v];
+                if (open[c]) continue;
+                open[c] = 1;
+                w->pin_vertex[pins++] = v;
+            }
+            for (int32_t v = 0; v < mesh->nv; ++v) {
+                int32_t c = mesh->vertex_component[v];
+                if (mesh->vertex_on_boundary[v]) open[c] = 2;
+            }
+            /* open[c] == 2: a component with boundary (the dual Laplacian's pin skips it) */
+            for (int32_t c = 0; c < mesh->component_count; ++c) open[c] = open[c] == 2;
+        }
+        if (s == CF_OK) s = dual_laplacian(ctx, mesh, open, &w->dual);
+        if (s == CF_OK) s = cf_cholesky_create(ctx, w->dual, NULL, &w->dual_factor);
+        if (s == CF_OK) s = cf_cholesky_factorize(w->dual_factor, w->dual);
+        /* the cotan Laplacian's pattern and analysis (of the rest positions;
+         * every compute refills and refactorises) */
+        if (s == CF_OK) s = cf_cotan_laplacian_with_slots(ctx, mesh, cf_mesh_positions(mesh), &w->laplacian, w->slots);
+        if (s == CF_OK) s = cf_cholesky_create(ctx, w->laplacian, NULL, &w->laplacian_factor);
+        if (s == CF_OK) s = cf_cholesky_reserve_solve(w->dual_factor, w->dim);
+        if (s == CF_OK) s = cf_cholesky_reserve_solve(w->laplacian_factor, w->dim);
     }
-    int32_t k = (int32_t)k64;
-    *dimension = k;
-    if (!basis || k == 0) {
-        CFI_FREE(ctx, open, mesh->component_count);
-        return CF_OK;
+    CFI_FREE(ctx, open, mesh->component_count);
+    if (s != CF_OK) {
+        cf_harmonic_workspace_destroy(&w);
+        return s;
     }
+    *out = w;
+    return CF_OK;
+}
 
-    int32_t ne = mesh->ne, nf = mesh->nf, nv = mesh->nv;
-    cf_sparse *b = NULL, *l = NULL;
-    cf_cholesky *cb = NULL, *cl = NULL;
-    double *w = CFI_ALLOC(ctx, double, ne);
-    double *rf = CFI_ALLOC(ctx, double, (int64_t)nf * k);
-    double *rv = CFI_ALLOC(ctx, double, (int64_t)nv * k);
-    if (!w || !rf || !rv) {
-        s = CF_ERR_NOMEM;
-        goto done;
-    }
-    if ((s = cf_cotan_weights(ctx, mesh, positions, w)) != CF_OK) goto done;
-    if ((s = dual_laplacian(ctx, mesh, open, &b)) != CF_OK) goto done;
-    if ((s = pinned_laplacian(ctx, mesh, positions, &l)) != CF_OK) goto done;
-    if ((s = factor(ctx, b, &cb)) != CF_OK) goto done;
-    if ((s = factor(ctx, l, &cl)) != CF_OK) goto done;
+cf_status cf_harmonic_workspace_compute(cf_harmonic_workspace *w, const double *positions, double *basis)
+{
+    if (!w) return CF_ERR_INVALID_ARG;
+    cf_context *ctx = w->ctx;
+    const cf_mesh *mesh = w->mesh;
+    cf_status s = cfi_ops_check(ctx, mesh, positions, basis, "harmonic_basis");
+    if (s != CF_OK || w->dim == 0) return s;
+    int32_t ne = mesh->ne, nf = mesh->nf, nv = mesh->nv, k = w->dim;
+    double *rf = w->rf, *rv = w->rv, *wt = w->weights;
+    if ((s = cf_cotan_weights(ctx, mesh, positions, wt)) != CF_OK) return s;
+    if ((s = cf_cotan_laplacian_refill(w->laplacian, mesh, positions, w->slots)) != CF_OK) return s;
+    pin_laplacian(mesh, w->laplacian, w->slots, w->pin_vertex, mesh->component_count);
+    if ((s = cf_cholesky_factorize(w->laplacian_factor, w->laplacian)) != CF_OK) return s;
 
     /* I. random 1-forms (fixed-seed LCG, so the basis is deterministic) */
     uint64_t state = 0x2545f4914f6cdd1dull;
@@ -194,7 +247,7 @@ cf_status cf_harmonic_basis(cf_context *ctx, const cf_mesh *mesh, const double *
                 }
             }
         }
-        if ((s = cf_cholesky_solve(cb, k, rf, rf)) != CF_OK) goto done;
+        if ((s = cf_cholesky_solve(w->dual_factor, k, rf, rf)) != CF_OK) return s;
         for (int32_t c = 0; c < k; ++c) {
             double *om = basis + (int64_t)ne * c, *g = rf + (int64_t)nf * c;
             for (int64_t h = 0; h < 3 * (int64_t)nf; ++h)
@@ -205,12 +258,12 @@ cf_status cf_harmonic_basis(cf_context *ctx, const cf_mesh *mesh, const double *
             double *om = basis + (int64_t)ne * c, *r = rv + (int64_t)nv * c;
             for (int32_t v = 0; v < nv; ++v) r[v] = 0.0;
             for (int32_t e = 0; e < ne; ++e) {
-                double y = w[e] * om[e];
+                double y = wt[e] * om[e];
                 r[mesh->edge_vertices[2 * e + 1]] += y;
                 r[mesh->edge_vertices[2 * e]] -= y;
             }
         }
-        if ((s = cf_cholesky_solve(cl, k, rv, rv)) != CF_OK) goto done;
+        if ((s = cf_cholesky_solve(w->laplacian_factor, k, rv, rv)) != CF_OK) return s;
         for (int32_t c = 0; c < k; ++c) {
             double *om = basis + (int64_t)ne * c, *a = rv + (int64_t)nv * c;
             for (int32_t e = 0; e < ne; ++e)
@@ -219,19 +272,23 @@ cf_status cf_harmonic_basis(cf_context *ctx, const cf_mesh *mesh, const double *
     }
     /* III. Gram-Schmidt under *1 */
     int32_t rank = 0;
-    cf_orthonormalize(ne, k, basis, w, 1e-8, &rank);
+    cf_orthonormalize(ne, k, basis, wt, 1e-8, &rank);
     if (rank != k)
-        s = cfi_error(ctx, CF_ERR_NUMERICAL, "harmonic_basis: only %d of %d harmonic forms are independent", rank,
-                      k);
-done:
-    cf_cholesky_destroy(&cb);
-    cf_cholesky_destroy(&cl);
-    cf_sparse_destroy(&b);
-    cf_sparse_destroy(&l);
-    CFI_FREE(ctx, w, ne);
-    CFI_FREE(ctx, rf, (int64_t)nf * k);
-    CFI_FREE(ctx, rv, (int64_t)nv * k);
-    CFI_FREE(ctx, open, mesh->component_count);
+        return cfi_error(ctx, CF_ERR_NUMERICAL, "harmonic_basis: only %d of %d harmonic forms are independent", rank,
+                         k);
+    return CF_OK;
+}
+
+cf_status cf_harmonic_basis(cf_context *ctx, const cf_mesh *mesh, const double *positions, int32_t *dimension,
+                            double *basis)
+{
+    cf_status s = cfi_ops_check(ctx, mesh, positions, dimension, "harmonic_basis");
+    if (s != CF_OK) return s;
+    cf_harmonic_workspace *w = NULL;
+    if ((s = cf_harmonic_workspace_create(ctx, mesh, &w)) != CF_OK) return s;
+    *dimension = w->dim;
+    if (basis && w->dim > 0) s = cf_harmonic_workspace_compute(w, positions, basis);
+    cf_harmonic_workspace_destroy(&w);
     return s;
 }
 

@@ -42,6 +42,11 @@ static cf_status op_conformal_class(cf_context *ctx, const cf_mesh *m, const dou
     double *gradient = malloc(sizeof(double) * 3 * 3 * (size_t)cf_mesh_vertex_count(m));
     if (s == CF_OK) s = gradient ? cf_conformal_class_gram_gradient(ctx, m, g_torus_b, gram, gradient) : CF_ERR_NOMEM;
     free(gradient);
+    cf_conformal_class_workspace *w = NULL;
+    if (s == CF_OK) s = cf_conformal_class_workspace_create(ctx, m, &w);
+    double g2[4];
+    if (s == CF_OK) s = cf_conformal_class_workspace_gram_gradient(w, g_torus_b, g2, NULL);
+    cf_conformal_class_workspace_destroy(&w);
     double form[4], normalized[4], derivative[9];
     if (s == CF_OK) s = cf_conformal_class_intersection_form(ctx, m, x, form);
     if (s == CF_OK) s = cf_conformal_class_normalize(ctx, 2, form, gram, normalized, derivative);

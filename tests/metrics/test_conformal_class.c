@@ -331,6 +331,47 @@ static void test_normalized_gram(void)
     cf_context_destroy(&ctx);
 }
 
+/* cf_conformal_class_workspace: the same G and dG/dx as
+ * cf_conformal_class_gram_gradient, bit for bit, for two position sets of
+ * one torus; refused on a sphere; bad input */
+static void test_class_workspace(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *m = NULL, *sphere = NULL;
+    CHECK_OK(ctx, cf_generate_torus(ctx, 1.0, 0.45, 24, 12, &m));
+    CHECK_OK(ctx, cf_generate_icosphere(ctx, 1, 1.0, &sphere));
+    if (m && sphere) {
+        int32_t nv = cf_mesh_vertex_count(m);
+        double *x = malloc(sizeof(double) * 3 * nv), *ga = malloc(sizeof(double) * 9 * nv);
+        double *gb = malloc(sizeof(double) * 9 * nv), gram_a[4], gram_b[4];
+        cf_conformal_class_workspace *w = NULL;
+        CHECK_OK(ctx, cf_conformal_class_workspace_create(ctx, m, &w));
+        for (int variant = 0; w && variant < 2; ++variant) {
+            for (int32_t i = 0; i < 3 * nv; ++i) x[i] = cf_mesh_positions(m)[i] * (variant && i % 3 == 1 ? 1.7 : 1.0);
+            CHECK_OK(ctx, cf_conformal_class_gram_gradient(ctx, m, x, gram_a, ga));
+            CHECK_OK(ctx, cf_conformal_class_workspace_gram_gradient(w, x, gram_b, gb));
+            CHECK(memcmp(gram_a, gram_b, sizeof gram_a) == 0);
+            CHECK(memcmp(ga, gb, sizeof(double) * 9 * nv) == 0);
+        }
+        CHECK_STATUS(cf_conformal_class_workspace_gram_gradient(w, x, NULL, gb), CF_ERR_INVALID_ARG);
+        x[4] = INFINITY;
+        CHECK_STATUS(cf_conformal_class_workspace_gram_gradient(w, x, gram_b, gb), CF_ERR_NONFINITE);
+        CHECK_STATUS(cf_conformal_class_workspace_gram_gradient(NULL, x, gram_b, gb), CF_ERR_INVALID_ARG);
+        cf_conformal_class_workspace_destroy(&w);
+        CHECK(w == NULL);
+        CHECK_STATUS(cf_conformal_class_workspace_create(ctx, sphere, &w), CF_ERR_BAD_MESH);
+        CHECK(w == NULL && strstr(cf_context_message(ctx), "genus") != NULL);
+        CHECK_STATUS(cf_conformal_class_workspace_create(ctx, m, NULL), CF_ERR_INVALID_ARG);
+        free(x);
+        free(ga);
+        free(gb);
+    }
+    cf_mesh_destroy(&m);
+    cf_mesh_destroy(&sphere);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 static void test_bad_input(void)
 {
     cf_context *ctx = cft_context();
@@ -365,6 +406,7 @@ int main(void)
     CFT_RUN(test_invariance);
     CFT_RUN(test_gram_gradient);
     CFT_RUN(test_normalized_gram);
+    CFT_RUN(test_class_workspace);
     CFT_RUN(test_bad_input);
     return cft_finish();
 }

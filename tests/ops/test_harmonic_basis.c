@@ -11,6 +11,7 @@
 #include "curvflow/ops.h"
 #include "test.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -177,6 +178,60 @@ static void test_generated(void)
     cf_context_destroy(&ctx);
 }
 
+/* cf_harmonic_workspace: on a torus moved three ways (as given, stretched,
+ * moved at random), one workspace returns cf_harmonic_basis's bits for
+ * each, its computes allocate nothing through the context, and a sphere's
+ * has dimension 0; bad input named. */
+static void test_workspace(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *m = NULL, *sphere = NULL;
+    CHECK_OK(ctx, cf_generate_torus(ctx, 1.0, 0.35, 40, 16, &m));
+    CHECK_OK(ctx, cf_generate_icosphere(ctx, 2, 1.0, &sphere));
+    if (m && sphere) {
+        int32_t nv = cf_mesh_vertex_count(m), ne = cf_mesh_edge_count(m), dim = 0;
+        double *x = malloc(sizeof(double) * 3 * (size_t)nv), *a = malloc(sizeof(double) * 2 * (size_t)ne);
+        double *b = malloc(sizeof(double) * 2 * (size_t)ne);
+        cf_harmonic_workspace *w = NULL;
+        CHECK_OK(ctx, cf_harmonic_workspace_create(ctx, m, &w));
+        CHECK(cf_harmonic_workspace_dimension(w) == 2);
+        unsigned seed = 99u;
+        for (int variant = 0; w && variant < 3; ++variant) {
+            for (int32_t i = 0; i < 3 * nv; ++i) {
+                seed = seed * 1103515245u + 12345u;
+                double r = (double)(seed >> 8) / (double)(1u << 24) - 0.5;
+                double p = cf_mesh_positions(m)[i];
+                x[i] = variant == 0 ? p : variant == 1 ? p * (i % 3 == 0 ? 2.0 : 1.0) : p + 0.01 * r;
+            }
+            CHECK_OK(ctx, cf_harmonic_basis(ctx, m, x, &dim, a));
+            int64_t before = cf_context_allocation_count(ctx);
+            CHECK_OK(ctx, cf_harmonic_workspace_compute(w, x, b));
+            CHECK(cf_context_allocation_count(ctx) == before);
+            CHECK(memcmp(a, b, sizeof(double) * 2 * (size_t)ne) == 0);
+        }
+        x[5] = NAN;
+        CHECK_STATUS(cf_harmonic_workspace_compute(w, x, b), CF_ERR_NONFINITE);
+        CHECK_STATUS(cf_harmonic_workspace_compute(w, NULL, b), CF_ERR_INVALID_ARG);
+        CHECK_STATUS(cf_harmonic_workspace_compute(NULL, x, b), CF_ERR_INVALID_ARG);
+        cf_harmonic_workspace_destroy(&w);
+        CHECK(w == NULL);
+        cf_harmonic_workspace_destroy(&w); /* NULL: nothing */
+        CHECK_OK(ctx, cf_harmonic_workspace_create(ctx, sphere, &w));
+        CHECK(cf_harmonic_workspace_dimension(w) == 0);
+        CHECK_OK(ctx, cf_harmonic_workspace_compute(w, cf_mesh_positions(sphere), b)); /* nothing to write */
+        cf_harmonic_workspace_destroy(&w);
+        CHECK_STATUS(cf_harmonic_workspace_create(ctx, NULL, &w), CF_ERR_INVALID_ARG);
+        CHECK_STATUS(cf_harmonic_workspace_create(ctx, m, NULL), CF_ERR_INVALID_ARG);
+        free(x);
+        free(a);
+        free(b);
+    }
+    cf_mesh_destroy(&m);
+    cf_mesh_destroy(&sphere);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 /* 2g + b - 1 with genus and holes, and components of both kinds: a torus
  * with two faces removed (g 1, b 2: dim 3) next to a closed torus (dim 2). */
 static void test_holed_torus(void)
@@ -283,6 +338,7 @@ int main(void)
     CFT_RUN(test_whitney_exact);
     CFT_RUN(test_generated);
     CFT_RUN(test_holed_torus);
+    CFT_RUN(test_workspace);
     CFT_RUN(test_shared);
     CFT_RUN(test_shared_boundary);
     return cft_finish();

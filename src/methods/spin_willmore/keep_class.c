@@ -62,6 +62,7 @@ struct cfi_spin_class {
     double *step, *trial;  /* 3 nv: a Gauss-Newton correction, the positions it is tried at */
     double scale;          /* |G0^| (Frobenius) */
     int32_t whole_gram;    /* keep_class 2: G itself rather than G^ */
+    cf_conformal_class_workspace *class_workspace; /* G and dG/dx of each position set */
     cf_sparse *laplacian;  /* L of the positions projected (pattern of the input's) */
     int64_t *slots;        /* its refill map */
     cf_cholesky *smoother; /* L + I / kappa */
@@ -85,6 +86,7 @@ void cfi_spin_class_destroy(cf_context *ctx, cfi_spin_class **cp)
     CFI_FREE(ctx, c->columns, rows);
     CFI_FREE(ctx, c->step, 3 * (int64_t)c->nv);
     CFI_FREE(ctx, c->trial, 3 * (int64_t)c->nv);
+    cf_conformal_class_workspace_destroy(&c->class_workspace);
     cf_cholesky_destroy(&c->smoother);
     cf_sparse_destroy(&c->laplacian);
     if (c->slots) cfi_free(ctx, c->slots, (size_t)c->slot_count * sizeof *c->slots);
@@ -127,7 +129,8 @@ cf_status cfi_spin_class_create(cf_flow *flow, int32_t whole_gram, cfi_spin_clas
     /* the input's class (the rest positions, also when the run starts
      * elsewhere: the class the flow is judged by) */
     if (st == CF_OK) st = cf_conformal_class_intersection_form(ctx, mesh, cf_mesh_positions(mesh), c->form);
-    if (st == CF_OK) st = cf_conformal_class_gram_gradient(ctx, mesh, cf_mesh_positions(mesh), c->gram, NULL);
+    if (st == CF_OK) st = cf_conformal_class_workspace_create(ctx, mesh, &c->class_workspace);
+    if (st == CF_OK) st = cf_conformal_class_workspace_gram_gradient(c->class_workspace, cf_mesh_positions(mesh), c->gram, NULL);
     c->whole_gram = whole_gram != 0;
     if (st == CF_OK && c->whole_gram) memcpy(c->target, c->gram, (size_t)n2 * sizeof(double));
     if (st == CF_OK && !c->whole_gram)
@@ -154,7 +157,7 @@ static cf_status evaluate(cf_context *ctx, const cf_mesh *mesh, cfi_spin_class *
 {
     int32_t dim = c->dim, pairs = c->pairs;
     int64_t len = 3 * (int64_t)c->nv;
-    cf_status st = cf_conformal_class_gram_gradient(ctx, mesh, x, c->gram, c->jacobian);
+    cf_status st = cf_conformal_class_workspace_gram_gradient(c->class_workspace, x, c->gram, c->jacobian);
     if (st == CF_OK && c->whole_gram) memcpy(c->normalized, c->gram, (size_t)dim * dim * sizeof(double));
     if (st == CF_OK && !c->whole_gram)
         st = cf_conformal_class_normalize(ctx, dim, c->form, c->gram, c->normalized, c->chain);

@@ -220,8 +220,9 @@ typedef struct cf_spin_willmore_options {
                                 * knotted tubes stall). The discrete flow otherwise drifts from the
                                 * class on coarse meshes (elephant_g3_3k 0.78, elk 0.092 after 10
                                 * steps). Default 0 (W falls less on most meshes of genus > 0 and
-                                * it costs 1.5-10x the time; docs/spin.md, "The conformal class the
-                                * flow keeps"); on another surface it is refused */
+                                * it costs 1.8-11x the time: bob 1.8-2.1x, elk 1.8-3.0x, elephant
+                                * 11x; docs/spin.md, "The conformal class the flow keeps"); on
+                                * another surface it is refused */
 } cf_spin_willmore_options;
 
 CF_API void cf_spin_willmore_options_default(cf_spin_willmore_options *options);

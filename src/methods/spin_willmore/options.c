@@ -110,7 +110,7 @@ static const cf_param_desc spin_params[] = {
     {"keep_class", CF_PARAM_INT, OPT(keep_class), 0, 2, NULL,
      "closed genus > 0: after each attempt Gauss-Newton steps move its positions back onto the input's conformal "
      "class (1: the class alone; 2: also the triangulation's part of its Gram matrix, which keeps triangles better "
-     "and stalls knotted tubes; smoothed; off by default: W falls less on most meshes of genus > 0, 1.5-10x the "
+     "and stalls knotted tubes; smoothed; off by default: W falls less on most meshes of genus > 0, 1.8-11x the "
      "time)"},
     {"max_integrability_error", CF_PARAM_DOUBLE, OPT(max_integrability_error), 0.0, 1.0, NULL,
      "adaptive: redo a step with half tau while its transformed edges are non-integrable by more than this "

@@ -161,9 +161,10 @@ CF_API cf_status cf_conformal_class_gram_gradient(cf_context *ctx, const cf_mesh
 
 /* cf_conformal_class_gram_gradient for many position sets of one mesh (a
  * Gauss-Newton projection): the marked cycles found and the harmonic
- * forms' factorisations analysed once (cf_harmonic_workspace); each call
- * returns what cf_conformal_class_gram_gradient returns, bit for bit. The
- * workspace keeps `mesh`, which must outlive it. Statuses as
+ * forms' factorisations analysed once (cf_harmonic_workspace); the first
+ * call returns what cf_conformal_class_gram_gradient returns bit for bit,
+ * later ones to rounding (the harmonic workspace's refill). The workspace
+ * keeps `mesh`, which must outlive it. Statuses as
  * cf_conformal_class_gram_gradient's (create: CF_ERR_BAD_MESH for a surface
  * that is not closed, connected and of genus >= 1). */
 typedef struct cf_conformal_class_workspace cf_conformal_class_workspace;

@@ -99,14 +99,16 @@ static void pin_laplacian(const cf_mesh *mesh, cf_sparse *l, const int64_t *diag
     double mean_diag = 0.0;
     for (int32_t v = 0; v < mesh->nv; ++v) mean_diag += l->values[diag[v]];
     mean_diag /= mesh->nv;
-    for (int32_t p = 0; p < pins; ++p) l->values[diag[pin_vertex[p]]] += mean_diag;
+    for (int32_t p = 0; p < pins; ++p)
+        if (pin_vertex[p] >= 0) l->values[diag[pin_vertex[p]]] += mean_diag;
 }
 
 struct cf_harmonic_workspace {
     cf_context *ctx;
     const cf_mesh *mesh;
     int32_t dim;
-    cf_sparse *dual, *laplacian; /* d1 d1^T (pinned, fixed), the pinned cotan Laplacian (refilled) */
+    cf_sparse *dual, *laplacian; /* d1 d1^T (pinned, fixed), the pinned cotan Laplacian (NULL until the
+                                  * first compute, then refilled) */
     cf_cholesky *dual_factor, *laplacian_factor;
     int64_t *slots;              /* the Laplacian's refill map: vertex v's diagonal at slots[v] */
     int64_t slot_count;
@@ -177,30 +179,16 @@ cf_status cf_harmonic_workspace_create(cf_context *ctx, const cf_mesh *mesh, cf_
         w->rv = CFI_ALLOC(ctx, double, (int64_t)mesh->nv * w->dim);
         if (!w->slots || !w->pin_vertex || !w->weights || !w->rf || !w->rv) s = CF_ERR_NOMEM;
         if (s == CF_OK) {
-            int32_t pins = 0;
-            memset(open, 0, (size_t)mesh->component_count); /* reused: component pinned */
-            for (int32_t v = 0; v < mesh->nv; ++v) {
-                int32_t c = mesh->vertex_component[v];
-                if (open[c]) continue;
-                open[c] = 1;
-                w->pin_vertex[pins++] = v;
-            }
-            for (int32_t v = 0; v < mesh->nv; ++v) {
-                int32_t c = mesh->vertex_component[v];
-                if (mesh->vertex_on_boundary[v]) open[c] = 2;
-            }
-            /* open[c] == 2: a component with boundary (the dual Laplacian's pin skips it) */
-            for (int32_t c = 0; c < mesh->component_count; ++c) open[c] = open[c] == 2;
+            /* each component's first vertex */
+            for (int32_t c = 0; c < mesh->component_count; ++c) w->pin_vertex[c] = -1;
+            for (int32_t v = 0; v < mesh->nv; ++v)
+                if (w->pin_vertex[mesh->vertex_component[v]] < 0) w->pin_vertex[mesh->vertex_component[v]] = v;
         }
         if (s == CF_OK) s = dual_laplacian(ctx, mesh, open, &w->dual);
         if (s == CF_OK) s = cf_cholesky_create(ctx, w->dual, NULL, &w->dual_factor);
         if (s == CF_OK) s = cf_cholesky_factorize(w->dual_factor, w->dual);
-        /* the cotan Laplacian's pattern and analysis (of the rest positions;
-         * every compute refills and refactorises) */
-        if (s == CF_OK) s = cf_cotan_laplacian_with_slots(ctx, mesh, cf_mesh_positions(mesh), &w->laplacian, w->slots);
-        if (s == CF_OK) s = cf_cholesky_create(ctx, w->laplacian, NULL, &w->laplacian_factor);
         if (s == CF_OK) s = cf_cholesky_reserve_solve(w->dual_factor, w->dim);
-        if (s == CF_OK) s = cf_cholesky_reserve_solve(w->laplacian_factor, w->dim);
+        /* the cotan Laplacian: built and analysed at the first compute */
     }
     CFI_FREE(ctx, open, mesh->component_count);
     if (s != CF_OK) {
@@ -221,7 +209,21 @@ cf_status cf_harmonic_workspace_compute(cf_harmonic_workspace *w, const double *
     int32_t ne = mesh->ne, nf = mesh->nf, nv = mesh->nv, k = w->dim;
     double *rf = w->rf, *rv = w->rv, *wt = w->weights;
     if ((s = cf_cotan_weights(ctx, mesh, positions, wt)) != CF_OK) return s;
-    if ((s = cf_cotan_laplacian_refill(w->laplacian, mesh, positions, w->slots)) != CF_OK) return s;
+    /* the first compute builds L from its positions (as cf_cotan_laplacian,
+     * bit for bit) and analyses it; later ones refill it, which sums the
+     * diagonal in another order (1 ulp apart on bob_5k) */
+    if (w->laplacian) {
+        s = cf_cotan_laplacian_refill(w->laplacian, mesh, positions, w->slots);
+    } else {
+        s = cf_cotan_laplacian_with_slots(ctx, mesh, positions, &w->laplacian, w->slots);
+        if (s == CF_OK) s = cf_cholesky_create(ctx, w->laplacian, NULL, &w->laplacian_factor);
+        if (s == CF_OK) s = cf_cholesky_reserve_solve(w->laplacian_factor, w->dim);
+        if (s != CF_OK) {
+            cf_cholesky_destroy(&w->laplacian_factor);
+            cf_sparse_destroy(&w->laplacian);
+        }
+    }
+    if (s != CF_OK) return s;
     pin_laplacian(mesh, w->laplacian, w->slots, w->pin_vertex, mesh->component_count);
     if ((s = cf_cholesky_factorize(w->laplacian_factor, w->laplacian)) != CF_OK) return s;
 

@@ -332,8 +332,10 @@ static void test_normalized_gram(void)
 }
 
 /* cf_conformal_class_workspace: the same G and dG/dx as
- * cf_conformal_class_gram_gradient, bit for bit, for two position sets of
- * one torus; refused on a sphere; bad input */
+ * cf_conformal_class_gram_gradient for two position sets of one torus, bit
+ * for bit for the first (the harmonic workspace builds its Laplacian as
+ * cf_harmonic_basis does), to rounding for the second (it refills it);
+ * refused on a sphere; bad input */
 static void test_class_workspace(void)
 {
     cf_context *ctx = cft_context();
@@ -350,8 +352,18 @@ static void test_class_workspace(void)
             for (int32_t i = 0; i < 3 * nv; ++i) x[i] = cf_mesh_positions(m)[i] * (variant && i % 3 == 1 ? 1.7 : 1.0);
             CHECK_OK(ctx, cf_conformal_class_gram_gradient(ctx, m, x, gram_a, ga));
             CHECK_OK(ctx, cf_conformal_class_workspace_gram_gradient(w, x, gram_b, gb));
-            CHECK(memcmp(gram_a, gram_b, sizeof gram_a) == 0);
-            CHECK(memcmp(ga, gb, sizeof(double) * 9 * nv) == 0);
+            if (variant == 0) {
+                CHECK(memcmp(gram_a, gram_b, sizeof gram_a) == 0);
+                CHECK(memcmp(ga, gb, sizeof(double) * 9 * nv) == 0);
+                continue;
+            }
+            double worst = 0.0, largest = 0.0;
+            for (int k = 0; k < 4; ++k) CHECK_NEAR(gram_b[k], gram_a[k], 1e-12, 1e-14);
+            for (int32_t i = 0; i < 9 * nv; ++i) {
+                worst = fmax(worst, fabs(ga[i] - gb[i]));
+                largest = fmax(largest, fabs(ga[i]));
+            }
+            CHECK_LE(worst, 1e-10 * largest);
         }
         CHECK_STATUS(cf_conformal_class_workspace_gram_gradient(w, x, NULL, gb), CF_ERR_INVALID_ARG);
         x[4] = INFINITY;

@@ -103,6 +103,29 @@ static void pin_laplacian(const cf_mesh *mesh, cf_sparse *l, const int64_t *diag
         if (pin_vertex[p] >= 0) l->values[diag[pin_vertex[p]]] += mean_diag;
 }
 
+/* The first Betti number (the basis' dimension) and, in open (one byte per
+ * component), which components touch the boundary. */
+static cf_status first_betti_number(cf_context *ctx, const cf_mesh *mesh, uint8_t *open, int64_t *k64)
+{
+    int32_t closed_count = mesh->component_count;
+    memset(open, 0, (size_t)mesh->component_count);
+    for (int32_t v = 0; v < mesh->nv; ++v) {
+        int32_t c = mesh->vertex_component[v];
+        if (mesh->vertex_on_boundary[v] && !open[c]) {
+            open[c] = 1;
+            --closed_count;
+        }
+    }
+    /* dim ker d1 - dim im d0 = (ne - rank d1) - (nv - #components) with
+     * rank d1 = nf - #closed components: sum over components of 2g on closed
+     * ones and 2g + b - 1 on ones with boundary. */
+    *k64 = (int64_t)mesh->ne - mesh->nv - mesh->nf + mesh->component_count + closed_count;
+    if (CF_NEVER(*k64 < 0 || *k64 > mesh->ne))
+        return cfi_error(ctx, CF_ERR_NUMERICAL, "harmonic_basis: inconsistent first Betti number %lld",
+                         (long long)*k64);
+    return CF_OK;
+}
+
 struct cf_harmonic_workspace {
     cf_context *ctx;
     const cf_mesh *mesh;
@@ -154,21 +177,8 @@ cf_status cf_harmonic_workspace_create(cf_context *ctx, const cf_mesh *mesh, cf_
         cfi_free(ctx, w, sizeof *w);
         return CF_ERR_NOMEM;
     }
-    int32_t closed_count = mesh->component_count;
-    for (int32_t v = 0; v < mesh->nv; ++v) {
-        int32_t c = mesh->vertex_component[v];
-        if (mesh->vertex_on_boundary[v] && !open[c]) {
-            open[c] = 1;
-            --closed_count;
-        }
-    }
-    /* dim ker d1 - dim im d0 = (ne - rank d1) - (nv - #components) with
-     * rank d1 = nf - #closed components: sum over components of 2g on closed
-     * ones and 2g + b - 1 on ones with boundary. */
-    int64_t k64 = (int64_t)mesh->ne - mesh->nv - mesh->nf + mesh->component_count + closed_count;
-    cf_status s = CF_OK;
-    if (CF_NEVER(k64 < 0 || k64 > mesh->ne))
-        s = cfi_error(ctx, CF_ERR_NUMERICAL, "harmonic_basis: inconsistent first Betti number %lld", (long long)k64);
+    int64_t k64 = 0;
+    cf_status s = first_betti_number(ctx, mesh, open, &k64);
     w->dim = s == CF_OK ? (int32_t)k64 : 0;
     if (s == CF_OK && w->dim > 0) {
         w->slot_count = cf_cotan_laplacian_slot_count(mesh);
@@ -286,10 +296,20 @@ cf_status cf_harmonic_basis(cf_context *ctx, const cf_mesh *mesh, const double *
 {
     cf_status s = cfi_ops_check(ctx, mesh, positions, dimension, "harmonic_basis");
     if (s != CF_OK) return s;
+    if (!basis) {
+        /* the dimension alone, without the factorisations */
+        uint8_t *open = CFI_ALLOC(ctx, uint8_t, mesh->component_count);
+        if (!open) return CF_ERR_NOMEM;
+        int64_t k64 = 0;
+        s = first_betti_number(ctx, mesh, open, &k64);
+        CFI_FREE(ctx, open, mesh->component_count);
+        if (s == CF_OK) *dimension = (int32_t)k64;
+        return s;
+    }
     cf_harmonic_workspace *w = NULL;
     if ((s = cf_harmonic_workspace_create(ctx, mesh, &w)) != CF_OK) return s;
     *dimension = w->dim;
-    if (basis && w->dim > 0) s = cf_harmonic_workspace_compute(w, positions, basis);
+    if (w->dim > 0) s = cf_harmonic_workspace_compute(w, positions, basis);
     cf_harmonic_workspace_destroy(&w);
     return s;
 }

@@ -310,6 +310,14 @@ static void reduce_modulus(double *x, double *y)
     }
 }
 
+/* G = K^-1 (dim x dim) */
+static cf_status gram_of(cf_context *ctx, int32_t dim, const double *k, double *gram)
+{
+    memset(gram, 0, (size_t)dim * dim * sizeof(double));
+    for (int32_t i = 0; i < dim; ++i) gram[i + (int64_t)i * dim] = 1.0;
+    return dense_solve(ctx, dim, dim, k, gram, PERIODS_SINGULAR);
+}
+
 /* The class of positions x on the marked cycles c: K = P^T P (k, dim x dim),
  * *out, and G = K^-1 into gram if not NULL. */
 static cf_status measure_class(cf_context *ctx, const cf_mesh *mesh, const double *x, const homology_cycles *c,
@@ -356,16 +364,28 @@ static cf_status measure_class(cf_context *ctx, const cf_mesh *mesh, const doubl
             out->modulus[0] = xr;
             out->modulus[1] = yi;
         }
-        if (gram && st == CF_OK) {
-            /* G = K^-1 */
-            memset(gram, 0, (size_t)n2 * sizeof(double));
-            for (int32_t i = 0; i < dim; ++i) gram[i + (int64_t)i * dim] = 1.0;
-            st = dense_solve(ctx, dim, dim, k, gram, PERIODS_SINGULAR);
-        }
+        if (gram && st == CF_OK) st = gram_of(ctx, dim, k, gram);
     }
     CFI_FREE(ctx, wedge, n2);
     CFI_FREE(ctx, periods, n2);
     CFI_FREE(ctx, inv, n2);
+    return st;
+}
+
+/* One position set's class (cf_conformal_class_compute, and the intersection
+ * form of cf_conformal_class_intersection_form): the checks, the marked
+ * cycles, measure_class. */
+static cf_status measure_one(cf_context *ctx, const cf_mesh *mesh, const double *positions, const char *fn,
+                             double *gram, double *form, cf_conformal_class *out)
+{
+    homology_cycles c = {0};
+    cf_status st = open_surface(ctx, mesh, positions, positions, fn, &c);
+    if (st != CF_OK) return st;
+    int64_t n2 = (int64_t)c.dim * c.dim;
+    double *k = CFI_ALLOC(ctx, double, n2);
+    st = k ? measure_class(ctx, mesh, positions, &c, k, gram, form, out) : CF_ERR_NOMEM;
+    CFI_FREE(ctx, k, n2);
+    cycles_free(ctx, mesh, &c);
     return st;
 }
 
@@ -375,15 +395,7 @@ cf_status cf_conformal_class_compute(cf_context *ctx, const cf_mesh *mesh, const
     static const char fn[] = "cf_conformal_class_compute";
     if (!ctx) return CF_ERR_INVALID_ARG;
     if (!out) return cfi_error(ctx, CF_ERR_INVALID_ARG, "%s: out is NULL", fn);
-    homology_cycles c = {0};
-    cf_status st = open_surface(ctx, mesh, positions, positions, fn, &c);
-    if (st != CF_OK) return st;
-    int64_t n2 = (int64_t)c.dim * c.dim;
-    double *k = CFI_ALLOC(ctx, double, n2);
-    st = k ? measure_class(ctx, mesh, positions, &c, k, gram, NULL, out) : CF_ERR_NOMEM;
-    CFI_FREE(ctx, k, n2);
-    cycles_free(ctx, mesh, &c);
-    return st;
+    return measure_one(ctx, mesh, positions, fn, gram, NULL, out);
 }
 
 cf_status cf_conformal_class_distance(cf_context *ctx, const cf_mesh *mesh, const double *a, const double *b,
@@ -412,14 +424,13 @@ cf_status cf_conformal_class_distance(cf_context *ctx, const cf_mesh *mesh, cons
     /* the classes alone: G^ of G = K^-1 (cf_conformal_class_normalize) */
     for (int side = 0; side < 2 && st == CF_OK; ++side) {
         double *k = side ? kb : ka;
-        memset(g, 0, (size_t)n2 * sizeof(double));
-        for (int32_t i = 0; i < dim; ++i) g[i + (int64_t)i * dim] = 1.0;
-        st = dense_solve(ctx, dim, dim, k, g, PERIODS_SINGULAR);
+        st = gram_of(ctx, dim, k, g);
         if (st == CF_OK) st = cf_conformal_class_normalize(ctx, dim, form, g, k, NULL);
     }
     if (st == CF_OK) st = cf_dense_generalized_eigenvalues(dim, ka, kb, mu, work, lwork);
     if (st == CF_OK) {
-        /* both scaled to det 1: the log eigenvalues less their mean */
+        /* G^ has det 1 (J^2 = -1, I unimodular): the log eigenvalues' mean
+         * is rounding, taken out as when G itself was scaled to det 1 */
         double mean = 0.0, sum2 = 0.0;
         for (int32_t i = 0; i < dim && st == CF_OK; ++i) {
             if (!(mu[i] > 0.0)) st = cfi_error(ctx, CF_ERR_NUMERICAL, "%s: the periods are singular", fn);
@@ -637,16 +648,8 @@ cf_status cf_conformal_class_intersection_form(cf_context *ctx, const cf_mesh *m
     static const char fn[] = "cf_conformal_class_intersection_form";
     if (!ctx) return CF_ERR_INVALID_ARG;
     if (!form) return cfi_error(ctx, CF_ERR_INVALID_ARG, "%s: form is NULL", fn);
-    homology_cycles c = {0};
-    cf_status st = open_surface(ctx, mesh, positions, positions, fn, &c);
-    if (st != CF_OK) return st;
-    int64_t n2 = (int64_t)c.dim * c.dim;
-    double *k = CFI_ALLOC(ctx, double, n2);
     cf_conformal_class cls;
-    st = k ? measure_class(ctx, mesh, positions, &c, k, NULL, form, &cls) : CF_ERR_NOMEM;
-    CFI_FREE(ctx, k, n2);
-    cycles_free(ctx, mesh, &c);
-    return st;
+    return measure_one(ctx, mesh, positions, fn, NULL, form, &cls);
 }
 
 /* c = a b (n x n, column-major) */

@@ -116,11 +116,6 @@ struct cf_flow {
  * (methods with policy.backtrack take their step from here). */
 static inline double cfi_flow_time_step(const cf_flow *flow) { return flow->policy.step; }
 
-/* Called by a method's begin_step: this step's attempts start from the
- * full step instead of the step carried from the last one (spin-willmore's
- * fairing variant, which is not the step whose tau was carried). */
-static inline void cfi_flow_start_from_full_step(cf_flow *flow) { flow->policy.step = flow->policy.full_step; }
-
 /* 1 when this flow's rejected steps are redone with a smaller step. */
 static inline int cfi_flow_backtracks(const cf_flow *flow) { return flow->policy.backtrack; }
 

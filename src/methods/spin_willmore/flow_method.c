@@ -1038,6 +1038,16 @@ static cf_status relax_positions(cf_flow *flow, cfi_spin_state *s)
     start_placement(flow, s, x, &pl);
     st = place(flow, s, &pl, s->relaxed, s->relaxed);
     if (st != CF_OK) return st;
+    if (s->keep_class) {
+        double residual = 0.0;
+        st = cfi_spin_class_project(flow, s->keep_class, s->relaxed, &residual);
+        if (st == CF_OK) st = place(flow, s, &pl, s->relaxed, s->relaxed);
+        if (st == CF_ERR_NOMEM) return st;
+        if (st != CF_OK) {
+            cf_context_clear_error(flow->ctx);
+            return CF_OK;
+        }
+    }
     double w = NAN;
     int touched = 0;
     st = candidate_energy(flow, s, s->relaxed, &w, &touched);

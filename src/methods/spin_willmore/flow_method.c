@@ -879,6 +879,7 @@ cf_status cfi_spin_begin_step(cf_flow *flow, cf_flow_info *info)
      * steps 6-9 halved 4, 7, 9 and 10 times down to the taus the carried
      * step reaches in 4, 3, 2 and 3 (0.90x the whole run). */
     s->fairing_only_step = s->last_fairing_only;
+    s->step_start_tau = flow->policy.step; /* where the fallback restarts from */
     s->x0_renew_pending = 0;
     memset(&s->diag, 0, sizeof s->diag);
     return step_direction(flow, s, &info->factorize_seconds, &info->solve_seconds);
@@ -962,8 +963,7 @@ cf_status cfi_spin_attempt(cf_flow *flow, double tau, cf_flow_info *info, cfi_st
  * or was rejected): where the input metric's least-squares recovery no
  * longer descends, the current metric's still does (docs/spin.md,
  * "Robustness"), so the rest of the step recovers positions in the metric
- * of the step's start, from the full step again, or from four times the
- * tau of the last step if that step needed this metric too. The
+ * of the step's start, from four times the tau the step started at. The
  * current-metric solver is made here on first use: most flows never stall,
  * and at 655k vertices it would cost ~100 MB from creation on
  * (docs/memory.md). */
@@ -983,11 +983,16 @@ cf_status cfi_spin_fallback(cf_flow *flow, int32_t *switched, double *restart_st
         }
         return CF_OK;
     }
-    /* where the last step already needed this metric, its tau is the
-     * better guess than the full step: restart two doublings above it
-     * (bull_6k, steps 6-9: 2-3 retries instead of 8-9; docs/spin.md,
-     * "Stalls of the input-metric recovery") */
-    if (s->fallback_step > 0.0) *restart_step = 4.0 * s->fallback_step;
+    /* two doublings above the tau the step started at (the layer's,
+     * carried from the last step), capped by the layer at the full step:
+     * where the last step already needed this metric its tau is the better
+     * guess than the full step (bull_6k, steps 6-9: 2-3 retries instead of
+     * 8-9), and where it did not the full step's first attempts only blew
+     * up (man_slivers_17k's step 4: W/4pi 7e7, 2e4, 714 at tau 0.09, 0.05,
+     * 0.02 after two rejected for their scale change). Every other shared,
+     * generated and knotted mesh keeps its result (docs/spin.md, "Stalls
+     * of the input-metric recovery") */
+    *restart_step = 4.0 * s->step_start_tau;
     if (!s->poisson) {
         /* the layer has reverted to the step's start: its metric, and from
          * now on H from the solver's Laplacian (the same values as s->lap) */
@@ -1125,7 +1130,6 @@ cf_status cfi_spin_end_step(cf_flow *flow, cf_flow_info *info)
     s->diag.current_metric = s->current_metric_step;
     s->diag.fairing_only = s->fairing_only_step;
     s->last_fairing_only = s->fairing_only_step && info->time_step > 0.0;
-    s->fallback_step = s->current_metric_step && !s->fairing_only_step && !flow->converged ? info->time_step : 0.0;
     return CF_OK;
 }
 
@@ -1135,7 +1139,6 @@ cf_status cfi_spin_reset(cf_flow *flow)
     if (!s) return CF_OK;
     flow->converged = 0;
     s->x0_factored = 0; /* new positions: X(0) of the old ones is no guide */
-    s->fallback_step = 0.0;
     s->last_fairing_only = 0;
     cf_status st = cfi_spin_update_geometry(flow, s, flow->positions);
     /* the flow layer compares the next step's W with this one */

@@ -56,10 +56,10 @@ typedef struct cfi_spin_state {
     cf_edge_poisson *poisson_input; /* input_metric: that of the starting surface, factorised once */
     int32_t stall_retry;     /* input_metric under `adaptive`: a stalled step is retried in the current
                               * metric (cfi_spin_fallback, which makes s->poisson if there is none) */
-    double fallback_step;        /* tau of the last step if it was accepted in the current metric, else 0 */
     int32_t current_metric_step; /* this attempt recovers positions with s->poisson, not poisson_input */
     int32_t fairing_only_step;   /* this attempt is the vertex-scale fairing of the step's start alone
                                   * (cfi_spin_fallback's last variant, at a stall in both metrics) */
+    double step_start_tau;       /* the tau this step's first attempt took (the layer's, carried) */
     int32_t last_fairing_only;   /* the last step was taken by that variant: this one begins with it */
     cf_spectral_filter *filter; /* sigma > 0: the spectral filter of the input (Sec. 4; curvflow/ops.h) */
     cf_vertex_fairing *fairing; /* fairing > 0 (not prescribed / cmc): the vertex-scale fairing (curvflow/ops.h) */

@@ -145,6 +145,14 @@ CF_API cf_status cf_edge_poisson_create_floored(cf_context *ctx, const cf_mesh *
 /* Refills L for the metric of `positions` (3 nv, values only); the next
  * solve refactorises. CF_ERR_DEGENERATE_FACE on a zero-area face. */
 CF_API cf_status cf_edge_poisson_set_metric(cf_edge_poisson *p, const double *positions);
+/* The same with face f's cotan weights multiplied by face_scale[f] (nf
+ * entries, each positive and finite, else CF_ERR_INVALID_ARG naming the
+ * face; NULL: 1, as cf_edge_poisson_set_metric): the fit then weighs the
+ * misfit of f's edges by that factor, e.g. more where the target surface is
+ * smaller than the metric's (spin-willmore's `recovery_scale_weight`).
+ * L = sum_f face_scale[f] L_f stays positive semi-definite. */
+CF_API cf_status cf_edge_poisson_set_metric_scaled(cf_edge_poisson *p, const double *positions,
+                                                   const double *face_scale);
 /* Frees what cf_edge_poisson_set_metric needs (the Laplacian's slot map:
  * 8 bytes per vertex and two per edge; 37 MB at 655k vertices) for a solver
  * whose metric seldom or never changes (spin-willmore's input-metric

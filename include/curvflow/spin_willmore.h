@@ -223,6 +223,19 @@ typedef struct cf_spin_willmore_options {
                                 * it costs 1.8-11x the time: bob 1.8-2.1x, elk 1.8-3.0x, elephant
                                 * 11x; docs/spin.md, "The conformal class the flow keeps"); on
                                 * another surface it is refused */
+    double recovery_scale_weight; /* the input-metric position recovery (Eq. (6), input_metric) weighs
+                                * the misfit of face f's edges by (A_f / A~_f)^p, p this value in
+                                * [0, 1]: A_f its area in the recovery's metric (the input, or the
+                                * relaxed state it took), A~_f the area its transformed edges span
+                                * (both relative to their totals; the factor capped at 1e12). Where
+                                * the flow has crowded a region, the plain fit (p = 0) leaves misfits
+                                * comparable to the mesh's edges on edges far smaller, which the
+                                * step then realises as crumpled triangles of huge W; p > 0 fits them
+                                * relative to their size and leaves the misfit on the large
+                                * triangles instead (distortion there). One real refactorisation of
+                                * the recovery per attempt. Default 0 (0.5 takes more knotted tubes
+                                * to W0/2 but raises mean Q on the shared genus-0 meshes;
+                                * docs/spin.md, "Crowded regions in the position recovery") */
 } cf_spin_willmore_options;
 
 CF_API void cf_spin_willmore_options_default(cf_spin_willmore_options *options);

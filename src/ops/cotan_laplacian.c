@@ -68,6 +68,12 @@ done:
 cf_status cfi_cotan_laplacian_refill(cf_sparse *l, const cf_mesh *mesh, const double *positions,
                                      double weight_floor, const int64_t *slot_map)
 {
+    return cfi_cotan_laplacian_refill_scaled(l, mesh, positions, weight_floor, NULL, slot_map);
+}
+
+cf_status cfi_cotan_laplacian_refill_scaled(cf_sparse *l, const cf_mesh *mesh, const double *positions,
+                                            double weight_floor, const double *face_scale, const int64_t *slot_map)
+{
     if (!l || !mesh || !positions || !slot_map) return CF_ERR_INVALID_ARG;
     cf_context *ctx = l->ctx;
     int64_t nnz = cf_sparse_nnz(l);
@@ -81,6 +87,7 @@ cf_status cfi_cotan_laplacian_refill(cf_sparse *l, const cf_mesh *mesh, const do
         for (int k = 0; k < 3; ++k) {
             /* halfedge k runs t[k] -> t[k+1] and is opposite corner k+2 */
             double w = 0.5 * cot[(k + 2) % 3];
+            if (face_scale) w *= face_scale[f];
             int64_t e = mesh->halfedge_edge[3 * f + k];
             l->values[edge_slot[2 * e]] -= w;
             l->values[edge_slot[2 * e + 1]] -= w;

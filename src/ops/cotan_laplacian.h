@@ -32,6 +32,12 @@ cf_status cfi_cotan_laplacian_pattern(cf_context *ctx, const cf_mesh *mesh, cons
 cf_status cfi_cotan_laplacian_refill(cf_sparse *l, const cf_mesh *mesh, const double *positions,
                                      double weight_floor, const int64_t *slot_map);
 
+/* The same with face f's weights multiplied by face_scale[f] (nf entries,
+ * positive and finite, unchecked; NULL: 1): sum_f face_scale[f] L_f, still
+ * positive semi-definite, since each face's term is. */
+cf_status cfi_cotan_laplacian_refill_scaled(cf_sparse *l, const cf_mesh *mesh, const double *positions,
+                                            double weight_floor, const double *face_scale, const int64_t *slot_map);
+
 /* Applies L to a vertex function without forming the matrix: y = L x for
  * `dim` interleaved components (x, y: dim nv, entry v * dim + c). */
 cf_status cfi_cotan_laplacian_apply(cf_context *ctx, const cf_mesh *mesh, const double *positions, int32_t dim,

@@ -173,13 +173,23 @@ static cf_status rebuild_slot_map(cf_edge_poisson *p)
 
 cf_status cf_edge_poisson_set_metric(cf_edge_poisson *p, const double *positions)
 {
+    return cf_edge_poisson_set_metric_scaled(p, positions, NULL);
+}
+
+cf_status cf_edge_poisson_set_metric_scaled(cf_edge_poisson *p, const double *positions, const double *face_scale)
+{
     if (!p || !positions) return CF_ERR_INVALID_ARG;
+    if (face_scale)
+        for (int32_t f = 0; f < p->mesh->nf; ++f)
+            if (!(face_scale[f] > 0.0) || !isfinite(face_scale[f]))
+                return cfi_error(p->ctx, CF_ERR_INVALID_ARG, "edge_poisson: face %d: scale %g is not positive and finite",
+                                 f, face_scale[f]);
     if (!p->slot_map) {
         cf_status st = rebuild_slot_map(p);
         if (st != CF_OK) return st;
     }
     p->factored = 0;
-    return cfi_cotan_laplacian_refill(p->l, p->mesh, positions, p->weight_floor, p->slot_map);
+    return cfi_cotan_laplacian_refill_scaled(p->l, p->mesh, positions, p->weight_floor, face_scale, p->slot_map);
 }
 
 const cf_sparse *cf_edge_poisson_laplacian(const cf_edge_poisson *p) { return p ? p->l : NULL; }

@@ -6,6 +6,7 @@
 #include "test.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -243,6 +244,98 @@ static void test_metric(void)
     cf_context_destroy(&ctx);
 }
 
+/* cf_edge_poisson_set_metric_scaled: scale 1 is set_metric bit for bit, a
+ * common factor c gives c L (and the same fit); integrable edges come back
+ * exactly whatever the positive scales; with edges that are not integrable
+ * a face weighted 1e6 times more has its own edges fitted far closer (the
+ * misfit goes elsewhere); a scale that is not positive and finite is
+ * refused, naming the face. */
+static void test_metric_scaled(void)
+{
+    cf_context *ctx = cft_context();
+    cf_mesh *mesh = NULL;
+    CHECK_OK(ctx, cf_generate_bumpy_sphere(ctx, 2, 0.2, 3, &mesh));
+    int32_t nv = cf_mesh_vertex_count(mesh), ne = cf_mesh_edge_count(mesh), nf = cf_mesh_face_count(mesh);
+    const double *p = cf_mesh_positions(mesh);
+    const int32_t *tri = cf_mesh_triangles(mesh);
+    const int32_t *ev = cf_mesh_edge_vertices(mesh);
+    double *scale = malloc((size_t)nf * sizeof(double));
+    double *x = malloc(3 * (size_t)nv * sizeof(double)), *y = malloc(3 * (size_t)nv * sizeof(double));
+    double *e = edges_of(mesh, p);
+    cf_edge_poisson *a = NULL, *b = NULL;
+    CHECK_OK(ctx, cf_edge_poisson_create(ctx, mesh, p, 0, NULL, &a));
+    CHECK_OK(ctx, cf_edge_poisson_create(ctx, mesh, p, 0, NULL, &b));
+    const cf_sparse *la = cf_edge_poisson_laplacian(a), *lb = cf_edge_poisson_laplacian(b);
+    int64_t nnz = la->colptr[nv];
+    CHECK_OK(ctx, cf_edge_poisson_set_metric(a, p)); /* a refill, as the scaled one (create sums in another order) */
+    for (int32_t f = 0; f < nf; ++f) scale[f] = 1.0;
+    CHECK_OK(ctx, cf_edge_poisson_set_metric_scaled(b, p, scale));
+    CHECK(memcmp(la->values, lb->values, (size_t)nnz * sizeof(double)) == 0);
+    CHECK_OK(ctx, cf_edge_poisson_set_metric_scaled(b, p, NULL));
+    CHECK(memcmp(la->values, lb->values, (size_t)nnz * sizeof(double)) == 0);
+    for (int32_t f = 0; f < nf; ++f) scale[f] = 2.5;
+    CHECK_OK(ctx, cf_edge_poisson_set_metric_scaled(b, p, scale));
+    double d = 0.0, big = 0.0;
+    for (int64_t k = 0; k < nnz; ++k) {
+        d = fmax(d, fabs(lb->values[k] - 2.5 * la->values[k]));
+        big = fmax(big, fabs(la->values[k]));
+    }
+    CHECK_LE(d, 1e-14 * big);
+    /* integrable edges: the surface again, whatever the positive scales */
+    for (int32_t f = 0; f < nf; ++f) scale[f] = exp(6.0 * sin(1.7 * f)); /* e^-6 .. e^6 */
+    CHECK_OK(ctx, cf_edge_poisson_set_metric_scaled(b, p, scale));
+    CHECK_OK(ctx, cf_edge_poisson_solve_from(b, p, e, NULL, x, NULL));
+    double err = 0.0;
+    for (int32_t i = 0; i < 3 * nv; ++i) err = fmax(err, fabs(x[i] - p[i]));
+    CHECK_LE(err, 1e-12);
+    /* not integrable elsewhere: the edges of one face exact (they close),
+     * the others perturbed; weighted 1e6, that face keeps its edges, where
+     * the plain fit leaves part of the misfit on them */
+    int32_t heavy = nf / 3;
+    uint8_t *of_heavy = calloc((size_t)ne, 1);
+    for (int32_t k = 0; k < ne; ++k) {
+        int32_t in_face = 0;
+        for (int c = 0; c < 3; ++c) in_face += tri[3 * heavy + c] == ev[2 * k] || tri[3 * heavy + c] == ev[2 * k + 1];
+        of_heavy[k] = in_face == 2;
+        if (!of_heavy[k]) e[3 * k] += (k % 3 == 0) ? 0.05 : -0.02;
+    }
+    for (int32_t f = 0; f < nf; ++f) scale[f] = 1.0;
+    CHECK_OK(ctx, cf_edge_poisson_solve_from(a, p, e, NULL, x, NULL));
+    scale[heavy] = 1e6;
+    CHECK_OK(ctx, cf_edge_poisson_set_metric_scaled(b, p, scale));
+    CHECK_OK(ctx, cf_edge_poisson_solve_from(b, p, e, NULL, y, NULL));
+    double miss_plain = 0.0, miss_heavy = 0.0;
+    for (int32_t k = 0; k < ne; ++k) {
+        int32_t i = ev[2 * k], j = ev[2 * k + 1];
+        if (!of_heavy[k]) continue;
+        for (int c = 0; c < 3; ++c) {
+            miss_plain = fmax(miss_plain, fabs(x[3 * j + c] - x[3 * i + c] - e[3 * k + c]));
+            miss_heavy = fmax(miss_heavy, fabs(y[3 * j + c] - y[3 * i + c] - e[3 * k + c]));
+        }
+    }
+    fprintf(stderr, "   misfit of the heavy face's edges: %.3g plain, %.3g weighted 1e6\n", miss_plain, miss_heavy);
+    CHECK(miss_plain > 1e-3);
+    CHECK_LE(miss_heavy, 1e-3 * miss_plain);
+    /* refused: zero, negative, NaN, infinite */
+    const double bad[4] = {0.0, -1.0, NAN, INFINITY};
+    for (int k = 0; k < 4; ++k) {
+        scale[7] = bad[k];
+        CHECK_STATUS(cf_edge_poisson_set_metric_scaled(b, p, scale), CF_ERR_INVALID_ARG);
+        CHECK(strstr(cf_context_message(ctx), "face 7") != NULL);
+    }
+    CHECK_STATUS(cf_edge_poisson_set_metric_scaled(NULL, p, scale), CF_ERR_INVALID_ARG);
+    cf_edge_poisson_destroy(&a);
+    cf_edge_poisson_destroy(&b);
+    free(of_heavy);
+    free(scale);
+    free(x);
+    free(y);
+    free(e);
+    cf_mesh_destroy(&mesh);
+    CHECK(cf_context_bytes_in_use(ctx) == 0);
+    cf_context_destroy(&ctx);
+}
+
 typedef struct sweep_data {
     const cf_mesh *mesh;
     int32_t nk;
@@ -344,6 +437,7 @@ int main(void)
     CFT_RUN(test_integrable_edges_closed);
     CFT_RUN(test_fixed_values_and_sign);
     CFT_RUN(test_metric);
+    CFT_RUN(test_metric_scaled);
     CFT_RUN(test_solve_from);
     CFT_RUN(test_invalid_and_allocation);
     CFT_RUN(test_freeze_metric);

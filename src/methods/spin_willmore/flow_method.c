@@ -358,8 +358,18 @@ cf_status cfi_spin_create(cf_flow *flow, const void *options)
                                             &s->poisson_input); /* filled with these positions */
     /* its metric stays the input's until a relaxed state is kept, if ever:
      * the refill data would only hold memory (37 MB at 655k vertices), and
-     * the first relaxed state's cf_edge_poisson_set_metric makes it again */
-    if (st == CF_OK && s->poisson_input) cf_edge_poisson_freeze_metric(s->poisson_input);
+     * the first relaxed state's cf_edge_poisson_set_metric makes it again;
+     * recovery_scale_weight refills it at every attempt */
+    if (st == CF_OK && s->poisson_input && !(o->recovery_scale_weight > 0.0))
+        cf_edge_poisson_freeze_metric(s->poisson_input);
+    /* its metric's positions and a face array, for recovery_scale_weight's
+     * per-attempt weights (scale_recovery) */
+    if (st == CF_OK && s->poisson_input && o->recovery_scale_weight > 0.0) {
+        s->recovery_metric = CFI_WS_ALLOC(&s->ws, double, 3 * (int64_t)mesh->nv);
+        s->face_scale = CFI_WS_ALLOC(&s->ws, double, mesh->nf);
+        if (!s->recovery_metric || !s->face_scale) st = CF_ERR_NOMEM;
+        else memcpy(s->recovery_metric, flow->positions, 3 * (size_t)mesh->nv * sizeof(double));
+    }
     if (st == CF_OK) st = cfi_spin_update_geometry(flow, s, flow->positions);
     /* desired vertex areas of Moebius balancing: the mesh's rest shape */
     if (st == CF_OK && s->rest_area) st = cf_vertex_areas(ctx, mesh, mesh->positions, CF_DUAL_AREA_BARYCENTRIC, s->rest_area);
@@ -752,6 +762,47 @@ static cf_status realise_fairing_only(cf_flow *flow, cfi_spin_state *s, double t
     return st;
 }
 
+/* Option recovery_scale_weight p: the input-metric recovery's face weights
+ * for this attempt's transformed edges, (A_f / A~_f)^p with A_f the face's
+ * area in the recovery's metric and A~_f the area two of its transformed
+ * edges span, each relative to its total (the fit does not depend on a
+ * common factor; the relative shift of the solve does). Measured on a
+ * trefoil tube of radius 0.25 (3 360 vertices): where an attempt's W rose
+ * from 13.8 to 131 against a model of 13.3, the recovered edges missed
+ * their transformed edges by 1-3 times their own length at the vertices
+ * that made the rise (crowded 3e4-fold in area by the step), against a
+ * median of 5 % (docs/spin.md, "Crowded regions in the position
+ * recovery"). The factor is capped at 1e12: a transformed face of no area
+ * would have no finite weight. */
+#define CFI_SPIN_MAX_FACE_SCALE 1e12
+
+static cf_status scale_recovery(cf_flow *flow, cfi_spin_state *s)
+{
+    const cf_mesh *mesh = flow->mesh;
+    const double *m = s->recovery_metric;
+    double total = 0.0, total_new = 0.0, longest2;
+    for (int32_t f = 0; f < mesh->nf; ++f) {
+        const int32_t *tri = mesh->triangles + 3 * f;
+        /* the triangle its transformed edges tri[0] -> tri[1] -> tri[2] span
+         * (each edge stored once, from its lower vertex) */
+        double corner[3][3] = {{0.0, 0.0, 0.0}};
+        for (int k = 0; k < 2; ++k) {
+            int64_t e = mesh->halfedge_edge[3 * f + k];
+            double sign = mesh->edge_vertices[2 * e] == tri[k] ? 1.0 : -1.0;
+            for (int c = 0; c < 3; ++c) corner[k + 1][c] = corner[k][c] + sign * s->edges[3 * e + c];
+        }
+        double area_new = cfi_triangle_area(corner[0], corner[1], corner[2], &longest2);
+        double area = cfi_triangle_area(m + 3 * tri[0], m + 3 * tri[1], m + 3 * tri[2], &longest2);
+        s->face_scale[f] = area_new > 0.0 ? area / area_new : INFINITY;
+        total += area;
+        total_new += area_new;
+    }
+    double p = s->opt.recovery_scale_weight;
+    for (int32_t f = 0; f < mesh->nf; ++f)
+        s->face_scale[f] = fmin(CFI_SPIN_MAX_FACE_SCALE, pow(s->face_scale[f] * (total_new / total), p));
+    return cf_edge_poisson_set_metric_scaled(s->poisson_input, m, s->face_scale);
+}
+
 cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, cfi_spin_too_large *too_large,
                                 cfi_spin_timers *t)
 {
@@ -809,6 +860,10 @@ cf_status cfi_spin_realise_step(cf_flow *flow, cfi_spin_state *s, double tau, cf
     /* for the displacement from x: the recovery's rounding error then scales
      * with the step, not with the coordinates (docs/spin.md, "Stalls") */
     cf_edge_poisson *recovery = s->poisson_input && !s->current_metric_step ? s->poisson_input : s->poisson;
+    if (recovery == s->poisson_input && s->face_scale) {
+        st = scale_recovery(flow, s);
+        if (st != CF_OK) return st;
+    }
     st = cf_edge_poisson_solve_from(recovery, x, s->edges,
                                     s->fixed_boundary ? x : NULL, s->newpos, &tm);
     t->factorize += tm.factorize_seconds;
@@ -1069,6 +1124,7 @@ static cf_status relax_positions(cf_flow *flow, cfi_spin_state *s)
          * conformally: that of the relaxed state does (measured:
          * triceratops_needles_3k, whose tau fell to 0.003 after its first
          * relaxed step while the input's metric stayed; docs/spin.md) */
+        if (s->recovery_metric) memcpy(s->recovery_metric, x, 3 * (size_t)s->nv * sizeof(double));
         return s->poisson_input ? cf_edge_poisson_set_metric(s->poisson_input, x) : CF_OK;
     }
     return touched ? cfi_spin_update_geometry(flow, s, x) : CF_OK;

@@ -37,6 +37,7 @@ void cf_spin_willmore_options_default(cf_spin_willmore_options *o)
     o->max_period_error = 3e-2;
     o->relaxation = -1;
     o->keep_class = 0;
+    o->recovery_scale_weight = 0.0;
     o->max_integrability_error = 0.0;
     o->max_conformal_excess = -1.0; /* automatic: the bound on closed surfaces only */
     o->stall_fairing = 1;
@@ -112,6 +113,10 @@ static const cf_param_desc spin_params[] = {
      "class (1: the class alone; 2: also the triangulation's part of its Gram matrix, which keeps triangles better "
      "and stalls knotted tubes; smoothed; off by default: W falls less on most meshes of genus > 0, 1.8-11x the "
      "time)"},
+    {"recovery_scale_weight", CF_PARAM_DOUBLE, OPT(recovery_scale_weight), 0.0, 1.0, NULL,
+     "input-metric position recovery: weigh each face's edge misfit by (its area in the metric / the area its "
+     "transformed edges span)^p, so that crowded regions are fitted relative to their size (0, default: the plain "
+     "input metric; 0.5 takes knotted tubes further, at some cost in mean Q; one refactorisation per attempt)"},
     {"max_integrability_error", CF_PARAM_DOUBLE, OPT(max_integrability_error), 0.0, 1.0, NULL,
      "adaptive: redo a step with half tau while its transformed edges are non-integrable by more than this "
      "(relative; 0: no bound; e.g. 0.04 keeps triangles better at some cost in W)"},

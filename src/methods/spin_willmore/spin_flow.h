@@ -68,6 +68,8 @@ typedef struct cfi_spin_state {
     cf_tangential_relaxation *relaxation; /* relaxation resolved > 0: its descent (curvflow/ops.h) */
     int32_t relax_iterations;  /* option relaxation (0 with prescribed / cmc boundaries) */
     double *relaxed;         /* 3 nv: the relaxed candidate of a step (relaxation only) */
+    double *recovery_metric; /* 3 nv: the positions of poisson_input's metric (recovery_scale_weight > 0 only) */
+    double *face_scale;      /* nf: that recovery's face weights of the attempt (recovery_scale_weight > 0 only) */
     cfi_spin_class *keep_class; /* option keep_class: the projection onto the input's class (keep_class.c) */
     int32_t harmonic_dim;    /* dim H^1 (2g + b - 1 with boundary) if the exactness constraint is active */
     int32_t linearized;      /* exactness by the discrete linearisation instead of App. C's Z_i */

@@ -233,9 +233,12 @@ typedef struct cf_spin_willmore_options {
                                 * step then realises as crumpled triangles of huge W; p > 0 fits them
                                 * relative to their size and leaves the misfit on the large
                                 * triangles instead (distortion there). One real refactorisation of
-                                * the recovery per attempt. Default 0 (0.5 takes more knotted tubes
-                                * to W0/2 but raises mean Q on the shared genus-0 meshes;
-                                * docs/spin.md, "Crowded regions in the position recovery") */
+                                * the recovery per attempt; no effect where positions are not
+                                * recovered in the input metric (input_metric 0, a fixed boundary,
+                                * the current-metric retry of a stall). Default 0 (0.5 takes more
+                                * knotted tubes to W0/2 but raises mean Q on the shared genus-0
+                                * meshes; docs/spin.md, "Crowded regions in the position
+                                * recovery") */
 } cf_spin_willmore_options;
 
 CF_API void cf_spin_willmore_options_default(cf_spin_willmore_options *options);

@@ -927,8 +927,9 @@ cf_status cfi_spin_begin_step(cf_flow *flow, cf_flow_info *info)
      * steps 5-9, each after two rounds of attempts): such a step is the
      * fairing alone, and the run stops when it stalls (docs/spin.md, "A
      * stall's last variant"). Its tau is the layer's, carried from the last
-     * fairing step and grown as after any accepted step: the variant's
-     * first step (in the fallback) starts from the full step, since the
+     * fairing step (doubled when that needed no halving, as after any
+     * step): the variant's first step (in the fallback) starts from the
+     * full step, since the
      * stalled spin step's tau says nothing of the fairing's kappa, but the
      * next ones need not. Restarted from the full step, man_slivers_17k's
      * steps 6-9 halved 4, 7, 9 and 10 times down to the taus the carried

@@ -724,12 +724,16 @@ static cf_status check_excess(cf_flow *flow, cfi_spin_state *s, const double *x,
  * layer retries at a smaller step. Projecting the plain and the
  * faired candidate each before choosing (twice the cost) stalled the flow
  * sooner (elephant_g3_3k: 5 steps, class distance 0.05). */
+static cf_status project_and_place(cf_flow *flow, cfi_spin_state *s, const placement *pl, double *x, double *residual)
+{
+    cf_status st = cfi_spin_class_project(flow, s->keep_class, x, residual);
+    return st == CF_OK ? place(flow, s, pl, x, x) : st;
+}
+
 static cf_status project_to_class(cf_flow *flow, cfi_spin_state *s, const placement *pl, double *x)
 {
-    cf_status st = cfi_spin_class_project(flow, s->keep_class, x, &s->diag.class_residual);
-    if (st == CF_OK) st = place(flow, s, pl, x, x);
-    if (st == CF_OK) st = cfi_spin_update_geometry(flow, s, x);
-    return st;
+    cf_status st = project_and_place(flow, s, pl, x, &s->diag.class_residual);
+    return st == CF_OK ? cfi_spin_update_geometry(flow, s, x) : st;
 }
 
 /* The fallback's last variant (cfi_spin_fallback): the step's start
@@ -1100,9 +1104,9 @@ static cf_status relax_positions(cf_flow *flow, cfi_spin_state *s)
     st = place(flow, s, &pl, s->relaxed, s->relaxed);
     if (st != CF_OK) return st;
     if (s->keep_class) {
+        /* onto the class too, or the next step's attempts pay for the way back */
         double residual = 0.0;
-        st = cfi_spin_class_project(flow, s->keep_class, s->relaxed, &residual);
-        if (st == CF_OK) st = place(flow, s, &pl, s->relaxed, s->relaxed);
+        st = project_and_place(flow, s, &pl, s->relaxed, &residual);
         if (st == CF_ERR_NOMEM) return st;
         if (st != CF_OK) {
             cf_context_clear_error(flow->ctx);

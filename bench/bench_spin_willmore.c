@@ -7,7 +7,7 @@
  * factorisations of X(0) and period corrections make most of the mean).
  * TSV on stdout, nothing asserted.
  *
- *   bench_spin_willmore [--real] [--no-reuse] [--no-fairing] [MESH_DIR_OR_FILE ...]
+ *   bench_spin_willmore [--real] [--no-reuse] [--no-fairing] [--resolve-periods] [MESH_DIR_OR_FILE ...]
  * Without arguments the meshes come from $CURVFLOW_SHARED_DIR/meshes (or
  * ../shared/meshes); missing files are skipped with a note on stderr.
  * --real factorises the real 4 nv x 4 nv form instead of the complex one
@@ -18,6 +18,9 @@
  * --no-fairing runs the paper's step without the vertex-scale fairing
  * (fairing = 0; docs/spin.md, "Vertex-scale fairing"); the column fairing
  * says which.
+ * --resolve-periods factorises X again after every period correction
+ * (period_first_order = 0; docs/spin.md, "Periods"); the column periods says
+ * which (first-order or re-solved).
  */
 #include "curvflow/flow.h"
 #include "curvflow/io.h"
@@ -50,7 +53,12 @@ static double median(double *v, int n)
     return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-static void bench_file(const char *path, int steps, int complex_form, int reuse, int fairing)
+/* the variants the flags select */
+typedef struct bench_setup {
+    int complex_form, reuse, fairing, period_first_order;
+} bench_setup;
+
+static void bench_file(const char *path, int steps, const bench_setup *b)
 {
     cf_context *ctx = NULL;
     if (cf_context_create(&ctx) != CF_OK) return;
@@ -64,9 +72,10 @@ static void bench_file(const char *path, int steps, int complex_form, int reuse,
     cf_flow_options o;
     cf_flow_options_default(CF_FLOW_SPIN_WILLMORE, &o);
     ((cf_spin_willmore_options *)cf_flow_options_method(&o))->tolerance = 0.0;
-    ((cf_spin_willmore_options *)cf_flow_options_method(&o))->complex_factorization = complex_form;
-    if (!reuse) ((cf_spin_willmore_options *)cf_flow_options_method(&o))->exactness_refresh = 0.0;
-    if (!fairing) ((cf_spin_willmore_options *)cf_flow_options_method(&o))->fairing = 0.0;
+    ((cf_spin_willmore_options *)cf_flow_options_method(&o))->complex_factorization = b->complex_form;
+    if (!b->reuse) ((cf_spin_willmore_options *)cf_flow_options_method(&o))->exactness_refresh = 0.0;
+    if (!b->fairing) ((cf_spin_willmore_options *)cf_flow_options_method(&o))->fairing = 0.0;
+    ((cf_spin_willmore_options *)cf_flow_options_method(&o))->period_first_order = b->period_first_order;
     /* timing of ten steps: elephant_g3_3k diverges at the default tau (W
      * rises from step 2), which the default check would stop */
     cf_flow_options_policy(&o)->divergence_factor = 0.0;
@@ -126,9 +135,10 @@ static void bench_file(const char *path, int steps, int complex_form, int reuse,
          * steps' factorisations of X(0) and period corrections that make
          * most of its mean (docs/spin.md, "What is missing") */
         double step_median = median(step_times, done);
-        printf("spin-willmore\t%s\t%s\t%s\t%s\t%d\t%d\t%d\t%.2f\t%.2f\t%.2f\t%.2f\t%.2f\t%.2f\t%.4f\t%.4f\t%.4f\t%.3f"
+        printf("spin-willmore\t%s\t%s\t%s\t%s\t%s\t%d\t%d\t%d\t%.2f\t%.2f\t%.2f\t%.2f\t%.2f\t%.2f\t%.4f\t%.4f\t%.4f\t%.3f"
                "\t%.2f\t%.2f\n",
-               name, complex_form ? "complex" : "real", reuse ? "reused" : "every-step", fairing ? "on" : "off",
+               name, b->complex_form ? "complex" : "real", b->reuse ? "reused" : "every-step", b->fairing ? "on" : "off",
+               b->period_first_order ? "first-order" : "re-solved",
                cf_mesh_vertex_count(mesh), cf_mesh_face_count(mesh), done,
                1e3 * asm_s / done, 1e3 * fac_s / done, 1e3 * sol_s / done, 1e3 * tot_s / done, 1e3 * mcf, mcf > 0 ? (tot_s / done) / mcf : 0.0,
                w0 / (4 * PI), w / (4 * PI), qmean, qmax, 1e3 * step_median, mcf > 0 ? step_median / mcf : 0.0);
@@ -141,21 +151,24 @@ static void bench_file(const char *path, int steps, int complex_form, int reuse,
 
 int main(int argc, char **argv)
 {
-    int steps = 10, complex_form = 1, reuse = 1, fairing = 1;
+    int steps = 10;
+    bench_setup b = {1, 1, 1, 1};
     while (argc > 1 && (strcmp(argv[1], "--real") == 0 || strcmp(argv[1], "--no-reuse") == 0 ||
-                        strcmp(argv[1], "--no-fairing") == 0)) {
+                        strcmp(argv[1], "--no-fairing") == 0 || strcmp(argv[1], "--resolve-periods") == 0)) {
         if (strcmp(argv[1], "--real") == 0)
-            complex_form = 0;
+            b.complex_form = 0;
         else if (strcmp(argv[1], "--no-reuse") == 0)
-            reuse = 0;
+            b.reuse = 0;
+        else if (strcmp(argv[1], "--no-fairing") == 0)
+            b.fairing = 0;
         else
-            fairing = 0;
+            b.period_first_order = 0;
         --argc;
         ++argv;
     }
-    printf("method\tmesh\tfactorization\tx0\tfairing\tV\tF\tsteps\tassemble_ms\tfactorize_ms\tsolve_ms\tstep_ms\timplicit_mcf_ms\tratio\tW0/4pi\tW/4pi\tQ_mean\tQ_max\tmedian_step_ms\tmedian_ratio\n");
+    printf("method\tmesh\tfactorization\tx0\tfairing\tperiods\tV\tF\tsteps\tassemble_ms\tfactorize_ms\tsolve_ms\tstep_ms\timplicit_mcf_ms\tratio\tW0/4pi\tW/4pi\tQ_mean\tQ_max\tmedian_step_ms\tmedian_ratio\n");
     if (argc > 1) {
-        for (int i = 1; i < argc; ++i) bench_file(argv[i], steps, complex_form, reuse, fairing);
+        for (int i = 1; i < argc; ++i) bench_file(argv[i], steps, &b);
         return 0;
     }
     const char *dir = getenv("CURVFLOW_SHARED_DIR");
@@ -170,7 +183,7 @@ int main(int argc, char **argv)
             continue;
         }
         fclose(fp);
-        bench_file(path, steps, complex_form, reuse, fairing);
+        bench_file(path, steps, &b);
     }
     return 0;
 }

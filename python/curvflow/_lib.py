@@ -134,7 +134,7 @@ class SpinWillmoreOptions(Structure):
                 ("boundary_targets", ParamValues), ("fairing", c_double), ("max_conformal_excess", c_double),
                 ("stall_fairing", c_int32), ("max_realised_decrease", c_double), ("weight_floor", c_double),
                 ("max_period_error", c_double), ("relaxation", c_int32), ("keep_class", c_int32),
-                ("recovery_scale_weight", c_double)]
+                ("recovery_scale_weight", c_double), ("period_first_order", c_int32)]
 
 
 class StretchBendOptions(Structure):
@@ -196,7 +196,8 @@ _LAYOUT = {
         "stall_fairing": ("stall_fairing", 0),
         "max_realised_decrease": ("max_realised_decrease", 0), "weight_floor": ("weight_floor", 0),
         "max_period_error": ("max_period_error", 0), "relaxation": ("relaxation", 0),
-        "keep_class": ("keep_class", 0), "recovery_scale_weight": ("recovery_scale_weight", 0)}),
+        "keep_class": ("keep_class", 0), "recovery_scale_weight": ("recovery_scale_weight", 0),
+        "period_first_order": ("period_first_order", 0)}),
     "stretch-bend-edit": (StretchBendOptions, {
         "energy": ("energy", 0), "lambda": ("lambda_", 0), "max_iterations": ("max_iterations", 0),
         "relative_tolerance": ("relative_tolerance", 0), "mass": ("mass", 0), "scale_free": ("scale_free", 0),

@@ -485,22 +485,40 @@ static cf_status solve_lambda(cf_flow *flow, cfi_spin_state *s, cfi_spin_timers 
  * while the harmonic part of e~ is above period_tolerance; a correction that
  * does not lower it is undone (rho, lambda and its eigenvalue back; X and
  * its factor are not used again in this attempt, the next one refills
- * them). */
+ * them). With period_first_order a correction whose first-order lambda
+ * meets the tolerance ends them without a factorisation of X at its rho
+ * (docs/spin.md, "Periods"). */
 static cf_status correct_periods(cf_flow *flow, cfi_spin_state *s, cfi_spin_timers *t, double err)
 {
     int32_t nv = s->nv;
     s->diag.period_error_first = s->diag.period_error = err;
-    s->diag.period_iterations = 0;
+    s->diag.period_iterations = s->diag.period_first_order = 0;
+    s->diag.period_first_order_error = 0.0;
     for (int32_t k = 0; k < s->opt.period_iterations && err > s->opt.period_tolerance; ++k) {
         memcpy(s->period_rho, s->rho, (size_t)nv * sizeof(double));
-        cf_status st = cfi_spin_period_correction(flow, s, t);
-        if (st != CF_OK) return st;
         /* lambda before the corrected rho, for an undo */
         memcpy(s->period_lambda, s->lambda, 4 * (size_t)nv * sizeof(double));
         double eigenvalue = s->diag.eigenvalue;
-        st = solve_lambda(flow, s, t);
+        cf_status st = cfi_spin_period_correction(flow, s, t);
         if (st != CF_OK) return st;
-        double next = cfi_spin_periods(flow->mesh, s, flow->positions, s->lambda, s->edges, s->period_values);
+        /* the first-order lambda first: the factor of X at the corrected rho
+         * only if it leaves the periods above the tolerance (it then also
+         * serves the next correction's Jacobian) */
+        double next = NAN;
+        int32_t first_order = 0;
+        if (s->opt.period_first_order) {
+            double ta = cfi_now_seconds();
+            cfi_spin_period_linear_lambda(s, s->lambda);
+            next = cfi_spin_periods(flow->mesh, s, flow->positions, s->lambda, s->edges, s->period_values);
+            t->solve += cfi_now_seconds() - ta;
+            if (k == 0) s->diag.period_first_order_error = next;
+            first_order = next <= s->opt.period_tolerance;
+        }
+        if (!first_order) {
+            st = solve_lambda(flow, s, t);
+            if (st != CF_OK) return st;
+            next = cfi_spin_periods(flow->mesh, s, flow->positions, s->lambda, s->edges, s->period_values);
+        }
         if (!(next < err)) {
             memcpy(s->rho, s->period_rho, (size_t)nv * sizeof(double));
             memcpy(s->lambda, s->period_lambda, 4 * (size_t)nv * sizeof(double));
@@ -510,6 +528,7 @@ static cf_status correct_periods(cf_flow *flow, cfi_spin_state *s, cfi_spin_time
         err = next;
         s->diag.period_error = err;
         s->diag.period_iterations = k + 1;
+        s->diag.period_first_order += first_order;
     }
     return CF_OK;
 }

@@ -38,6 +38,7 @@ void cf_spin_willmore_options_default(cf_spin_willmore_options *o)
     o->relaxation = -1;
     o->keep_class = 0;
     o->recovery_scale_weight = 0.0;
+    o->period_first_order = 1;
     o->max_integrability_error = 0.0;
     o->max_conformal_excess = -1.0; /* automatic: the bound on closed surfaces only */
     o->stall_fairing = 1;
@@ -103,6 +104,10 @@ static const cf_param_desc spin_params[] = {
     {"max_period_error", CF_PARAM_DOUBLE, OPT(max_period_error), 0.0, 1.0, NULL,
      "adaptive, closed genus > 0: redo a step with half tau whose periods the corrections leave above this "
      "(relative, as period_tolerance: their Newton steps diverged; 0: no bound)"},
+    {"period_first_order", CF_PARAM_BOOL, OPT(period_first_order), 0, 1, NULL,
+     "period corrections: take lambda at first order in each correction and factorise X at the corrected rho only "
+     "if its periods stay above period_tolerance (0: always factorise; the first-order lambda cancels them better "
+     "and saves a factorisation per correction)"},
     {"relaxation", CF_PARAM_INT, OPT(relaxation), -1, 1000, NULL,
      "tangential relaxation: after a step that lowered W, once the map from the input has mean Q above 1.3, this "
      "many sweeps moving every vertex within its star on the surface to lower the MIPS energy against the input's "

@@ -118,3 +118,23 @@ cf_status cfi_spin_period_correction(cf_flow *flow, cfi_spin_state *s, cfi_spin_
     }
     return CF_OK;
 }
+
+void cfi_spin_period_linear_lambda(const cfi_spin_state *s, double *lambda)
+{
+    int64_t n4 = 4 * (int64_t)s->nv;
+    memcpy(lambda, s->period_lambda, (size_t)n4 * sizeof(double));
+    /* period_sol holds -dlambda per direction, period_values the step along each */
+    for (int32_t l = 0; l < s->zcount; ++l) {
+        const double *sol = s->period_sol + l * n4;
+        double c = s->period_values[l];
+        for (int64_t k = 0; k < n4; ++k) lambda[k] -= c * sol[k];
+    }
+    double total = 0.0, norm = 0.0;
+    for (int32_t i = 0; i < s->nv; ++i) {
+        const double *q = lambda + 4 * (int64_t)i;
+        total += s->area[i];
+        norm += s->area[i] * (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    }
+    double scale = norm > 0.0 ? sqrt(total / norm) : 1.0;
+    for (int64_t k = 0; k < n4; ++k) lambda[k] *= scale;
+}

@@ -189,6 +189,10 @@ double cfi_spin_periods(const cf_mesh *mesh, const cfi_spin_state *s, const doub
  * in s->period_values (as cfi_spin_periods left them; overwritten): writes
  * s->rho. */
 cf_status cfi_spin_period_correction(cf_flow *flow, cfi_spin_state *s, cfi_spin_timers *t);
+/* lambda of the corrected rho at first order, without a new factor: the one
+ * before the correction (s->period_lambda) plus the correction's dlambda,
+ * normalised as the inverse iteration's */
+void cfi_spin_period_linear_lambda(const cfi_spin_state *s, double *lambda);
 
 /* Option keep_class (keep_class.c; docs/spin.md, "The conformal class the
  * flow keeps"): the class of the input positions (whole_gram: its Gram

@@ -155,7 +155,8 @@ typedef struct cfi_spin_diagnostics {
     double conformal_excess;        /* mean Q of the step's map minus its vertex-scale model's (cf_conformal_excess;
                                      * measured while max_conformal_excess bounds it and the attempt did not
                                      * raise W, else 0) */
-    double eigenvalue;              /* Rayleigh quotient of lambda (shift removed) */
+    double eigenvalue;              /* Rayleigh quotient of lambda (shift removed; of the last factorised X's
+                                     * lambda when a period correction took the first-order one) */
     int32_t harmonic_dimension;     /* dim H^1 used by the exactness constraint: 2g, or 2g + b - 1 with a free boundary (0 if off) */
     double mobius_norm;             /* |balancing term|_M added to rhodot */
     double scale_change;            /* max over edges of |log(|lambda_i|^2 / |lambda_j|^2)| of the step */
@@ -165,6 +166,9 @@ typedef struct cfi_spin_diagnostics {
     double period_error_first;      /* harmonic part of e~ / |e~| (*1 of the input) before the period corrections */
     double period_error;            /* ... after them (closed genus > 0 with period_iterations > 0; else 0) */
     int32_t period_iterations;      /* corrections made in the accepted attempt */
+    int32_t period_first_order;     /* ... of which taken with the first-order lambda (no factorisation of X) */
+    double period_first_order_error; /* periods of the first correction's first-order lambda, whether taken
+                                      * or not (0: none tried) */
     double predicted_energy;        /* W the step's rho would give if realised exactly (Eq. (1)), see realised_decrease */
     double realised_decrease;       /* (W before - W after) / (W before - predicted_energy); 0 when no decrease is predicted */
     double fairing_kappa;           /* kappa = fairing tau of the vertex-scale fairing in the accepted attempt (0: none) */

@@ -365,8 +365,13 @@ static void test_keep_class_shared(void)
          * compared. Before, the kept relaxed state left the class, every
          * attempt of the next step paid for the way back (W/4pi 8.59 at tau
          * -> 0 from 8.45) and the run stalled at step 5 (W/4pi 8.45, mean
-         * Q 1.372). Measured now: 10 steps, W/4pi
-         * 8.354, mean Q 1.346, the class to 5e-13. */
+         * Q 1.372). With that, 10 steps, W/4pi 8.354, mean Q 1.346 (still
+         * near a stall: tau 0.004-0.001 from step 5). With the first-order
+         * lambda of the period corrections (period_first_order, default
+         * since) the run no longer stalls: W/4pi 6.280, and mean Q 1.703,
+         * that of keep_class 1 without the relaxation (1.697): elk's class
+         * costs its triangles this much at that W, and the relaxation keeps
+         * no worse. (The bound here was mean Q <= 1.4 before.) */
         class_run relaxed;
         if (run_keep_class_relaxed(elk.ctx, elk.mesh, 1, "10", &relaxed)) {
             fprintf(stderr, "   elk keep_class 1, relaxation 10: W/4pi %.4f, mean Q %.4f, class distance %.3g, %d steps\n",
@@ -375,7 +380,8 @@ static void test_keep_class_shared(void)
             CHECK_LE(relaxed.distance, 1e-9);
             CHECK_LE(relaxed.run.worst_rise, 0.0);
             CHECK_LE(relaxed.run.w, 0.5 * relaxed.run.w0);
-            CHECK_LE(relaxed.run.mean_q, 1.4);
+            CHECK(relaxed.run.w < 8.0); /* past the old stall (8.45) */
+            CHECK_LE(relaxed.run.mean_q, 1.01 * r[0].run.mean_q);
         }
         cft_shared_case_close(&elk);
     }

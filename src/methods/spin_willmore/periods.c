@@ -25,8 +25,12 @@
  *    equals (P(lambda + dl) - P(lambda - dl)) / 2 exactly: the two edge
  *    transforms per direction that the Jacobian took until session 33.
  * The Jacobian (3 dim x zcount) costs one pass over the faces and one over
- * the edges for all directions together, one solve with the step's factor
- * for all of them, and the least-squares update one more factorisation.
+ * the edges for all directions together and one solve with the step's factor
+ * for all of them. The corrected rho's lambda is first taken at first order
+ * from those solves (cfi_spin_period_linear_lambda, option
+ * period_first_order); only where that leaves the periods above the
+ * tolerance does the update cost one more factorisation (flow_method.c,
+ * correct_periods).
  */
 #include "methods/spin_willmore/spin_flow.h"
 

@@ -191,7 +191,9 @@ double cfi_spin_periods(const cf_mesh *mesh, const cfi_spin_state *s, const doub
 cf_status cfi_spin_period_correction(cf_flow *flow, cfi_spin_state *s, cfi_spin_timers *t);
 /* lambda of the corrected rho at first order, without a new factor: the one
  * before the correction (s->period_lambda) plus the correction's dlambda,
- * normalised as the inverse iteration's */
+ * normalised as the inverse iteration's. Reads what the correction just
+ * left (its solves in s->period_sol, its steps in s->period_values), so it
+ * is called before the next cfi_spin_periods. */
 void cfi_spin_period_linear_lambda(const cfi_spin_state *s, double *lambda);
 
 /* Option keep_class (keep_class.c; docs/spin.md, "The conformal class the

@@ -218,7 +218,7 @@ typedef struct cf_spin_willmore_options {
                                 * holds the discrete Hodge star's defect, a property of the
                                 * triangles (elk_g1_2k: mean Q 1.35 against 1.71 with 1, but the
                                 * knotted tubes stall). The discrete flow otherwise drifts from the
-                                * class on coarse meshes (elephant_g3_3k 0.78, elk 0.092 after 10
+                                * class on coarse meshes (elephant_g3_3k 0.75, elk 0.175 after 10
                                 * steps). Default 0 (W falls less on most meshes of genus > 0 and
                                 * it costs 1.8-11x the time: bob 1.8-2.1x, elk 1.8-3.0x, elephant
                                 * 11x; docs/spin.md, "The conformal class the flow keeps"); on

@@ -348,6 +348,11 @@ CF_API double cf_rayleigh_quotient(const cf_sparse *a, const double *m_diag, con
  * zero denominator. */
 CF_API cf_status cf_inverse_iteration_blocks(cf_cholesky *chol, const double *m_diag, int32_t block_size,
                                              int32_t iterations, double norm2, double *v, double *work);
+/* The scaling each inverse iteration above ends with: v (nb blocks of
+ * block_size entries, one mass m_diag[i] each) scaled to
+ * sum_i m_i |v_i|^2 = norm2. Returns that sum before the scaling; when it is
+ * not positive and finite v is left as it was. */
+CF_API double cf_normalize_blocks(int32_t nb, const double *m_diag, int32_t block_size, double norm2, double *v);
 CF_API double cf_rayleigh_quotient_blocks(const cf_sparse *a, const double *m_diag, int32_t block_size,
                                           const double *v, double *work);
 

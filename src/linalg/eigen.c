@@ -268,19 +268,26 @@ cf_status cf_inverse_iteration_blocks(cf_cholesky *chol, const double *m_diag, i
                 work[(int64_t)block_size * i + c] = m_diag[i] * v[(int64_t)block_size * i + c];
         cf_status st = cf_cholesky_solve(chol, 1, work, v);
         if (st != CF_OK) return st;
-        double n2 = 0.0;
-        for (int32_t i = 0; i < nb; ++i) {
-            const double *vi = v + (int64_t)block_size * i;
-            double q = 0.0;
-            for (int32_t c = 0; c < block_size; ++c) q += vi[c] * vi[c];
-            n2 += m_diag[i] * q;
-        }
+        double n2 = cf_normalize_blocks(nb, m_diag, block_size, norm2, v);
         if (!(n2 > 0.0) || !isfinite(n2))
             return cfi_error(ctx, CF_ERR_NUMERICAL, "inverse iteration (blocks): the iterate's M-norm is %g", n2);
-        double s = sqrt(norm2 / n2);
-        for (int32_t i = 0; i < n; ++i) v[i] *= s;
     }
     return CF_OK;
+}
+
+double cf_normalize_blocks(int32_t nb, const double *m_diag, int32_t block_size, double norm2, double *v)
+{
+    double n2 = 0.0;
+    for (int32_t i = 0; i < nb; ++i) {
+        const double *vi = v + (int64_t)block_size * i;
+        double q = 0.0;
+        for (int32_t c = 0; c < block_size; ++c) q += vi[c] * vi[c];
+        n2 += m_diag[i] * q;
+    }
+    if (!(n2 > 0.0) || !isfinite(n2)) return n2;
+    double s = sqrt(norm2 / n2);
+    for (int64_t i = 0; i < (int64_t)nb * block_size; ++i) v[i] *= s;
+    return n2;
 }
 
 double cf_rayleigh_quotient_blocks(const cf_sparse *a, const double *m_diag, int32_t block_size, const double *v,

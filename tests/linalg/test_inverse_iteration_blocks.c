@@ -1,4 +1,5 @@
-/* cf_inverse_iteration_blocks / cf_rayleigh_quotient_blocks: block masses
+/* cf_inverse_iteration_blocks / cf_rayleigh_quotient_blocks /
+ * cf_normalize_blocks: block masses
  * agree with the same masses repeated per component (cf_inverse_iteration_step,
  * cf_rayleigh_quotient), the normalisation target is met, the iteration finds
  * the smallest eigenpair of a known spectrum, and bad input is refused. */
@@ -107,6 +108,24 @@ static void test_converges_to_known_eigenvalue(void)
     cf_context_destroy(&ctx);
 }
 
+/* cf_normalize_blocks, the scaling the iteration ends with: the target met,
+ * the sum before it returned, a zero or non-finite vector left alone. */
+static void test_normalize_blocks(void)
+{
+    double mass[3] = {0.5, 2.0, 1.5}, v[6] = {1.0, 2.0, 0.0, 3.0, -1.0, 1.0}, w[6];
+    double before = 0.5 * 5.0 + 2.0 * 9.0 + 1.5 * 2.0, after = 0.0;
+    CHECK_NEAR(cf_normalize_blocks(3, mass, 2, 4.0, v), before, 1e-15, 0.0);
+    for (int32_t i = 0; i < 3; ++i) after += mass[i] * (v[2 * i] * v[2 * i] + v[2 * i + 1] * v[2 * i + 1]);
+    CHECK_NEAR(after, 4.0, 1e-14, 0.0);
+    CHECK_NEAR(v[1] / v[0], 2.0, 1e-15, 0.0); /* a scaling: directions kept */
+    memset(w, 0, sizeof w);
+    CHECK(cf_normalize_blocks(3, mass, 2, 4.0, w) == 0.0);
+    for (int32_t i = 0; i < 6; ++i) CHECK(w[i] == 0.0);
+    w[3] = NAN;
+    CHECK(isnan(cf_normalize_blocks(3, mass, 2, 4.0, w)));
+    CHECK(w[0] == 0.0 && isnan(w[3]));
+}
+
 static void test_bad_input(void)
 {
     cf_context *ctx = cft_context();
@@ -136,6 +155,7 @@ int main(void)
 {
     CFT_RUN(test_blocks_match_repeated_masses);
     CFT_RUN(test_converges_to_known_eigenvalue);
+    CFT_RUN(test_normalize_blocks);
     CFT_RUN(test_bad_input);
     return cft_finish();
 }

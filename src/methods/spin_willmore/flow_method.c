@@ -508,11 +508,12 @@ static cf_status correct_periods(cf_flow *flow, cfi_spin_state *s, cfi_spin_time
         int32_t first_order = 0;
         if (s->opt.period_first_order) {
             double ta = cfi_now_seconds();
-            cfi_spin_period_linear_lambda(s, s->lambda);
-            next = cfi_spin_periods(flow->mesh, s, flow->positions, s->lambda, s->edges, s->period_values);
+            if (cfi_spin_period_linear_lambda(s, s->lambda)) {
+                next = cfi_spin_periods(flow->mesh, s, flow->positions, s->lambda, s->edges, s->period_values);
+                first_order = next <= s->opt.period_tolerance;
+            }
             t->solve += cfi_now_seconds() - ta;
             if (k == 0) s->diag.period_first_order_error = next;
-            first_order = next <= s->opt.period_tolerance;
         }
         if (!first_order) {
             st = solve_lambda(flow, s, t);

@@ -123,7 +123,7 @@ cf_status cfi_spin_period_correction(cf_flow *flow, cfi_spin_state *s, cfi_spin_
     return CF_OK;
 }
 
-void cfi_spin_period_linear_lambda(const cfi_spin_state *s, double *lambda)
+int cfi_spin_period_linear_lambda(const cfi_spin_state *s, double *lambda)
 {
     int64_t n4 = 4 * (int64_t)s->nv;
     memcpy(lambda, s->period_lambda, (size_t)n4 * sizeof(double));
@@ -133,12 +133,9 @@ void cfi_spin_period_linear_lambda(const cfi_spin_state *s, double *lambda)
         double c = s->period_values[l];
         for (int64_t k = 0; k < n4; ++k) lambda[k] -= c * sol[k];
     }
-    double total = 0.0, norm = 0.0;
-    for (int32_t i = 0; i < s->nv; ++i) {
-        const double *q = lambda + 4 * (int64_t)i;
-        total += s->area[i];
-        norm += s->area[i] * (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-    }
-    double scale = norm > 0.0 ? sqrt(total / norm) : 1.0;
-    for (int64_t k = 0; k < n4; ++k) lambda[k] *= scale;
+    /* as the inverse iteration normalises (solve_lambda): sum M |lambda|^2 = sum M */
+    double total = 0.0;
+    for (int32_t i = 0; i < s->nv; ++i) total += s->area[i];
+    double n2 = cf_normalize_blocks(s->nv, s->area, 4, total, lambda);
+    return n2 > 0.0 && isfinite(n2);
 }

@@ -193,8 +193,9 @@ cf_status cfi_spin_period_correction(cf_flow *flow, cfi_spin_state *s, cfi_spin_
  * before the correction (s->period_lambda) plus the correction's dlambda,
  * normalised as the inverse iteration's. Reads what the correction just
  * left (its solves in s->period_sol, its steps in s->period_values), so it
- * is called before the next cfi_spin_periods. */
-void cfi_spin_period_linear_lambda(const cfi_spin_state *s, double *lambda);
+ * is called before the next cfi_spin_periods. Returns 0 when that lambda
+ * has no finite, nonzero norm to normalise (then it is not to be used). */
+int cfi_spin_period_linear_lambda(const cfi_spin_state *s, double *lambda);
 
 /* Option keep_class (keep_class.c; docs/spin.md, "The conformal class the
  * flow keeps"): the class of the input positions (whole_gram: its Gram

@@ -266,10 +266,11 @@ static int apply_params(cf_context *ctx, const cli_flow_job *job, cf_flow_option
  * surface with a boundary or of genus > 0) the note names it; where it ran
  * (the flow's last step reports its `relaxation_sweeps`, which the method
  * names whenever the relaxation is on) it says what is left. On a closed
- * connected surface of genus > 0 it names keep_class's modes instead (the
- * relaxation moves the class there; docs/spin.md, "The conformal class the
- * flow keeps"): without keep_class with the class distance, with 1 the
- * second mode. */
+ * connected surface of genus > 0 it names keep_class's modes instead
+ * (docs/spin.md, "The conformal class the flow keeps"): without keep_class
+ * with the class distance, and the relaxation where it did not run (not the
+ * default there: it helps elk, 1.555 -> 1.482, and lets a coarse double
+ * torus crowd further, 1.531 -> 1.969); with 1 the second mode. */
 static void relaxation_hint(cf_context *ctx, const cf_flow_options *options, const cf_mesh *mesh,
                             const cf_flow *flow)
 {
@@ -282,9 +283,9 @@ static void relaxation_hint(cf_context *ctx, const cf_flow_options *options, con
     }
     if (!(q.weighted_mean > CLI_RELAXATION_HINT_MEAN_Q)) return;
     if (cf_mesh_component_count(mesh) == 1 && cf_mesh_boundary_loop_count(mesh) == 0 && cf_mesh_genus(mesh) >= 1) {
-        /* genus > 0: the relaxation moves the class; holding the class, and
-         * with keep_class 2 the triangulation's part of G too, keeps the
-         * triangles */
+        /* genus > 0: holding the class, and with keep_class 2 the
+         * triangulation's part of G too, keeps the triangles; the relaxation
+         * helps on some meshes */
         double drift = NAN;
         if (cf_conformal_class_distance(ctx, mesh, cf_mesh_positions(mesh), cf_flow_positions(flow), NULL, NULL,
                                         &drift) != CF_OK)
@@ -292,10 +293,14 @@ static void relaxation_hint(cf_context *ctx, const cf_flow_options *options, con
         if (spin->keep_class == 0)
             fprintf(stderr,
                     "curvflow: note: the result's mean Q against the input is %.3f and its conformal class moved by "
-                    "%.3g: -p keep_class=1 holds the input's class, -p keep_class=2 also the triangulation's part of "
+                    "%.3g: %s-p keep_class=1 holds the input's class, -p keep_class=2 also the triangulation's part of "
                     "its Gram matrix, which keeps the triangles at some cost in W and time; a finer input helps too "
                     "(docs/spin.md, \"The conformal class the flow keeps\")\n",
-                    q.weighted_mean, drift);
+                    q.weighted_mean, drift,
+                    spin->relaxation > 0 ? ""
+                                         : "-p relaxation=10 moves the vertices within the surface toward a more "
+                                           "conformal map (not the default on genus > 0: on some coarse meshes W then "
+                                           "falls further at more crowding), ");
         else if (spin->keep_class == 1)
             fprintf(stderr,
                     "curvflow: note: the result's mean Q against the input is %.3f with its conformal class held: "
@@ -325,7 +330,7 @@ static void relaxation_hint(cf_context *ctx, const cf_flow_options *options, con
         fprintf(stderr,
                 "curvflow: note: the result's mean Q against the input is %.3f: thin parts crowded by the conformal map; "
                 "-p relaxation=10 moves the vertices within the surface toward a more conformal map (the default on "
-                "closed surfaces of genus 0 only: on genus > 0 it moves the conformal class, with a boundary it can slow "
+                "closed surfaces of genus 0 only: on genus > 0 it can let a coarse mesh crowd further, with a boundary it can slow "
                 "the flow), a finer input helps too (docs/spin.md, \"Tangential relaxation\")\n",
                 q.weighted_mean);
 }

@@ -205,9 +205,12 @@ typedef struct cf_spin_willmore_options {
                                 * its W is not above the step's, the position recovery then taking
                                 * the relaxed state's metric. -1 (default): 10 on a closed surface
                                 * of genus 0 (each component judged alone), 0 otherwise: on genus > 0
-                                * the resampling moves the conformal class the flow keeps, and with a
-                                * boundary (held) it slowed bunny_scan_35k's flow (W/4pi 5.10 -> 8.83
-                                * after 10 steps). 0: off (docs/spin.md, "Tangential relaxation") */
+                                * the resampled state lets the flow go on to a lower W of the same
+                                * class that crowds a coarse mesh (the double torus, 315 vertices:
+                                * mean Q 1.53 -> 1.97; elk meets both issue-13 targets with it), and
+                                * with a boundary (held) it slowed bunny_scan_35k's flow (W/4pi 5.10
+                                * -> 8.83 after 10 steps). 0: off (docs/spin.md, "Tangential
+                                * relaxation") */
     int32_t keep_class;        /* closed surfaces of genus >= 1: after each attempt, Gauss-Newton
                                 * steps (halved until the residual falls) move its positions back
                                 * onto the input's conformal class before its W is judged, the

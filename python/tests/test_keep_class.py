@@ -1,7 +1,8 @@
 """spin-willmore's option keep_class on a closed surface of genus 2
 (docs/spin.md, "The conformal class the flow keeps"): the generated double
 torus leaves its conformal class by 0.35 in 10 default steps and ends at mean
-Q 1.80, and the run's note names both modes and the distance. keep_class=1
+Q 1.80, and the run's note names both modes and the distance (and the
+tangential relaxation, unless it was asked for). keep_class=1
 holds the class (to 1e-8), W still falls at every step and below the
 default's, mean Q falls to 1.51 and the note names the second mode;
 keep_class=2 also holds the Gram matrix (the triangulation's part of it),
@@ -31,6 +32,10 @@ def test_keep_class_on_the_double_torus(cli, tmp_path):
     qa, qb, qc = (r["quasi_conformal_error"]["mean"] for r in (a, b, c))
     assert qa > qb > 1.5 > qc
     assert "-p keep_class=1" in default.stderr and "conformal class moved by 0.35" in default.stderr
+    # the relaxation, not a default on genus > 0, is named where it did not run
+    assert "-p relaxation=10 moves the vertices" in default.stderr
+    relaxed = run_cli(cli, "flow", mesh, "-o", tmp_path / "d.obj", "--method", "spin-willmore", "-p", "relaxation=10")
+    assert "-p keep_class=1" in relaxed.stderr and "-p relaxation=10" not in relaxed.stderr
     assert "-p keep_class=2" in kept.stderr and "with its conformal class held" in kept.stderr
     assert "note:" not in whole.stderr
     w_default = read_jsonl(tmp_path / "a.jsonl")[-1]["terms"]["W/4pi"]

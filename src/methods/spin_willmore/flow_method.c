@@ -332,8 +332,10 @@ cf_status cfi_spin_create(cf_flow *flow, const void *options)
     s->stall_retry = o->input_metric && !s->fixed_boundary && !s->restricted_boundary && cfi_flow_backtracks(flow);
     /* the tangential relaxation, not with prescribed / cmc boundaries,
      * whose boundary vectors are the step's purpose; by default on closed
-     * genus-0 surfaces only: on genus > 0 it moves the conformal class the
-     * flow keeps (the double torus' mean Q 1.545 -> 1.967), with a (held)
+     * genus-0 surfaces only: on genus > 0 the resampled state lets the flow
+     * go on to a lower W of the same class, which crowds a coarse mesh (the
+     * double torus' mean Q 1.53 -> 1.97 with the class held or not; elk
+     * 1.555 -> 1.482, both issue-13 targets met; session 41), with a (held)
      * boundary it slowed bunny_scan_35k (W/4pi 5.10 -> 8.83 after 10 steps;
      * docs/spin.md, "Tangential relaxation") */
     s->relax_iterations = s->restricted_boundary ? 0

@@ -11,7 +11,7 @@
  * the relaxation acts on some steps and only after the threshold; each
  * component keeps its area and centroid; a flow whose map stays below the
  * threshold is bit for bit the flow without the option; a trefoil tube
- * (genus 1, where the option moves the conformal class) still runs cleanly;
+ * (genus 1, where the option is not a default) still runs cleanly;
  * and the default (-1) resolves per surface: 10 sweeps on a closed surface
  * of genus 0, none on genus > 0 or with a boundary (session 36).
  */
@@ -238,12 +238,13 @@ static cf_mesh *without_face(cf_context *ctx, const cf_mesh *mesh, int32_t face)
 }
 
 /* The default (-1) resolves per surface: 10 sweeps on a closed surface of
- * genus 0, none on genus > 0 (where the resampling moves the conformal
- * class) or with a boundary (held by the relaxation; bunny_scan_35k's W/4pi
- * rose 5.10 -> 8.83 with it). Checked bit for bit against the explicit
- * values, on meshes where the relaxation acts when asked: the star of
- * eight limbs (kept at every step), the trefoil tube (run, never kept) and
- * the star with a hole in its body (kept). */
+ * genus 0, none on genus > 0 (where it lets a coarse double torus crowd
+ * further: test `conformal_class`) or with a boundary (held by the
+ * relaxation; bunny_scan_35k's W/4pi rose 5.10 -> 8.83 with it). Checked
+ * bit for bit against the explicit values, on meshes where the relaxation
+ * acts when asked: the star of eight limbs (kept at every step), the
+ * trefoil tube (run, never kept) and the star with a hole in its body
+ * (kept). */
 static void test_default_per_surface(void)
 {
     cf_context *ctx = cft_context();

@@ -109,7 +109,12 @@ typedef enum cf_ordering {
     CF_ORDERING_AUTO = 0,   /* AMD; METIS too when AMD's factor is costly (CHOLMOD's rule), fewer flops wins */
     CF_ORDERING_AMD = 1,
     CF_ORDERING_METIS = 2,
-    CF_ORDERING_NATURAL = 3
+    CF_ORDERING_NATURAL = 3,
+    /* AMD and METIS both, the one with fewer flops: for a matrix refactorised
+     * many times (a flow's), where METIS's slower analysis (5-6x AMD's), paid
+     * once per mesh, comes back in every factorisation even when AUTO's rule
+     * would not try it (docs/linalg.md, "Ordering") */
+    CF_ORDERING_FEWER_FLOPS = 4
 } cf_ordering;
 
 typedef struct cf_cholesky_options {

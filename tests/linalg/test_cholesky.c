@@ -169,9 +169,10 @@ static void test_orderings_agree(void)
     cf_cholesky_destroy(&chol);
     double scale = 0.0;
     for (int32_t i = 0; i < n; ++i) scale = fmax(scale, fabs(x0[i]));
-    const cf_ordering orders[4] = {CF_ORDERING_AUTO, CF_ORDERING_AMD, CF_ORDERING_METIS, CF_ORDERING_NATURAL};
+    const cf_ordering orders[5] = {CF_ORDERING_AUTO, CF_ORDERING_AMD, CF_ORDERING_METIS, CF_ORDERING_NATURAL,
+                                   CF_ORDERING_FEWER_FLOPS};
     for (int blocks = 1; blocks <= 3; blocks += 2)
-        for (int k = 0; k < 4; ++k) {
+        for (int k = 0; k < 5; ++k) {
             o.block_size = blocks;
             o.ordering = orders[k];
             CHECK_OK(ctx, cf_cholesky_create(ctx, a, &o, &chol));

@@ -107,8 +107,9 @@ static void test_matches_real_factorisation(void)
     double *b = malloc((size_t)n * nrhs * sizeof *b), *xr = malloc((size_t)n * nrhs * sizeof *xr),
            *xq = malloc((size_t)n * nrhs * sizeof *xq);
     for (int32_t i = 0; i < n * nrhs; ++i) b[i] = rng_unit();
-    const cf_ordering orderings[] = {CF_ORDERING_AUTO, CF_ORDERING_AMD, CF_ORDERING_METIS, CF_ORDERING_NATURAL};
-    for (int o = 0; o < 4; ++o) {
+    const cf_ordering orderings[] = {CF_ORDERING_AUTO, CF_ORDERING_AMD, CF_ORDERING_METIS, CF_ORDERING_NATURAL,
+                                     CF_ORDERING_FEWER_FLOPS};
+    for (int o = 0; o < 5; ++o) {
         for (int s = 0; s < 2; ++s) {
             double shift = s ? 0.7 : 0.0;
             CHECK_OK(ctx, factor_and_solve(ctx, a, 0, orderings[o], shift, nrhs, b, xr));

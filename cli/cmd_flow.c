@@ -330,8 +330,8 @@ static void relaxation_hint(cf_context *ctx, const cf_flow_options *options, con
         fprintf(stderr,
                 "curvflow: note: the result's mean Q against the input is %.3f: thin parts crowded by the conformal map; "
                 "-p relaxation=10 moves the vertices within the surface toward a more conformal map (the default on "
-                "closed surfaces of genus 0 only: on genus > 0 it can let a coarse mesh crowd further, with a boundary it can slow "
-                "the flow), a finer input helps too (docs/spin.md, \"Tangential relaxation\")\n",
+                "closed surfaces of genus 0 only: on genus > 0 it can let a coarse mesh crowd further, with a "
+                "boundary it can slow the flow), a finer input helps too (docs/spin.md, \"Tangential relaxation\")\n",
                 q.weighted_mean);
 }
 

@@ -110,11 +110,11 @@ typedef enum cf_ordering {
     CF_ORDERING_AMD = 1,
     CF_ORDERING_METIS = 2,
     CF_ORDERING_NATURAL = 3,
-    /* AMD and METIS both, the one with fewer flops: for a matrix refactorised
-     * many times (a flow's), where METIS's slower analysis (5-6x AMD's), paid
-     * once per mesh, comes back in every factorisation even when AUTO's rule
-     * would not try it (docs/linalg.md, "Ordering") */
-    CF_ORDERING_FEWER_FLOPS = 4
+    /* AUTO's rule for a matrix refactorised at every step of a flow: METIS is
+     * tried from fl / lnz >= 200 instead of 500, since its slower analysis
+     * (5-6x AMD's), paid once per mesh, then comes back in the
+     * factorisations; fewer flops wins (docs/linalg.md, "Ordering") */
+    CF_ORDERING_AUTO_REFACTORISED = 4
 } cf_ordering;
 
 typedef struct cf_cholesky_options {

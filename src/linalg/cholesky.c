@@ -186,8 +186,12 @@ static cf_status graph_ordering(cf_cholesky *chol, cholmod_sparse *view, int32_t
  * b: METIS, whose analysis is 5-7x slower here (176 vs 19 ms at 41k
  * vertices), is tried for the lifted 3x3 / 4x4 operators and large meshes,
  * where it pays back in every refactorisation (docs/linalg.md).
- * FEWER_FLOPS tries both whatever the counts, for matrices that a flow
- * refactorises at every step. The block orderings of the last block graph
+ * AUTO_REFACTORISED, for matrices that a flow refactorises at every step,
+ * tries METIS from fl / lnz >= 200: there it needed 30-44 % fewer flops
+ * (the complex form of spin-willmore's X on bob_5k, blade_slivers_8k,
+ * mushroom_cap_2k, the built-in bumpy sphere: 230-414) or 2 % (armadillo,
+ * 248), and below it more flops than AMD or at most 12 % fewer (every
+ * other shared mesh: 51-189). The block orderings of the last block graph
  * are kept in the context, so that the matrices of one mesh (Laplacians,
  * the Dirac matrix) share them. */
 static cf_status block_ordering(cf_cholesky *chol, const cf_sparse *a, int32_t b, int32_t rule_b, cf_ordering ordering,
@@ -209,9 +213,8 @@ static cf_status block_ordering(cf_cholesky *chol, const cf_sparse *a, int32_t b
     double fl = 0.0, lnz = 0.0, fl_metis = 0.0, lnz_metis = 0.0;
     int first = ordering == CF_ORDERING_METIS;
     st = graph_ordering(chol, &view, nb, nnz, hash, first, &pb, &own_b, &fl, &lnz);
-    int try_metis = ordering == CF_ORDERING_FEWER_FLOPS ||
-                    (ordering == CF_ORDERING_AUTO && lnz > 0.0 && rule_b * fl / lnz >= 500.0 && lnz / (double)nnz >= 5.0);
-    if (st == CF_OK && try_metis) {
+    double costly = ordering == CF_ORDERING_AUTO ? 500.0 : ordering == CF_ORDERING_AUTO_REFACTORISED ? 200.0 : INFINITY;
+    if (st == CF_OK && lnz > 0.0 && rule_b * fl / lnz >= costly && lnz / (double)nnz >= 5.0) {
         /* (the AMD ordering pb stays valid: storing METIS keeps the cache's AMD entry of the same graph) */
         st = graph_ordering(chol, &view, nb, nnz, hash, 1, &pm, &own_m, &fl_metis, &lnz_metis);
         if (st == CF_OK && fl_metis < fl) pb = pm;
@@ -343,7 +346,7 @@ cf_status cf_cholesky_create(cf_context *ctx, const cf_sparse *a, const cf_chole
     if (opt.block_size < 1 || a->ncols % opt.block_size != 0)
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "cholesky create: block size %d does not divide n = %d",
                          opt.block_size, a->ncols);
-    if (opt.ordering < CF_ORDERING_AUTO || opt.ordering > CF_ORDERING_FEWER_FLOPS)
+    if (opt.ordering < CF_ORDERING_AUTO || opt.ordering > CF_ORDERING_AUTO_REFACTORISED)
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "cholesky create: unknown ordering %d", (int)opt.ordering);
     if (opt.quaternion_blocks && opt.block_size != 4)
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "cholesky create: quaternion blocks need block size 4, not %d",
@@ -394,7 +397,7 @@ cf_status cf_cholesky_create_quat(cf_context *ctx, const cf_quat_sparse *a, cons
     cf_cholesky_options opt;
     cf_cholesky_options_default(&opt);
     if (options) opt = *options;
-    if (opt.ordering < CF_ORDERING_AUTO || opt.ordering > CF_ORDERING_FEWER_FLOPS)
+    if (opt.ordering < CF_ORDERING_AUTO || opt.ordering > CF_ORDERING_AUTO_REFACTORISED)
         return cfi_error(ctx, CF_ERR_INVALID_ARG, "cholesky create: unknown ordering %d", (int)opt.ordering);
     double t0 = cfi_now_seconds();
     cf_cholesky *chol = NULL;

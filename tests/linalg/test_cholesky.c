@@ -170,7 +170,7 @@ static void test_orderings_agree(void)
     double scale = 0.0;
     for (int32_t i = 0; i < n; ++i) scale = fmax(scale, fabs(x0[i]));
     const cf_ordering orders[5] = {CF_ORDERING_AUTO, CF_ORDERING_AMD, CF_ORDERING_METIS, CF_ORDERING_NATURAL,
-                                   CF_ORDERING_FEWER_FLOPS};
+                                   CF_ORDERING_AUTO_REFACTORISED};
     for (int blocks = 1; blocks <= 3; blocks += 2)
         for (int k = 0; k < 5; ++k) {
             o.block_size = blocks;

@@ -108,7 +108,7 @@ static void test_matches_real_factorisation(void)
            *xq = malloc((size_t)n * nrhs * sizeof *xq);
     for (int32_t i = 0; i < n * nrhs; ++i) b[i] = rng_unit();
     const cf_ordering orderings[] = {CF_ORDERING_AUTO, CF_ORDERING_AMD, CF_ORDERING_METIS, CF_ORDERING_NATURAL,
-                                     CF_ORDERING_FEWER_FLOPS};
+                                     CF_ORDERING_AUTO_REFACTORISED};
     for (int o = 0; o < 5; ++o) {
         for (int s = 0; s < 2; ++s) {
             double shift = s ? 0.7 : 0.0;

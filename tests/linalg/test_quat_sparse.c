@@ -169,7 +169,7 @@ static void test_same_factor_as_real_form(void)
     double *b = malloc((size_t)n * nrhs * sizeof *b), *xr = malloc((size_t)n * nrhs * sizeof *xr),
            *xz = malloc((size_t)n * nrhs * sizeof *xz), *xp = malloc((size_t)n * nrhs * sizeof *xp);
     const cf_ordering orders[5] = {CF_ORDERING_AUTO, CF_ORDERING_AMD, CF_ORDERING_METIS, CF_ORDERING_NATURAL,
-                                   CF_ORDERING_FEWER_FLOPS};
+                                   CF_ORDERING_AUTO_REFACTORISED};
     for (int o = 0; o < 5; ++o) {
         for (int32_t i = 0; i < n * nrhs; ++i) b[i] = rng_unit();
         cf_cholesky_options oq = options(1, orders[o]), op = options(0, orders[o]);

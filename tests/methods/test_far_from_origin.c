@@ -142,9 +142,10 @@ static void test_flows(void)
  * is that rounding amplified, and varies with how each offset rounds. Its
  * row in test_flows measured 3.3e-9 against a bound of 1e-8, at the first
  * offset only; over these eight offsets it spans 1.8e-9 .. 1.1e-8 with the
- * AMD ordering of X and 4.2e-9 .. 1.05e-8 with METIS's (which the flow
- * takes since session 41 where it needs fewer flops: the first offset
- * gives 1.05e-8 there), so a single offset's 1e-8 was within the noise.
+ * AMD ordering of X that the flow takes here, and 4.2e-9 .. 1.05e-8 with
+ * METIS's (measured in session 41, when X's ordering became a choice: the
+ * first offset gives 1.05e-8 there), so a single offset's 1e-8 was within
+ * the noise.
  * Asserted: the largest of the eight below 3e-8, and every run takes its 5
  * steps. A cancellation in a solve for positions (what test_flows' fixes
  * removed) leaves 1e-6 and more. */

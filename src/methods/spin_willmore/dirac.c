@@ -356,7 +356,7 @@ cf_status cfi_dirac_fixed_create(cf_context *ctx, cfi_dirac *d, const cf_mesh *m
     cf_min_quad_options_default(&o);
     o.block_size = 4;
     o.quaternion_blocks = complex_form != 0;
-    o.ordering = CF_ORDERING_FEWER_FLOPS; /* refactorised every step, as X (flow_method.c) */
+    o.ordering = CF_ORDERING_AUTO_REFACTORISED; /* refactorised every step, as X (flow_method.c) */
     return cf_min_quad_create(ctx, d->x, d->nknown, d->known, NULL, &o, &d->fixed);
 }
 

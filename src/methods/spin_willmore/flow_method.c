@@ -209,12 +209,11 @@ static cf_status create_dirac(cf_flow *flow, cfi_spin_state *s)
     cf_cholesky_options_default(&co);
     co.block_size = 4;
     /* X is refactorised at every step (X(0) too on genus > 0), so METIS's
-     * slower analysis, once per mesh, pays back even where AUTO's rule does
-     * not try it: bob_5k's complex factorisation 26-28 -> 21.5-22.6 ms (30 %
-     * fewer flops; blade_slivers_8k 38 %, the built-in bumpy sphere 44 %;
-     * AMD stays where it needs fewer, e.g. spot_3k, cow_3k; docs/linalg.md,
-     * "Ordering") */
-    co.ordering = CF_ORDERING_FEWER_FLOPS;
+     * slower analysis, once per mesh, pays back where AUTO's rule does not
+     * try it: bob_5k's complex factorisation 26-28 -> 21.5-22.6 ms (30 %
+     * fewer flops; blade_slivers_8k 46 %, the built-in bumpy sphere 44 %;
+     * docs/linalg.md, "Ordering") */
+    co.ordering = CF_ORDERING_AUTO_REFACTORISED;
     /* X(rho) is a Hermitian quaternionic matrix; its complex form halves the
      * factorisation (docs/linalg.md). The boundary frames of prescribed/cmc
      * boundaries mix the quaternion components, so those keep the real form;

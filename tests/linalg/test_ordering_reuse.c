@@ -58,20 +58,26 @@ static void test_kron_dense(void)
     cf_context_destroy(&ctx);
 }
 
-/* L (shifted) and Q = L kron I4 stored as whole quaternion blocks, of the
- * icosphere with `level` subdivisions. */
+/* L (shifted) and Q = L kron I4 stored as whole quaternion blocks, of
+ * mesh (destroyed here). */
+static void mesh_matrices(cf_context *ctx, cf_mesh *mesh, cf_sparse **l, cf_sparse **q)
+{
+    if (mesh) CHECK_OK(ctx, cf_cotan_laplacian(ctx, mesh, cf_mesh_positions(mesh), l));
+    for (int32_t j = 0; *l && j < (*l)->ncols; ++j)
+        (*l)->values[cf_sparse_find(*l, j, j)] += 1e-2;
+    if (*l) CHECK_OK(ctx, cf_sparse_kron_dense(ctx, *l, 4, q));
+    for (int32_t j = 0; *q && j < (*q)->ncols; ++j)
+        for (int32_t p = (*q)->colptr[j]; p < (*q)->colptr[j + 1]; ++p)
+            if ((*q)->rowind[p] % 4 != j % 4) (*q)->values[p] = 0.0; /* a_ij I4: real quaternions */
+    cf_mesh_destroy(&mesh);
+}
+
+/* The same of the icosphere with `level` subdivisions. */
 static void sphere_matrices(cf_context *ctx, int32_t level, cf_sparse **l, cf_sparse **q)
 {
     cf_mesh *mesh = NULL;
     CHECK_OK(ctx, cf_generate_icosphere(ctx, level, 1.0, &mesh));
-    CHECK_OK(ctx, cf_cotan_laplacian(ctx, mesh, cf_mesh_positions(mesh), l));
-    for (int32_t j = 0; j < (*l)->ncols; ++j)
-        (*l)->values[cf_sparse_find(*l, j, j)] += 1e-2;
-    CHECK_OK(ctx, cf_sparse_kron_dense(ctx, *l, 4, q));
-    for (int32_t j = 0; j < (*q)->ncols; ++j)
-        for (int32_t p = (*q)->colptr[j]; p < (*q)->colptr[j + 1]; ++p)
-            if ((*q)->rowind[p] % 4 != j % 4) (*q)->values[p] = 0.0; /* a_ij I4: real quaternions */
-    cf_mesh_destroy(&mesh);
+    mesh_matrices(ctx, mesh, l, q);
 }
 
 /* Factorises a with the options and solves for a fixed right-hand side. */
@@ -143,26 +149,11 @@ static void test_cache_bit_identical(void)
     cf_context_destroy(&shared);
 }
 
-/* The cotan Laplacian of mesh, shifted by 1e-2 on the diagonal, lifted to
- * 4 x 4 blocks (a I4), as the Dirac matrix of a flow is made of. */
-static cf_sparse *lifted_laplacian(cf_context *ctx, cf_mesh *mesh)
-{
-    cf_sparse *l = NULL, *q = NULL;
-    if (mesh) CHECK_OK(ctx, cf_cotan_laplacian(ctx, mesh, cf_mesh_positions(mesh), &l));
-    for (int32_t j = 0; l && j < l->ncols; ++j) l->values[cf_sparse_find(l, j, j)] += 1e-2;
-    if (l) CHECK_OK(ctx, cf_sparse_kron_dense(ctx, l, 4, &q));
-    for (int32_t j = 0; q && j < q->ncols; ++j)
-        for (int32_t p = q->colptr[j]; p < q->colptr[j + 1]; ++p)
-            if (q->rowind[p] % 4 != j % 4) q->values[p] = 0.0;
-    cf_sparse_destroy(&l);
-    cf_mesh_destroy(&mesh);
-    return q;
-}
-
-/* CF_ORDERING_AUTO_REFACTORISED: AUTO's rule with METIS tried from
- * 4 fl / lnz >= 200 (4: the block size; fl, lnz: CHOLMOD's counts of the
- * vertex graph under AMD) instead of 500, fewer flops winning; the
- * solution is bit for bit that of the ordering taken. The built-in bumpy
+/* CF_ORDERING_AUTO_REFACTORISED, on the quaternion lift Q of a shifted
+ * Laplacian (4 x 4 blocks, as a flow's Dirac matrix): AUTO's rule with
+ * METIS tried from 4 fl / lnz >= 200 (4: the block size; fl, lnz:
+ * CHOLMOD's counts of the vertex graph under AMD) instead of 500, fewer
+ * flops winning; the solution is bit for bit that of the ordering taken. The built-in bumpy
  * sphere (2 562 vertices): 4 fl / lnz = 313, 7.0e6 flops with AMD, 3.95e6
  * with METIS, so METIS (AUTO keeps AMD); the generated double torus (198
  * vertices): 48, AMD (METIS would need 2.60e4 flops against 2.16e4). An
@@ -173,7 +164,9 @@ static void test_auto_refactorised(void)
     cf_mesh *bumpy = NULL, *torus = NULL;
     CHECK_OK(ctx, cf_generate_bumpy_sphere(ctx, 4, 0.25, 1, &bumpy));
     CHECK_OK(ctx, cf_generate_double_torus(ctx, 2, &torus));
-    cf_sparse *a[2] = {lifted_laplacian(ctx, bumpy), lifted_laplacian(ctx, torus)};
+    cf_sparse *l[2] = {NULL, NULL}, *a[2] = {NULL, NULL};
+    mesh_matrices(ctx, bumpy, &l[0], &a[0]);
+    mesh_matrices(ctx, torus, &l[1], &a[1]);
     const cf_ordering taken[2] = {CF_ORDERING_METIS, CF_ORDERING_AMD}, other[2] = {CF_ORDERING_AMD, CF_ORDERING_METIS};
     for (int k = 0; k < 2; ++k) {
         if (!a[k]) continue;
@@ -199,8 +192,10 @@ static void test_auto_refactorised(void)
         CHECK(strstr(cf_context_message(ctx), "unknown ordering") != NULL);
     }
     CHECK(chol == NULL);
-    cf_sparse_destroy(&a[0]);
-    cf_sparse_destroy(&a[1]);
+    for (int k = 0; k < 2; ++k) {
+        cf_sparse_destroy(&l[k]);
+        cf_sparse_destroy(&a[k]);
+    }
     CHECK(cf_context_bytes_in_use(ctx) == 0);
     cf_context_destroy(&ctx);
 }

@@ -464,9 +464,8 @@ static cf_status solve_lambda(cf_flow *flow, cfi_spin_state *s, cfi_spin_timers 
                 s->lambda[4 * i + 2] = s->lambda[4 * i + 3] = 0.0;
             }
         }
-        double total = 0.0; /* lambda normalised to sum M |lambda|^2 = sum M */
-        for (int32_t i = 0; i < nv; ++i) total += s->area[i];
-        st = cf_inverse_iteration_blocks(s->chol, s->area, 4, s->opt.power_iterations, total, s->lambda, s->qwork);
+        st = cf_inverse_iteration_blocks(s->chol, s->area, 4, s->opt.power_iterations, cfi_spin_lambda_norm2(s),
+                                         s->lambda, s->qwork);
     }
     t->solve += cfi_now_seconds() - tc;
     if (st != CF_OK) return cfi_error(ctx, st, "spin-willmore: eigenvector solve failed");

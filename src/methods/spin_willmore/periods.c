@@ -133,9 +133,7 @@ int cfi_spin_period_linear_lambda(const cfi_spin_state *s, double *lambda)
         double c = s->period_values[l];
         for (int64_t k = 0; k < n4; ++k) lambda[k] -= c * sol[k];
     }
-    /* as the inverse iteration normalises (solve_lambda): sum M |lambda|^2 = sum M */
-    double total = 0.0;
-    for (int32_t i = 0; i < s->nv; ++i) total += s->area[i];
-    double n2 = cf_normalize_blocks(s->nv, s->area, 4, total, lambda);
+    /* as the inverse iteration normalises (solve_lambda) */
+    double n2 = cf_normalize_blocks(s->nv, s->area, 4, cfi_spin_lambda_norm2(s), lambda);
     return n2 > 0.0 && isfinite(n2);
 }

@@ -196,6 +196,15 @@ cf_status cfi_spin_period_correction(cf_flow *flow, cfi_spin_state *s, cfi_spin_
  * is called before the next cfi_spin_periods. Returns 0 when that lambda
  * has no finite, nonzero norm to normalise (then it is not to be used). */
 int cfi_spin_period_linear_lambda(const cfi_spin_state *s, double *lambda);
+/* The M-norm^2 every lambda of the flow is normalised to: sum M |lambda|^2
+ * = sum M (the mean |lambda|^2 is 1), for the inverse iteration and the
+ * first-order lambda alike. */
+static inline double cfi_spin_lambda_norm2(const cfi_spin_state *s)
+{
+    double total = 0.0;
+    for (int32_t i = 0; i < s->nv; ++i) total += s->area[i];
+    return total;
+}
 
 /* Option keep_class (keep_class.c; docs/spin.md, "The conformal class the
  * flow keeps"): the class of the input positions (whole_gram: its Gram
